@@ -1,0 +1,1 @@
+//! Voxel data for niebla.
