@@ -3,8 +3,20 @@
 //! Conventions (see ARCHITECTURE.md): coefficients are per unit length,
 //! radiance is in W/(sr m^2) of whatever length unit the scene uses, phase
 //! functions take `wo` and `wi` both pointing away from the scattering point,
-//! and linear RGB uses Rec.709 primaries.
+//! medium emission `L_ve` is radiance per unit length, and linear RGB uses
+//! Rec.709 primaries.
 
+pub mod bsdf;
+pub mod camera;
 pub mod color;
+pub mod film;
+pub mod geometry;
+pub mod integrator;
+pub mod light;
 pub mod math;
+pub mod medium;
+pub mod phase;
+pub mod render;
 pub mod sampling;
+pub mod scene;
+pub mod tracking;

@@ -1,0 +1,293 @@
+//! `niebla render` and `niebla info`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use niebla::film::write_image;
+use niebla::integrator::{IntegratorSettings, SingleSampling};
+use niebla::render::{render, RenderOptions};
+use niebla::scene::{build_scene, load_scene, parse_scene_str, BuiltScene, DEFAULT_SCENE};
+use niebla::tracking::TransmittanceMethod;
+
+/// Options of `niebla render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (JSON, version 1). Without it, renders the built-in default
+    /// scene: a hazy room with a spot light.
+    pub scene: Option<PathBuf>,
+    /// Output image: .exr (linear float32 radiance) or .png (exposure, sRGB,
+    /// 8-bit). Only the named file is written. Default: both <scene>.exr and
+    /// <scene>.png in the current folder.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Samples per pixel (overrides the scene's `render.spp`).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Integrator (overrides the scene's `render.integrator.type`; its other
+    /// parameters take defaults unless the scene names the same integrator).
+    #[arg(long, value_enum)]
+    pub integrator: Option<IntegratorName>,
+    /// Scattering-point sampling of the `single` integrator: march (ray
+    /// marching), equiangular (toward point and spot lights) or mis
+    /// (equiangular + distance sampling).
+    #[arg(long, value_enum)]
+    pub sampling: Option<SamplingName>,
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Sampler seed (overrides the scene's `render.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// PNG exposure in stops: the PNG shows the radiance times 2^E (overrides
+    /// the scene's `render.exposure`). The EXR is never scaled.
+    #[arg(long, allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+    /// Do not draw a progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Integrators selectable on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum IntegratorName {
+    /// Emission and absorption only.
+    Emission,
+    /// Single scattering with shadow rays.
+    Single,
+}
+
+/// Scattering-point sampling of `single`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SamplingName {
+    /// Stratified ray marching.
+    March,
+    /// Equiangular sampling toward point and spot lights.
+    Equiangular,
+    /// Equiangular and distance sampling combined by MIS.
+    Mis,
+}
+
+/// Load the scene named on the command line, or the built-in default.
+pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
+    match scene {
+        Some(path) => {
+            if !path.exists() {
+                return Err(format!("{}: scene file not found", path.display()));
+            }
+            let built = load_scene(path).map_err(|e| e.to_string())?;
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "niebla".into());
+            Ok((built, stem))
+        }
+        None => {
+            let desc =
+                parse_scene_str(DEFAULT_SCENE, "<default scene>").map_err(|e| e.to_string())?;
+            let built =
+                build_scene(&desc, "<default scene>", Path::new(".")).map_err(|e| e.to_string())?;
+            Ok((built, "niebla".into()))
+        }
+    }
+}
+
+/// Apply command-line overrides to the scene's integrator settings.
+pub fn override_integrator(
+    settings: IntegratorSettings,
+    name: Option<IntegratorName>,
+    sampling: Option<SamplingName>,
+) -> Result<IntegratorSettings, String> {
+    let mut s = match (name, settings) {
+        (None, s) => s,
+        (Some(IntegratorName::Single), s @ IntegratorSettings::Single { .. }) => s,
+        (Some(IntegratorName::Emission), s @ IntegratorSettings::Emission { .. }) => s,
+        (Some(IntegratorName::Single), _) => IntegratorSettings::Single {
+            step: None,
+            sampling: SingleSampling::March,
+            transmittance: TransmittanceMethod::Analytic,
+        },
+        (Some(IntegratorName::Emission), _) => IntegratorSettings::Emission {
+            step: None,
+            transmittance: TransmittanceMethod::Analytic,
+        },
+    };
+    if let Some(choice) = sampling {
+        match &mut s {
+            IntegratorSettings::Single { sampling, .. } => {
+                *sampling = match choice {
+                    SamplingName::March => SingleSampling::March,
+                    SamplingName::Equiangular => SingleSampling::Equiangular,
+                    SamplingName::Mis => SingleSampling::Mis,
+                }
+            }
+            other => {
+                return Err(format!(
+                    "--sampling applies to the single integrator, not to {}",
+                    other.name()
+                ))
+            }
+        }
+    }
+    Ok(s)
+}
+
+/// `niebla render`.
+pub fn run(args: &RenderArgs) -> Result<(), String> {
+    let (built, stem) = load(args.scene.as_deref())?;
+    let integrator =
+        override_integrator(built.settings.integrator, args.integrator, args.sampling)?;
+    let spp = args.spp.unwrap_or(built.settings.spp);
+    if spp == 0 {
+        return Err("--spp: must be at least 1".into());
+    }
+    if args.threads == Some(0) {
+        return Err("--threads: must be at least 1".into());
+    }
+    let exposure = args.exposure.unwrap_or(built.settings.exposure);
+    if !exposure.is_finite() {
+        return Err("--exposure: must be a finite number of stops".into());
+    }
+    let outputs: Vec<PathBuf> = match &args.output {
+        Some(p) => {
+            let ext = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+                return Err(format!("{}: output must end in .exr or .png", p.display()));
+            }
+            vec![p.clone()]
+        }
+        None => vec![
+            PathBuf::from(format!("{stem}.exr")),
+            PathBuf::from(format!("{stem}.png")),
+        ],
+    };
+    for out in &outputs {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if !dir.is_dir() {
+                return Err(format!(
+                    "{}: output folder {} does not exist",
+                    out.display(),
+                    dir.display()
+                ));
+            }
+        }
+    }
+
+    let scene = &built.scene;
+    let options = RenderOptions {
+        spp,
+        seed: args.seed.unwrap_or(built.settings.seed),
+        first_sample: 0,
+        threads: args.threads,
+    };
+    let total = scene.camera.width as u64 * scene.camera.height as u64 * spp as u64;
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(total)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {human_pos}/{human_len} samples, {per_sec}, ETA {eta}",
+        )
+        .map_err(|e| e.to_string())?,
+    );
+    let start = Instant::now();
+    let progress = |done: u64, _total: u64| bar.set_position(done);
+    let image = render(scene, &integrator, &options, &progress, None).map_err(|e| e.to_string())?;
+    bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+
+    for out in &outputs {
+        write_image(&image, out, exposure).map_err(|e| e.to_string())?;
+    }
+    let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
+    println!(
+        "rendered {}x{} at {} spp with {} in {:.2} s ({:.2} M samples/s) -> {}",
+        scene.camera.width,
+        scene.camera.height,
+        spp,
+        integrator.name(),
+        seconds,
+        total as f64 / seconds / 1e6,
+        names.join(", ")
+    );
+    Ok(())
+}
+
+/// `niebla info`.
+pub fn info(scene: Option<&Path>) -> Result<(), String> {
+    let (built, _) = load(scene)?;
+    let s = &built.scene;
+    let c = &s.camera;
+    println!(
+        "scene: {}",
+        scene.map_or("<default scene>".into(), |p| p.display().to_string())
+    );
+    println!(
+        "camera: perspective at {:?} looking {:?}, {}x{} pixels, fov_y {:.1} deg",
+        c.position.to_array(),
+        c.forward.to_array(),
+        c.width,
+        c.height,
+        2.0 * c.tan_half_fov_y.atan().to_degrees()
+    );
+    println!(
+        "render: {:?}, {} spp, seed {}, exposure {}",
+        built.settings.integrator, built.settings.spp, built.settings.seed, built.settings.exposure
+    );
+    println!("media ({}):", s.media.len());
+    for (name, m) in s.medium_names.iter().zip(&s.media) {
+        match m.as_homogeneous() {
+            Some(h) => println!(
+                "  {name}: homogeneous, sigma_a {:?}, sigma_s {:?} (per unit length), L_ve {:?}, phase {} (mean cosine {:.3})",
+                h.sigma_a.0,
+                h.sigma_s.0,
+                h.l_ve.0,
+                h.phase.name(),
+                h.phase.mean_cosine()
+            ),
+            None => println!("  {name}: max sigma_t {}", m.max_sigma_t()),
+        }
+    }
+    let name_of = |id: Option<niebla::medium::MediumId>| {
+        id.map_or("vacuum".to_string(), |i| {
+            s.medium_names[i.0 as usize].clone()
+        })
+    };
+    println!("shapes ({}):", s.objects.len());
+    for (i, o) in s.objects.iter().enumerate() {
+        let (lo, hi) = o.shape.bounds();
+        let kind = match o.shape {
+            niebla::geometry::Shape::Sphere(_) => "sphere",
+            niebla::geometry::Shape::Box(_) => "box",
+            niebla::geometry::Shape::Rectangle(_) => "rectangle",
+        };
+        let media = if o.bounds_medium {
+            format!(
+                ", interior {}, exterior {}",
+                name_of(o.interior),
+                name_of(o.exterior)
+            )
+        } else {
+            String::new()
+        };
+        println!(
+            "  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}",
+            lo.to_array(),
+            hi.to_array(),
+            o.bsdf
+        );
+    }
+    println!("lights ({}):", s.lights.len());
+    for (i, l) in s.lights.iter().enumerate() {
+        println!("  [{i}] {l:?}");
+    }
+    println!("ambient medium: {}", name_of(s.ambient_medium));
+    println!("camera medium: {}", name_of(s.camera_medium));
+    Ok(())
+}

@@ -1,0 +1,96 @@
+//! Direct lighting shared by the integrators: light arriving at a surface
+//! point or a medium point straight from the lights, with shadow
+//! transmittance through the media in between.
+
+use crate::color::Rgb;
+use crate::light::Light;
+use crate::math::Vec3;
+use crate::medium::MediumId;
+use crate::phase::PhaseFunction;
+use crate::sampling::PixelSampler;
+use crate::scene::{offset_origin, Scene};
+use crate::tracking::TransmittanceMethod;
+
+/// Radiance scattered toward `wo` at surface point `p` (normal `n`, facing the
+/// side of `wo`), from one sample of every light, with shadow rays that start
+/// in `medium` (the medium on the side of `wo`).
+#[allow(clippy::too_many_arguments)]
+pub fn direct_surface_radiance(
+    scene: &Scene,
+    p: Vec3,
+    n: Vec3,
+    wo: Vec3,
+    bsdf: &crate::bsdf::Bsdf,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let n = if n.dot(wo) < 0.0 { -n } else { n };
+    let mut l = Rgb::ZERO;
+    for light in &scene.lights {
+        let u = sampler.next_2d();
+        let Some(ls) = light.sample_li(p, Some(n), u) else {
+            continue;
+        };
+        let cos = ls.wi.dot(n);
+        if cos <= 0.0 || ls.pdf == 0.0 {
+            continue;
+        }
+        let f = bsdf.eval(n, wo, ls.wi);
+        if f.is_black() || ls.li.is_black() {
+            continue;
+        }
+        let origin = offset_origin(p, n);
+        let tr = scene.transmittance(origin, medium, ls.wi, ls.distance, method, sampler);
+        l += f * ls.li * tr * (cos / ls.pdf);
+    }
+    l
+}
+
+/// In-scattered radiance `integral p(wo, wi) L_d(wi) dwi` at medium point `p`
+/// (without the sigma_s factor), from one sample of every light, with shadow
+/// rays through `medium` and the media beyond. Units: radiance (W/(sr m^2)).
+pub fn in_scattered_radiance(
+    scene: &Scene,
+    p: Vec3,
+    wo: Vec3,
+    phase: &PhaseFunction,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let mut l = Rgb::ZERO;
+    for light in &scene.lights {
+        l += light_in_scattered_radiance(scene, light, p, wo, phase, medium, method, sampler);
+    }
+    l
+}
+
+/// One light's share of [`in_scattered_radiance`]: `p(wo, wi) T(p, light) L_i / pdf`
+/// for one sampled direction `wi` toward `light`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn light_in_scattered_radiance(
+    scene: &Scene,
+    light: &Light,
+    p: Vec3,
+    wo: Vec3,
+    phase: &PhaseFunction,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let u = sampler.next_2d();
+    let Some(ls) = light.sample_li(p, None, u) else {
+        return Rgb::ZERO;
+    };
+    if ls.pdf == 0.0 || ls.li.is_black() {
+        return Rgb::ZERO;
+    }
+    let f = phase.eval(wo, ls.wi);
+    if f == 0.0 {
+        return Rgb::ZERO;
+    }
+    let tr = scene.transmittance(p, medium, ls.wi, ls.distance, method, sampler);
+    ls.li * tr * (f / ls.pdf)
+}

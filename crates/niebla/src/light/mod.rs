@@ -1,0 +1,232 @@
+//! Lights. Radiometric quantities follow Mitsuba 3 so scenes compare 1:1:
+//! a point light has `intensity` (W/sr), a spot light `intensity` on its axis
+//! (W/sr), a directional light `irradiance` (W/m^2 on a surface perpendicular
+//! to its direction of travel), a constant environment `radiance`
+//! (W/(sr m^2)).
+
+use crate::color::Rgb;
+use crate::math::{Frame, Vec2, Vec3};
+use crate::sampling::{
+    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
+};
+
+/// A closed set of lights.
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// Isotropic point light.
+    Point(PointLight),
+    /// Spot light with Mitsuba 3's linear-in-angle falloff.
+    Spot(SpotLight),
+    /// Distant light with parallel rays.
+    Directional(DirectionalLight),
+    /// Uniform environment of constant radiance.
+    Constant(ConstantLight),
+}
+
+/// Isotropic point light.
+#[derive(Clone, Copy, Debug)]
+pub struct PointLight {
+    /// Position (world).
+    pub position: Vec3,
+    /// Radiant intensity, W/sr.
+    pub intensity: Rgb,
+}
+
+/// Spot light: intensity `I` on the axis, 1 inside `beam_width`, falling
+/// linearly in angle to 0 at `cutoff_angle` (Mitsuba 3 `spot`).
+#[derive(Clone, Copy, Debug)]
+pub struct SpotLight {
+    /// Position (world).
+    pub position: Vec3,
+    /// Frame whose z axis is the unit spot axis.
+    pub frame: Frame,
+    /// Radiant intensity on the axis, W/sr.
+    pub intensity: Rgb,
+    /// Cutoff half-angle, radians.
+    pub cutoff_angle: f32,
+    /// Half-angle of full intensity, radians (<= cutoff).
+    pub beam_width: f32,
+}
+
+impl SpotLight {
+    /// Falloff factor in [0, 1] for a unit direction `w` leaving the light (world).
+    #[inline]
+    pub fn falloff(&self, w: Vec3) -> f32 {
+        let cos_theta = w.dot(self.frame.z);
+        if cos_theta <= self.cutoff_angle.cos() {
+            return 0.0;
+        }
+        if cos_theta >= self.beam_width.cos() {
+            return 1.0;
+        }
+        let width = self.cutoff_angle - self.beam_width;
+        if width <= 0.0 {
+            return 1.0;
+        }
+        ((self.cutoff_angle - cos_theta.clamp(-1.0, 1.0).acos()) / width).clamp(0.0, 1.0)
+    }
+}
+
+/// Distant light.
+#[derive(Clone, Copy, Debug)]
+pub struct DirectionalLight {
+    /// Unit direction in which the light travels (world).
+    pub direction: Vec3,
+    /// Irradiance on a surface perpendicular to `direction`, W/m^2.
+    pub irradiance: Rgb,
+}
+
+/// Uniform environment.
+#[derive(Clone, Copy, Debug)]
+pub struct ConstantLight {
+    /// Radiance arriving from every direction, W/(sr m^2).
+    pub radiance: Rgb,
+}
+
+/// A sampled direction toward a light as seen from a receiving point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the receiver toward the light (world).
+    pub wi: Vec3,
+    /// Distance to the light along `wi` (infinite for distant lights).
+    pub distance: f32,
+    /// Unoccluded incident radiance (or, for delta lights, irradiance
+    /// perpendicular to `wi`) arriving at the receiver, before transmittance.
+    pub li: Rgb,
+    /// Density of `wi` per steradian; 1 for delta lights.
+    pub pdf: f32,
+    /// True for point, spot and directional lights (no MIS possible).
+    pub is_delta: bool,
+}
+
+impl Light {
+    /// Sample incident light at `p`. `normal` (if any) lets environment lights
+    /// sample the hemisphere around a surface normal with a cosine density.
+    #[inline]
+    pub fn sample_li(&self, p: Vec3, normal: Option<Vec3>, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Point(l) => {
+                let to = l.position - p;
+                let d2 = to.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let distance = d2.sqrt();
+                Some(LightSample {
+                    wi: to / distance,
+                    distance,
+                    li: l.intensity / d2,
+                    pdf: 1.0,
+                    is_delta: true,
+                })
+            }
+            Light::Spot(l) => {
+                let to = l.position - p;
+                let d2 = to.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let distance = d2.sqrt();
+                let wi = to / distance;
+                let f = l.falloff(-wi);
+                if f == 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    distance,
+                    li: l.intensity * (f / d2),
+                    pdf: 1.0,
+                    is_delta: true,
+                })
+            }
+            Light::Directional(l) => Some(LightSample {
+                wi: -l.direction,
+                distance: f32::INFINITY,
+                li: l.irradiance,
+                pdf: 1.0,
+                is_delta: true,
+            }),
+            Light::Constant(l) => {
+                let (wi, pdf) = match normal {
+                    Some(n) => {
+                        let local = sample_cosine_hemisphere(u);
+                        (
+                            Frame::from_z(n).to_world(local),
+                            cosine_hemisphere_pdf(local.z),
+                        )
+                    }
+                    None => (sample_uniform_sphere(u), uniform_sphere_pdf()),
+                };
+                if pdf == 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    distance: f32::INFINITY,
+                    li: l.radiance,
+                    pdf,
+                    is_delta: false,
+                })
+            }
+        }
+    }
+
+    /// Radiance seen along a ray that escapes the scene in direction `d`.
+    #[inline]
+    pub fn le_escaped(&self, _d: Vec3) -> Rgb {
+        match self {
+            Light::Constant(l) => l.radiance,
+            _ => Rgb::ZERO,
+        }
+    }
+
+    /// Position of a point-like light (point, spot), for equiangular sampling.
+    #[inline]
+    pub fn point_position(&self) -> Option<Vec3> {
+        match self {
+            Light::Point(l) => Some(l.position),
+            Light::Spot(l) => Some(l.position),
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spot_falloff_is_one_in_beam_and_zero_past_cutoff() {
+        let s = SpotLight {
+            position: Vec3::ZERO,
+            frame: Frame::from_z(Vec3::Z),
+            intensity: Rgb::ONE,
+            cutoff_angle: 20f32.to_radians(),
+            beam_width: 10f32.to_radians(),
+        };
+        assert_eq!(s.falloff(Vec3::Z), 1.0);
+        let at = |deg: f32| {
+            s.falloff(Vec3::new(
+                deg.to_radians().sin(),
+                0.0,
+                deg.to_radians().cos(),
+            ))
+        };
+        assert_eq!(at(9.0), 1.0);
+        assert!((at(15.0) - 0.5).abs() < 1e-3);
+        assert_eq!(at(21.0), 0.0);
+    }
+
+    #[test]
+    fn point_light_follows_inverse_square() {
+        let l = Light::Point(PointLight {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            intensity: Rgb::splat(8.0),
+        });
+        let s = l.sample_li(Vec3::ZERO, None, Vec2::ZERO).unwrap();
+        assert_eq!(s.li, Rgb::splat(2.0));
+        assert!((s.wi - Vec3::Y).length() < 1e-6);
+        assert_eq!(s.distance, 2.0);
+    }
+}

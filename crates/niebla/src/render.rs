@@ -1,0 +1,192 @@
+//! The render loop: 16x16 tiles on rayon, a counter-based sampler per pixel
+//! sample, progress reported per finished tile. The image depends only on the
+//! scene, seed and sample count, never on thread count or tile order.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+
+use crate::color::Rgb;
+use crate::film::Image;
+use crate::integrator::{EmissionIntegrator, Integrator, IntegratorSettings, SingleIntegrator};
+use crate::sampling::PixelSampler;
+use crate::scene::Scene;
+
+/// Tile edge length in pixels.
+pub const TILE_SIZE: u32 = 16;
+
+/// Parameters of one render.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderOptions {
+    /// Samples per pixel (>= 1).
+    pub spp: u32,
+    /// Seed of the counter-based sampler.
+    pub seed: u64,
+    /// Index of the first sample (lets passes continue a render: samples
+    /// `first_sample .. first_sample + spp`).
+    pub first_sample: u64,
+    /// Worker threads; `None` uses rayon's default (all cores).
+    pub threads: Option<usize>,
+}
+
+/// Why a render did not produce an image.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The thread pool could not be created.
+    #[error("could not start {threads} render threads: {message}")]
+    ThreadPool {
+        /// Requested thread count.
+        threads: usize,
+        /// Cause.
+        message: String,
+    },
+    /// The cancel flag was raised.
+    #[error("render cancelled")]
+    Cancelled,
+}
+
+/// Progress of a render: called after each tile with (pixel samples done, total).
+pub type ProgressFn<'a> = &'a (dyn Fn(u64, u64) + Sync);
+
+/// Render `scene` with the integrator described by `settings`.
+pub fn render(
+    scene: &Scene,
+    settings: &IntegratorSettings,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<Image, RenderError> {
+    match *settings {
+        IntegratorSettings::Emission {
+            step,
+            transmittance,
+        } => render_with(
+            scene,
+            &EmissionIntegrator {
+                step,
+                transmittance,
+            },
+            options,
+            progress,
+            cancel,
+        ),
+        IntegratorSettings::Single {
+            step,
+            sampling,
+            transmittance,
+        } => render_with(
+            scene,
+            &SingleIntegrator {
+                step,
+                sampling,
+                transmittance,
+            },
+            options,
+            progress,
+            cancel,
+        ),
+    }
+}
+
+/// Render with a concrete integrator type (monomorphized per integrator).
+pub fn render_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<Image, RenderError> {
+    match options.threads {
+        Some(threads) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| RenderError::ThreadPool {
+                    threads,
+                    message: e.to_string(),
+                })?;
+            pool.install(|| render_tiles(scene, integrator, options, progress, cancel))
+        }
+        None => render_tiles(scene, integrator, options, progress, cancel),
+    }
+}
+
+fn render_tiles<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<Image, RenderError> {
+    use rayon::prelude::*;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let tiles_x = w.div_ceil(TILE_SIZE);
+    let tiles_y = h.div_ceil(TILE_SIZE);
+    let total = w as u64 * h as u64 * options.spp as u64;
+    let done = AtomicU64::new(0);
+    let tiles: Vec<(u32, u32, Vec<Rgb>)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|tile| {
+            let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
+            let (x1, y1) = ((x0 + TILE_SIZE).min(w), (y0 + TILE_SIZE).min(h));
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return (tile, 0, out);
+            }
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    out.push(render_pixel(scene, integrator, options, x, y));
+                }
+            }
+            let n = (x1 - x0) as u64 * (y1 - y0) as u64 * options.spp as u64;
+            progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
+            (tile, 1, out)
+        })
+        .collect();
+    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || tiles.iter().any(|t| t.1 == 0) {
+        return Err(RenderError::Cancelled);
+    }
+    let mut image = Image::new(w, h);
+    for (tile, _, pixels) in tiles {
+        let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
+        let x1 = (x0 + TILE_SIZE).min(w);
+        let tw = (x1 - x0) as usize;
+        for (i, p) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 + (i % tw) as u32, y0 + (i / tw) as u32);
+            image.pixels[(y * w + x) as usize] = p;
+        }
+    }
+    Ok(image)
+}
+
+/// Mean radiance of `options.spp` samples of pixel `(x, y)`. Samples with a
+/// non-finite value are dropped (counted as zero) so that one numerical
+/// accident cannot poison a pixel; debug builds assert instead.
+#[inline]
+pub fn render_pixel<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    options: &RenderOptions,
+    x: u32,
+    y: u32,
+) -> Rgb {
+    let mut sum = [0f64; 3];
+    for s in options.first_sample..options.first_sample + options.spp as u64 {
+        let mut sampler = PixelSampler::new(options.seed, x, y, s);
+        let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
+        let l = integrator.radiance(scene, ray, scene.camera_medium, &mut sampler);
+        debug_assert!(
+            l.is_finite(),
+            "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}"
+        );
+        if l.is_finite() {
+            for c in 0..3 {
+                sum[c] += l[c] as f64;
+            }
+        }
+    }
+    let n = options.spp.max(1) as f64;
+    Rgb::new(
+        (sum[0] / n) as f32,
+        (sum[1] / n) as f32,
+        (sum[2] / n) as f32,
+    )
+}

@@ -1,0 +1,333 @@
+//! From description to render-ready scene: names become typed ids, transforms
+//! become matrices, phase tables are loaded, and each shape without an explicit
+//! `exterior` gets the medium that encloses it.
+
+use std::path::Path;
+
+use glam::{Affine3A, Mat4};
+
+use super::desc::*;
+use super::{RenderSettings, Scene, SceneError, SceneObject};
+use crate::bsdf::Bsdf;
+use crate::camera::PerspectiveCamera;
+use crate::color::Rgb;
+use crate::geometry::{AxisAlignedBox, Rectangle, Shape, Sphere, Transform};
+use crate::integrator::{IntegratorSettings, SingleSampling};
+use crate::light::{ConstantLight, DirectionalLight, Light, PointLight, SpotLight};
+use crate::math::{Frame, Vec3};
+use crate::medium::{HomogeneousMedium, Medium, MediumId};
+use crate::phase::{PhaseFunction, Schlick, Tabulated};
+use crate::tracking::{MarchStep, TransmittanceMethod};
+
+/// A scene ready to render and the render settings its file asked for.
+#[derive(Clone, Debug)]
+pub struct BuiltScene {
+    /// The scene.
+    pub scene: Scene,
+    /// Integrator, spp, seed and exposure from the file.
+    pub settings: RenderSettings,
+}
+
+/// Build a validated description. `source` names the file in messages;
+/// `base_dir` resolves relative paths (phase tables, later grids).
+pub fn build_scene(
+    desc: &SceneDesc,
+    source: &str,
+    base_dir: &Path,
+) -> Result<BuiltScene, SceneError> {
+    let err = |path: &str, message: String| SceneError::new(source, path, message);
+
+    // Media, in name order (BTreeMap), so ids are stable.
+    let mut media = Vec::new();
+    let mut medium_names = Vec::new();
+    for (name, m) in &desc.media {
+        let path = format!("media.{name}");
+        let medium = match m {
+            MediumDesc::Homogeneous(h) => {
+                let (sigma_a, sigma_s) = h.sigma_a_sigma_s();
+                let phase = build_phase(&h.phase, &format!("{path}.phase"), source, base_dir)?;
+                let l_ve = h.emission.map_or(Rgb::ZERO, |e| e.l_ve.to_rgb());
+                Medium::Homogeneous(HomogeneousMedium {
+                    sigma_a,
+                    sigma_s,
+                    l_ve,
+                    phase,
+                })
+            }
+        };
+        media.push(medium);
+        medium_names.push(name.clone());
+    }
+    let medium_id = |name: &Option<String>| -> Option<MediumId> {
+        name.as_ref()
+            .and_then(|n| medium_names.iter().position(|m| m == n))
+            .map(|i| MediumId(i as u32))
+    };
+
+    // Shapes.
+    let mut objects = Vec::new();
+    let mut explicit_exterior = Vec::new();
+    for (i, s) in desc.shapes.iter().enumerate() {
+        let path = format!("shapes[{i}]");
+        let shape = match &s.geometry {
+            GeometryDesc::Sphere(d) => Shape::Sphere(Sphere {
+                center: Vec3::from(d.center),
+                radius: d.radius,
+            }),
+            GeometryDesc::Box(d) => Shape::Box(AxisAlignedBox {
+                min: Vec3::from(d.min),
+                max: Vec3::from(d.max),
+            }),
+            GeometryDesc::Rectangle(d) => {
+                let t = build_transform(&d.to_world).ok_or_else(|| {
+                    err(
+                        &format!("{path}.to_world"),
+                        "transform is singular (zero scale?)".into(),
+                    )
+                })?;
+                Shape::Rectangle(Rectangle::new(t))
+            }
+        };
+        let bsdf = match s.bsdf {
+            BsdfDesc::Null => Bsdf::Null,
+            BsdfDesc::Diffuse { reflectance } => Bsdf::Diffuse {
+                reflectance: reflectance.to_rgb(),
+            },
+        };
+        let interior = medium_id(&s.interior);
+        let exterior = medium_id(&s.exterior);
+        objects.push(SceneObject {
+            shape,
+            bsdf,
+            interior,
+            exterior,
+            bounds_medium: s.interior.is_some() || s.exterior.is_some(),
+        });
+        explicit_exterior.push(s.exterior.is_some());
+    }
+    let ambient_medium = medium_id(&desc.ambient_medium);
+
+    // Lights.
+    let mut lights = Vec::new();
+    for (i, l) in desc.lights.iter().enumerate() {
+        let path = format!("lights[{i}]");
+        lights.push(match l {
+            LightDesc::Point(p) => Light::Point(PointLight {
+                position: Vec3::from(p.position),
+                intensity: p.intensity.to_rgb(),
+            }),
+            LightDesc::Spot(s) => {
+                let position = Vec3::from(s.position);
+                let axis = match s.aim {
+                    SpotAimDesc::Target(t) => Vec3::from(t) - position,
+                    SpotAimDesc::Direction(d) => Vec3::from(d),
+                };
+                let axis = axis.try_normalize().ok_or_else(|| {
+                    err(
+                        &path,
+                        "spot light target equals its position (no direction)".into(),
+                    )
+                })?;
+                Light::Spot(SpotLight {
+                    position,
+                    frame: Frame::from_z(axis),
+                    intensity: s.intensity.to_rgb(),
+                    cutoff_angle: s.cutoff_angle.to_radians(),
+                    beam_width: s.beam_width.to_radians(),
+                })
+            }
+            LightDesc::Directional(d) => Light::Directional(DirectionalLight {
+                direction: Vec3::from(d.direction).try_normalize().ok_or_else(|| {
+                    err(
+                        &format!("{path}.direction"),
+                        "must be a non-zero vector".into(),
+                    )
+                })?,
+                irradiance: d.irradiance.to_rgb(),
+            }),
+            LightDesc::Constant(c) => Light::Constant(ConstantLight {
+                radiance: c.radiance.to_rgb(),
+            }),
+        });
+    }
+
+    // Camera.
+    let CameraDesc::Perspective(c) = &desc.camera;
+    let camera = PerspectiveCamera::look_at(
+        Vec3::from(c.position),
+        Vec3::from(c.target),
+        Vec3::from(c.up),
+        c.fov_y,
+        c.width,
+        c.height,
+    )
+    .ok_or_else(|| {
+        err(
+            "camera",
+            "position, target and up do not define a view (parallel or equal)".into(),
+        )
+    })?;
+
+    // Bounds of everything positioned.
+    let mut lo = camera.position;
+    let mut hi = camera.position;
+    for o in &objects {
+        let (a, b) = o.shape.bounds();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    for l in &lights {
+        if let Some(p) = l.point_position() {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+
+    let mut scene = Scene {
+        camera,
+        objects,
+        media,
+        medium_names,
+        lights,
+        ambient_medium,
+        camera_medium: None,
+        bounds: (lo, hi),
+    };
+    assign_enclosing_exteriors(&mut scene, &explicit_exterior);
+    scene.camera_medium = scene.medium_at(scene.camera.position);
+
+    let settings = RenderSettings {
+        integrator: integrator_settings(&desc.render.integrator),
+        spp: desc.render.spp,
+        seed: desc.render.seed,
+        exposure: desc.render.exposure,
+    };
+    Ok(BuiltScene { scene, settings })
+}
+
+/// Give each medium-bounding shape without an explicit `exterior` the medium
+/// of the innermost other closed shape that contains its whole bounding box,
+/// else the ambient medium (design.md section 1: the same rule that places
+/// the camera).
+fn assign_enclosing_exteriors(scene: &mut Scene, explicit: &[bool]) {
+    for (i, &is_explicit) in explicit.iter().enumerate() {
+        if is_explicit || !scene.objects[i].bounds_medium {
+            continue;
+        }
+        let (lo, hi) = scene.objects[i].shape.bounds();
+        let corners = (0..8).map(|k| {
+            Vec3::new(
+                if k & 1 == 0 { lo.x } else { hi.x },
+                if k & 2 == 0 { lo.y } else { hi.y },
+                if k & 4 == 0 { lo.z } else { hi.z },
+            )
+        });
+        let corners: Vec<Vec3> = corners.collect();
+        let mut best: Option<(f32, MediumId)> = None;
+        for (j, other) in scene.objects.iter().enumerate() {
+            let Some(id) = other.interior else { continue };
+            if j == i || !other.shape.is_closed() {
+                continue;
+            }
+            let v = other.shape.volume();
+            if v > scene.objects[i].shape.volume()
+                && corners.iter().all(|&p| other.shape.contains(p))
+                && best.is_none_or(|(bv, _)| v < bv)
+            {
+                best = Some((v, id));
+            }
+        }
+        scene.objects[i].exterior = best.map(|(_, id)| id).or(scene.ambient_medium);
+    }
+}
+
+/// Integrator settings from the file's description.
+pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
+    let step = |m: &MarchStepDesc| match *m {
+        MarchStepDesc::Auto => None,
+        MarchStepDesc::Length(l) => Some(MarchStep::Length(l)),
+        MarchStepDesc::PerSegment(n) => Some(MarchStep::Count(n)),
+    };
+    let transmittance = |t: &TransmittanceDesc, s: Option<MarchStep>| match t {
+        TransmittanceDesc::Analytic => TransmittanceMethod::Analytic,
+        TransmittanceDesc::RayMarch => {
+            TransmittanceMethod::RayMarch(s.unwrap_or(MarchStep::Count(64)))
+        }
+    };
+    match desc {
+        IntegratorDesc::Single(s) => IntegratorSettings::Single {
+            step: step(&s.march),
+            sampling: match s.sampling {
+                ScatterSamplingDesc::March => SingleSampling::March,
+                ScatterSamplingDesc::Equiangular => SingleSampling::Equiangular,
+                ScatterSamplingDesc::Mis => SingleSampling::Mis,
+            },
+            transmittance: transmittance(&s.transmittance, step(&s.march)),
+        },
+        IntegratorDesc::Emission(e) => IntegratorSettings::Emission {
+            step: step(&e.march),
+            transmittance: transmittance(&e.transmittance, step(&e.march)),
+        },
+    }
+}
+
+/// Transform from its description: scale, rotate x, y, z (degrees), translate;
+/// or a row-major 4x4 matrix whose last row must be (0, 0, 0, 1).
+pub fn build_transform(desc: &TransformDesc) -> Option<Transform> {
+    match *desc {
+        TransformDesc::Components {
+            scale,
+            rotate_x,
+            rotate_y,
+            rotate_z,
+            translate,
+        } => Transform::from_components(
+            Vec3::from(scale),
+            Vec3::new(rotate_x, rotate_y, rotate_z),
+            Vec3::from(translate),
+        ),
+        TransformDesc::Matrix(rows) => {
+            let m = Mat4::from_cols_array_2d(&rows).transpose();
+            if rows[3] != [0.0, 0.0, 0.0, 1.0] {
+                return None;
+            }
+            Transform::new(Affine3A::from_mat4(m))
+        }
+    }
+}
+
+fn build_phase(
+    desc: &PhaseDesc,
+    path: &str,
+    source: &str,
+    base_dir: &Path,
+) -> Result<PhaseFunction, SceneError> {
+    let err = |e: crate::phase::PhaseError| SceneError::new(source, path, e.to_string());
+    Ok(match desc {
+        PhaseDesc::Isotropic => PhaseFunction::isotropic(),
+        PhaseDesc::HenyeyGreenstein { g } => {
+            PhaseFunction::HenyeyGreenstein(crate::phase::HenyeyGreenstein::new(*g).map_err(err)?)
+        }
+        PhaseDesc::DoubleHenyeyGreenstein { w, g1, g2 } => {
+            PhaseFunction::DoubleHg(crate::phase::DoubleHg::new(*w, *g1, *g2).map_err(err)?)
+        }
+        PhaseDesc::Schlick(SchlickDesc::K(k)) => {
+            PhaseFunction::Schlick(Schlick::new(*k).map_err(err)?)
+        }
+        PhaseDesc::Schlick(SchlickDesc::G(g)) => {
+            PhaseFunction::Schlick(Schlick::with_mean_cosine(*g).map_err(err)?)
+        }
+        PhaseDesc::Rayleigh => PhaseFunction::rayleigh(),
+        PhaseDesc::CornetteShanks { g } => {
+            PhaseFunction::CornetteShanks(crate::phase::CornetteShanks::new(*g).map_err(err)?)
+        }
+        PhaseDesc::Tabulated { file, column } => {
+            let full = base_dir.join(file);
+            let table = Tabulated::from_csv_file(&full, column)
+                .map_err(|e| SceneError::new(source, format!("{path}.file"), e.to_string()))?;
+            PhaseFunction::tabulated(table)
+        }
+        PhaseDesc::Fog => PhaseFunction::fog(),
+        PhaseDesc::MieFog => PhaseFunction::mie_fog(),
+    })
+}

@@ -1,0 +1,52 @@
+//! Scenes: the JSON description (serde), its validation, and the build into
+//! the render-ready [`Scene`].
+//!
+//! Describe, then build (style.md rule 8):
+//! ```
+//! use niebla::scene::{build_scene, parse_scene_str, DEFAULT_SCENE};
+//! let desc = parse_scene_str(DEFAULT_SCENE, "<default>").unwrap();
+//! let built = build_scene(&desc, "<default>", std::path::Path::new(".")).unwrap();
+//! assert!(built.scene.camera_medium.is_some());
+//! ```
+
+mod build;
+pub mod desc;
+mod error;
+mod parse;
+mod render_scene;
+mod validate;
+
+pub use build::{build_scene, build_transform, integrator_settings, BuiltScene};
+pub use desc::*;
+pub use error::SceneError;
+pub use parse::{load_scene_file, parse_scene_str};
+pub use render_scene::{
+    offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS,
+};
+
+use crate::integrator::IntegratorSettings;
+
+/// The built-in default scene (scenes/default.json): a hazy room lit by a spot
+/// light whose cone and shadows show in the haze.
+pub const DEFAULT_SCENE: &str = include_str!("../../../../scenes/default.json");
+
+/// What a scene file asks of a render.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Integrator and its parameters.
+    pub integrator: IntegratorSettings,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Sampler seed.
+    pub seed: u64,
+    /// PNG exposure in stops (the PNG is the EXR times 2^exposure).
+    pub exposure: f32,
+}
+
+/// Load, validate and build a scene file in one call; relative paths resolve
+/// against the file's folder.
+pub fn load_scene(path: &std::path::Path) -> Result<BuiltScene, SceneError> {
+    let desc = load_scene_file(path)?;
+    let base = path.parent().unwrap_or(std::path::Path::new("."));
+    build_scene(&desc, &path.display().to_string(), base)
+}

@@ -1,0 +1,741 @@
+//! Reading a scene file into a [`SceneDesc`], with errors that name the JSON
+//! path of the offending value.
+//!
+//! Steps: the text is parsed into a `serde_json::Value` (syntax errors carry
+//! line and column); the top level and `version` are checked; a small scanner
+//! rejects duplicate keys (which `serde_json` would silently collapse); then
+//! the value is deserialized with `serde_path_to_error`, and the result is
+//! validated.
+//!
+//! Why the tagged types (`type` fields) have hand-written `Deserialize`
+//! implementations: serde's internally tagged enums buffer their content, so
+//! `serde_path_to_error` loses the path inside them (an error in
+//! `lights[1].intensity[2]` would be reported at `lights[1]`), and
+//! `deny_unknown_fields` does not work reliably on their variants. Instead each
+//! tagged object is read into a `serde_json::Map`, the `type` is taken out, and
+//! the rest is deserialized into a plain `deny_unknown_fields` struct with its
+//! own `serde_path_to_error` tracking. The inner error's path travels out
+//! inside the serde error message (see [`Located::into_serde`]) and is joined
+//! to the outer path, so every error carries its full path.
+
+use std::fmt;
+use std::path::Path;
+
+use serde::de::{DeserializeOwned, Deserializer, MapAccess, Visitor};
+use serde::Deserialize;
+use serde_json::{Map, Value};
+
+use super::desc::*;
+use super::error::{byte_offset, find_duplicate_key, path_at, Located, SceneError};
+
+/// Parses and validates a scene from JSON text.
+///
+/// `source` is the file name shown in error messages (for example the path
+/// the text came from, or `<stdin>`). Relative paths inside the scene (such as
+/// a tabulated phase function's `file`) are kept as written; they resolve
+/// against the scene file's folder when the scene is built.
+///
+/// ```
+/// use niebla::scene::parse_scene_str;
+/// let err = parse_scene_str(r#"{"version": 1, "camera": {"type": "perspective",
+///     "position": [0, 0, 5], "target": [0, 0, 0], "width": 64, "height": 64},
+///     "media": {"fog": {"sigma_a": 0.1, "sigam_s": 1}}}"#, "fog.json").unwrap_err();
+/// assert_eq!(err.path, "media.fog.sigam_s");
+/// assert!(err.to_string().starts_with("fog.json: media.fog.sigam_s: unknown field `sigam_s`"));
+/// ```
+pub fn parse_scene_str(text: &str, source: &str) -> Result<SceneDesc, SceneError> {
+    let value: Value =
+        serde_json::from_str(text).map_err(|e| json_syntax_error(text, source, &e))?;
+    check_top_level(&value, source)?;
+    if let Some((path, key)) = find_duplicate_key(text) {
+        return Err(SceneError::new(
+            source,
+            path,
+            format!("duplicate key `{key}`; each key may appear once per object"),
+        ));
+    }
+    let desc: SceneDesc = serde_path_to_error::deserialize(value).map_err(|e| {
+        let located = Located::from_path_error(e);
+        SceneError::new(source, located.path, located.message)
+    })?;
+    desc.validate(source)?;
+    Ok(desc)
+}
+
+/// Reads, parses and validates a scene file. Errors name the file as
+/// `path.display()` shows it, including errors reading it.
+pub fn load_scene_file(path: &Path) -> Result<SceneDesc, SceneError> {
+    let source = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(&source, "", format!("cannot read scene file: {e}")))?;
+    parse_scene_str(&text, &source)
+}
+
+/// The error for text that is not valid JSON. A number too large for a
+/// 64-bit float also lands here; for it the scanner finds the JSON path.
+fn json_syntax_error(text: &str, source: &str, e: &serde_json::Error) -> SceneError {
+    let message = e.to_string();
+    if message.starts_with("number out of range") {
+        let offset = byte_offset(text, e.line(), e.column());
+        return SceneError::new(
+            source,
+            path_at(text, offset),
+            format!(
+                "number out of range, expected a finite number (at line {} column {})",
+                e.line(),
+                e.column()
+            ),
+        );
+    }
+    SceneError::new(source, "", format!("invalid JSON: {message}"))
+}
+
+/// Checks that the top level is an object and, before anything else, that
+/// `version` is 1 (a file for a later version would otherwise fail on its
+/// new keys with a less helpful message).
+fn check_top_level(value: &Value, source: &str) -> Result<(), SceneError> {
+    let Value::Object(object) = value else {
+        return Err(SceneError::new(
+            source,
+            "",
+            format!(
+                "expected a JSON object at the top level, got {}",
+                describe(value)
+            ),
+        ));
+    };
+    if let Some(Value::Number(n)) = object.get("version") {
+        if n.as_u64() != Some(u64::from(SCENE_VERSION)) {
+            return Err(SceneError::new(
+                source,
+                "version",
+                format!(
+                    "unsupported scene version {n}; this build of niebla reads version {SCENE_VERSION}"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A short description of a JSON value's kind, for messages.
+fn describe(value: &Value) -> &'static str {
+    match value {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "an object",
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Reading objects field by field
+// ---------------------------------------------------------------------------
+
+type Object = Map<String, Value>;
+
+/// Reads any JSON object into a map; `expecting` completes "expected ..." when
+/// the value is not an object.
+fn read_object<'de, D: Deserializer<'de>>(
+    deserializer: D,
+    expecting: &'static str,
+) -> Result<Object, D::Error> {
+    struct ObjectVisitor(&'static str);
+    impl<'de> Visitor<'de> for ObjectVisitor {
+        type Value = Object;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str(self.0)
+        }
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Object, A::Error> {
+            let mut object = Object::new();
+            while let Some((key, value)) = map.next_entry::<String, Value>()? {
+                object.insert(key, value);
+            }
+            Ok(object)
+        }
+    }
+    deserializer.deserialize_map(ObjectVisitor(expecting))
+}
+
+/// Takes the `type` tag out of a tagged object. A missing tag is an error
+/// unless there is a `default`.
+fn take_tag(
+    object: &mut Object,
+    kind: &str,
+    types: &[&str],
+    default: Option<&str>,
+) -> Result<String, Located> {
+    match object.remove("type") {
+        Some(Value::String(tag)) => Ok(tag),
+        Some(other) => Err(Located::new(
+            "type",
+            format!(
+                "expected a string naming the {kind} type, one of: {}; got {}",
+                types.join(", "),
+                describe(&other)
+            ),
+        )),
+        None => default.map(str::to_string).ok_or_else(|| {
+            Located::new(
+                "type",
+                format!(
+                    "missing required field `type`; expected one of: {}",
+                    types.join(", ")
+                ),
+            )
+        }),
+    }
+}
+
+/// The error for a `type` that names no variant.
+fn unknown_type(kind: &str, tag: &str, types: &[&str]) -> Located {
+    Located::new(
+        "type",
+        format!(
+            "unknown {kind} type {tag:?}; expected one of: {}",
+            types.join(", ")
+        ),
+    )
+}
+
+/// Takes `key` out of the object and deserializes it, if present.
+fn take<T: DeserializeOwned>(object: &mut Object, key: &str) -> Result<Option<T>, Located> {
+    object
+        .remove(key)
+        .map(|value| {
+            serde_path_to_error::deserialize(value)
+                .map_err(|e| Located::from_path_error(e).under(key))
+        })
+        .transpose()
+}
+
+/// Deserializes what is left of an object (the tag removed) as `T`, usually a
+/// `deny_unknown_fields` struct.
+fn rest<T: DeserializeOwned>(object: Object) -> Result<T, Located> {
+    serde_path_to_error::deserialize(Value::Object(object)).map_err(Located::from_path_error)
+}
+
+/// An object that must have no fields besides `type`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoFields {}
+
+/// Implements `Deserialize` for a type through a `fn(Object) -> Result<T,
+/// Located>`.
+macro_rules! deserialize_object {
+    ($ty:ty, $expecting:literal, $parse:ident) => {
+        impl<'de> Deserialize<'de> for $ty {
+            fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<$ty, D::Error> {
+                let object = read_object(deserializer, $expecting)?;
+                $parse(object).map_err(Located::into_serde)
+            }
+        }
+    };
+}
+
+// ---------------------------------------------------------------------------
+// Camera and render settings
+// ---------------------------------------------------------------------------
+
+deserialize_object!(
+    CameraDesc,
+    "a camera object with a \"type\" field",
+    parse_camera
+);
+
+fn parse_camera(mut object: Object) -> Result<CameraDesc, Located> {
+    let tag = take_tag(&mut object, "camera", CameraDesc::TYPES, None)?;
+    match tag.as_str() {
+        "perspective" => Ok(CameraDesc::Perspective(rest(object)?)),
+        _ => Err(unknown_type("camera", &tag, CameraDesc::TYPES)),
+    }
+}
+
+deserialize_object!(
+    IntegratorDesc,
+    "an integrator object with a \"type\" field",
+    parse_integrator
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSingle {
+    #[serde(default)]
+    step: Option<f32>,
+    #[serde(default)]
+    steps: Option<u32>,
+    #[serde(default)]
+    sampling: ScatterSamplingDesc,
+    #[serde(default)]
+    transmittance: TransmittanceDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEmission {
+    #[serde(default)]
+    step: Option<f32>,
+    #[serde(default)]
+    steps: Option<u32>,
+    #[serde(default)]
+    transmittance: TransmittanceDesc,
+}
+
+fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
+    let tag = take_tag(&mut object, "integrator", IntegratorDesc::TYPES, None)?;
+    match tag.as_str() {
+        "single" => {
+            let raw: RawSingle = rest(object)?;
+            Ok(IntegratorDesc::Single(SingleScatteringDesc {
+                march: march_step(raw.step, raw.steps)?,
+                sampling: raw.sampling,
+                transmittance: raw.transmittance,
+            }))
+        }
+        "emission" => {
+            let raw: RawEmission = rest(object)?;
+            Ok(IntegratorDesc::Emission(EmissionIntegratorDesc {
+                march: march_step(raw.step, raw.steps)?,
+                transmittance: raw.transmittance,
+            }))
+        }
+        _ => Err(unknown_type("integrator", &tag, IntegratorDesc::TYPES)),
+    }
+}
+
+fn march_step(step: Option<f32>, steps: Option<u32>) -> Result<MarchStepDesc, Located> {
+    match (step, steps) {
+        (Some(_), Some(_)) => Err(Located::new(
+            "steps",
+            "`step` and `steps` are mutually exclusive: give a step length in scene units \
+             (`step`) or a number of steps per medium segment (`steps`), not both",
+        )),
+        (Some(length), None) => Ok(MarchStepDesc::Length(length)),
+        (None, Some(count)) => Ok(MarchStepDesc::PerSegment(count)),
+        (None, None) => Ok(MarchStepDesc::Auto),
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Media and phase functions
+// ---------------------------------------------------------------------------
+
+deserialize_object!(MediumDesc, "a medium object", parse_medium);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHomogeneous {
+    #[serde(default)]
+    sigma_a: Option<ColorDesc>,
+    #[serde(default)]
+    sigma_s: Option<ColorDesc>,
+    #[serde(default)]
+    sigma_t: Option<ColorDesc>,
+    #[serde(default)]
+    albedo: Option<ColorDesc>,
+    #[serde(default = "one")]
+    scale: f32,
+    #[serde(default)]
+    phase: PhaseDesc,
+    #[serde(default)]
+    emission: Option<EmissionDesc>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
+    let tag = take_tag(
+        &mut object,
+        "medium",
+        MediumDesc::TYPES,
+        Some("homogeneous"),
+    )?;
+    match tag.as_str() {
+        "homogeneous" => {
+            let raw: RawHomogeneous = rest(object)?;
+            let coefficients = coefficients(raw.sigma_a, raw.sigma_s, raw.sigma_t, raw.albedo)?;
+            Ok(MediumDesc::Homogeneous(HomogeneousMediumDesc {
+                coefficients,
+                scale: raw.scale,
+                phase: raw.phase,
+                emission: raw.emission,
+            }))
+        }
+        _ => Err(unknown_type("medium", &tag, MediumDesc::TYPES)),
+    }
+}
+
+/// Exactly one of the forms `sigma_a` + `sigma_s` and `sigma_t` + `albedo`.
+fn coefficients(
+    sigma_a: Option<ColorDesc>,
+    sigma_s: Option<ColorDesc>,
+    sigma_t: Option<ColorDesc>,
+    albedo: Option<ColorDesc>,
+) -> Result<CoefficientsDesc, Located> {
+    const FORMS: &str = "give either `sigma_a` and `sigma_s`, or `sigma_t` and `albedo`";
+    match (sigma_a, sigma_s, sigma_t, albedo) {
+        (Some(sigma_a), Some(sigma_s), None, None) => {
+            Ok(CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s })
+        }
+        (None, None, Some(sigma_t), Some(albedo)) => {
+            Ok(CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo })
+        }
+        (None, None, None, None) => Err(Located::new("", format!("missing coefficients: {FORMS}"))),
+        (a, s, t, al) => {
+            let first_form = a.map(|_| "sigma_a").or(s.map(|_| "sigma_s"));
+            let second_form = t.map(|_| "sigma_t").or(al.map(|_| "albedo"));
+            if let (Some(first), Some(second)) = (first_form, second_form) {
+                return Err(Located::new(
+                    second,
+                    format!("`{second}` cannot be combined with `{first}`: {FORMS}"),
+                ));
+            }
+            let (given, missing) = match (a, s, t) {
+                (Some(_), _, _) => ("sigma_a", "sigma_s"),
+                (_, Some(_), _) => ("sigma_s", "sigma_a"),
+                (_, _, Some(_)) => ("sigma_t", "albedo"),
+                _ => ("albedo", "sigma_t"),
+            };
+            Err(Located::new(
+                missing,
+                format!("missing required field `{missing}`, which goes with `{given}`: {FORMS}"),
+            ))
+        }
+    }
+}
+
+deserialize_object!(
+    PhaseDesc,
+    "a phase function object with a \"type\" field",
+    parse_phase
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawG {
+    g: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDoubleHg {
+    w: f32,
+    g1: f32,
+    g2: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSchlick {
+    #[serde(default)]
+    k: Option<f32>,
+    #[serde(default)]
+    g: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTabulated {
+    file: String,
+    #[serde(default = "default_column")]
+    column: String,
+}
+
+fn default_column() -> String {
+    "p_mie_poly".to_string()
+}
+
+fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
+    let tag = take_tag(&mut object, "phase function", PhaseDesc::TYPES, None)?;
+    let no_fields = |object| rest::<NoFields>(object).map(|_| ());
+    Ok(match tag.as_str() {
+        "isotropic" => {
+            no_fields(object)?;
+            PhaseDesc::Isotropic
+        }
+        "hg" => PhaseDesc::HenyeyGreenstein {
+            g: rest::<RawG>(object)?.g,
+        },
+        "double_hg" => {
+            let raw: RawDoubleHg = rest(object)?;
+            PhaseDesc::DoubleHenyeyGreenstein {
+                w: raw.w,
+                g1: raw.g1,
+                g2: raw.g2,
+            }
+        }
+        "schlick" => {
+            let raw: RawSchlick = rest(object)?;
+            PhaseDesc::Schlick(match (raw.k, raw.g) {
+                (Some(k), None) => SchlickDesc::K(k),
+                (None, Some(g)) => SchlickDesc::G(g),
+                (Some(_), Some(_)) => {
+                    return Err(Located::new(
+                        "g",
+                        "`k` and `g` are mutually exclusive: give Schlick's `k` or the HG asymmetry `g`",
+                    ))
+                }
+                (None, None) => {
+                    return Err(Located::new(
+                        "k",
+                        "missing required field `k` (or give the HG asymmetry `g` instead)",
+                    ))
+                }
+            })
+        }
+        "rayleigh" => {
+            no_fields(object)?;
+            PhaseDesc::Rayleigh
+        }
+        "cornette_shanks" => PhaseDesc::CornetteShanks {
+            g: rest::<RawG>(object)?.g,
+        },
+        "tabulated" => {
+            let raw: RawTabulated = rest(object)?;
+            PhaseDesc::Tabulated {
+                file: raw.file,
+                column: raw.column,
+            }
+        }
+        "fog" => {
+            no_fields(object)?;
+            PhaseDesc::Fog
+        }
+        "mie_fog" => {
+            no_fields(object)?;
+            PhaseDesc::MieFog
+        }
+        _ => return Err(unknown_type("phase function", &tag, PhaseDesc::TYPES)),
+    })
+}
+
+// ---------------------------------------------------------------------------
+// Shapes, surfaces and transforms
+// ---------------------------------------------------------------------------
+
+deserialize_object!(
+    ShapeDesc,
+    "a shape object with a \"type\" field",
+    parse_shape
+);
+
+/// Fields every shape accepts besides its geometry's.
+const SHAPE_COMMON_FIELDS: &str = "`type`, `interior`, `exterior`, `bsdf`";
+
+fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
+    let tag = take_tag(&mut object, "shape", GeometryDesc::TYPES, None)?;
+    if !GeometryDesc::TYPES.contains(&tag.as_str()) {
+        return Err(unknown_type("shape", &tag, GeometryDesc::TYPES));
+    }
+    let interior = take::<String>(&mut object, "interior")?;
+    let exterior = take::<String>(&mut object, "exterior")?;
+    let bsdf = take::<BsdfDesc>(&mut object, "bsdf")?.unwrap_or_default();
+    let geometry = match tag.as_str() {
+        "sphere" => rest(object).map(GeometryDesc::Sphere),
+        "box" => rest(object).map(GeometryDesc::Box),
+        "rectangle" => rest(object).map(GeometryDesc::Rectangle),
+        _ => Err(unknown_type("shape", &tag, GeometryDesc::TYPES)),
+    };
+    let geometry = geometry.map_err(|mut e| {
+        let direct_child = !e.path.contains(['.', '[']);
+        if direct_child && e.message.starts_with("unknown field") {
+            e.message = format!(
+                "{}; every shape also accepts {SHAPE_COMMON_FIELDS}",
+                e.message
+            );
+        }
+        e
+    })?;
+    Ok(ShapeDesc {
+        geometry,
+        interior,
+        exterior,
+        bsdf,
+    })
+}
+
+deserialize_object!(BsdfDesc, "a bsdf object with a \"type\" field", parse_bsdf);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDiffuse {
+    #[serde(default = "half_gray")]
+    reflectance: ColorDesc,
+}
+
+fn half_gray() -> ColorDesc {
+    ColorDesc::Gray(0.5)
+}
+
+fn parse_bsdf(mut object: Object) -> Result<BsdfDesc, Located> {
+    let tag = take_tag(&mut object, "bsdf", BsdfDesc::TYPES, None)?;
+    match tag.as_str() {
+        "null" => rest::<NoFields>(object).map(|_| BsdfDesc::Null),
+        "diffuse" => {
+            let raw: RawDiffuse = rest(object)?;
+            Ok(BsdfDesc::Diffuse {
+                reflectance: raw.reflectance,
+            })
+        }
+        _ => Err(unknown_type("bsdf", &tag, BsdfDesc::TYPES)),
+    }
+}
+
+deserialize_object!(
+    TransformDesc,
+    "a transform object (translate, scale, rotate_x, rotate_y, rotate_z, or matrix)",
+    parse_transform
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTransform {
+    #[serde(default, deserialize_with = "optional_vec3")]
+    translate: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "optional_scale")]
+    scale: Option<[f32; 3]>,
+    #[serde(default)]
+    rotate_x: Option<f32>,
+    #[serde(default)]
+    rotate_y: Option<f32>,
+    #[serde(default)]
+    rotate_z: Option<f32>,
+    #[serde(default)]
+    matrix: Option<[[f32; 4]; 4]>,
+}
+
+fn parse_transform(object: Object) -> Result<TransformDesc, Located> {
+    let raw: RawTransform = rest(object)?;
+    if let Some(matrix) = raw.matrix {
+        let others = [
+            ("translate", raw.translate.is_some()),
+            ("scale", raw.scale.is_some()),
+            ("rotate_x", raw.rotate_x.is_some()),
+            ("rotate_y", raw.rotate_y.is_some()),
+            ("rotate_z", raw.rotate_z.is_some()),
+        ];
+        if let Some((name, _)) = others.iter().find(|(_, given)| *given) {
+            return Err(Located::new(
+                *name,
+                format!(
+                    "`{name}` cannot be combined with `matrix`: give a full matrix, or \
+                     translate/scale/rotate_x/rotate_y/rotate_z"
+                ),
+            ));
+        }
+        return Ok(TransformDesc::Matrix(matrix));
+    }
+    Ok(TransformDesc::Components {
+        scale: raw.scale.unwrap_or([1.0; 3]),
+        rotate_x: raw.rotate_x.unwrap_or(0.0),
+        rotate_y: raw.rotate_y.unwrap_or(0.0),
+        rotate_z: raw.rotate_z.unwrap_or(0.0),
+        translate: raw.translate.unwrap_or([0.0; 3]),
+    })
+}
+
+// ---------------------------------------------------------------------------
+// Lights
+// ---------------------------------------------------------------------------
+
+deserialize_object!(
+    LightDesc,
+    "a light object with a \"type\" field",
+    parse_light
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSpot {
+    #[serde(deserialize_with = "vec3")]
+    position: [f32; 3],
+    #[serde(default, deserialize_with = "optional_vec3")]
+    target: Option<[f32; 3]>,
+    #[serde(default, deserialize_with = "optional_vec3")]
+    direction: Option<[f32; 3]>,
+    intensity: ColorDesc,
+    #[serde(default = "default_cutoff_angle")]
+    cutoff_angle: f32,
+    #[serde(default)]
+    beam_width: Option<f32>,
+}
+
+fn default_cutoff_angle() -> f32 {
+    20.0
+}
+
+fn parse_light(mut object: Object) -> Result<LightDesc, Located> {
+    let tag = take_tag(&mut object, "light", LightDesc::TYPES, None)?;
+    match tag.as_str() {
+        "point" => rest(object).map(LightDesc::Point),
+        "spot" => {
+            let raw: RawSpot = rest(object)?;
+            let aim = match (raw.target, raw.direction) {
+                (Some(target), None) => SpotAimDesc::Target(target),
+                (None, Some(direction)) => SpotAimDesc::Direction(direction),
+                (Some(_), Some(_)) => {
+                    return Err(Located::new(
+                        "direction",
+                        "`target` and `direction` are mutually exclusive: give the point the \
+                         spot light looks at, or the direction of its axis",
+                    ))
+                }
+                (None, None) => {
+                    return Err(Located::new(
+                        "target",
+                        "missing required field `target` (or give `direction` instead)",
+                    ))
+                }
+            };
+            Ok(LightDesc::Spot(SpotLightDesc {
+                position: raw.position,
+                aim,
+                intensity: raw.intensity,
+                cutoff_angle: raw.cutoff_angle,
+                beam_width: raw.beam_width.unwrap_or(0.75 * raw.cutoff_angle),
+            }))
+        }
+        "directional" => rest(object).map(LightDesc::Directional),
+        "constant" => rest(object).map(LightDesc::Constant),
+        _ => Err(unknown_type("light", &tag, LightDesc::TYPES)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn out_of_range_numbers_are_reported_at_their_path() {
+        let text = "{\"version\": 1,\n \"media\": {\"fog\": {\"sigma_s\": [1, 1e400]}}}";
+        let err = parse_scene_str(text, "t.json").unwrap_err();
+        assert_eq!(err.path, "media.fog.sigma_s[1]", "{err}");
+        assert!(err.message.contains("line 2"), "{err}");
+    }
+
+    /// Every name in a `TYPES` list is accepted by its parser (the lists
+    /// feed error messages and must match the `match` arms).
+    #[test]
+    fn every_listed_type_is_parsed() {
+        fn accepted(parse: fn(Object) -> Result<(), Located>, types: &[&str]) {
+            for tag in types {
+                let mut object = Object::new();
+                object.insert("type".into(), Value::String(tag.to_string()));
+                if let Err(e) = parse(object) {
+                    assert!(!e.message.starts_with("unknown"), "{tag}: {e:?}");
+                }
+            }
+        }
+        accepted(|o| parse_camera(o).map(drop), CameraDesc::TYPES);
+        accepted(|o| parse_integrator(o).map(drop), IntegratorDesc::TYPES);
+        accepted(|o| parse_medium(o).map(drop), MediumDesc::TYPES);
+        accepted(|o| parse_phase(o).map(drop), PhaseDesc::TYPES);
+        accepted(|o| parse_shape(o).map(drop), GeometryDesc::TYPES);
+        accepted(|o| parse_bsdf(o).map(drop), BsdfDesc::TYPES);
+        accepted(|o| parse_light(o).map(drop), LightDesc::TYPES);
+    }
+}

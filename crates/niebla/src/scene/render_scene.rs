@@ -1,0 +1,203 @@
+//! The render-ready scene: typed ids, world-space shapes and lights, no strings
+//! on the per-sample path. Immutable and `Sync` while rendering.
+
+use crate::bsdf::Bsdf;
+use crate::camera::PerspectiveCamera;
+use crate::color::Rgb;
+use crate::geometry::{Shape, SurfaceHit};
+use crate::light::Light;
+use crate::math::{Ray, Vec3};
+use crate::medium::{Medium, MediumId};
+use crate::sampling::PixelSampler;
+use crate::tracking::{segment_transmittance, TransmittanceMethod};
+
+/// A shape with its surface model and the media on its two sides.
+#[derive(Clone, Debug)]
+pub struct SceneObject {
+    /// Geometry (world space).
+    pub shape: Shape,
+    /// Surface scattering.
+    pub bsdf: Bsdf,
+    /// Medium inside a closed shape (or behind a rectangle's normal).
+    pub interior: Option<MediumId>,
+    /// Medium outside (or in front of a rectangle's normal). When the scene file
+    /// leaves it out, the builder sets the medium that encloses the shape.
+    pub exterior: Option<MediumId>,
+    /// True when the shape bounds a medium (a side has a medium).
+    pub bounds_medium: bool,
+}
+
+/// A surface hit with the object it belongs to.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Geometric hit record.
+    pub surface: SurfaceHit,
+    /// Index into [`Scene::objects`].
+    pub object: u32,
+}
+
+/// Maximum number of index-matched boundaries a ray may cross before it is
+/// terminated (guards against rays trapped by numerical error).
+pub const MAX_BOUNDARY_CROSSINGS: u32 = 256;
+
+/// The scene as the integrators see it.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The camera.
+    pub camera: PerspectiveCamera,
+    /// Shapes with their surfaces and media.
+    pub objects: Vec<SceneObject>,
+    /// Media, indexed by [`MediumId`].
+    pub media: Vec<Medium>,
+    /// Names of the media (same order), for messages and `niebla info`.
+    pub medium_names: Vec<String>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// The medium that fills space outside every shape (`ambient_medium`).
+    pub ambient_medium: Option<MediumId>,
+    /// The medium the camera sits in (innermost closed shape containing it, else ambient).
+    pub camera_medium: Option<MediumId>,
+    /// World bounds of shapes, camera and positioned lights.
+    pub bounds: (Vec3, Vec3),
+}
+
+/// Offset from a surface point along `d` that moves a ray origin off the
+/// surface, scaled with the coordinates' magnitude.
+#[inline]
+pub fn offset_origin(p: Vec3, d: Vec3) -> Vec3 {
+    p + d * surface_epsilon(p)
+}
+
+/// Smallest ray parameter accepted for a ray that starts on a surface at `p`,
+/// so that the surface it leaves is not hit again.
+#[inline]
+pub fn surface_epsilon(p: Vec3) -> f32 {
+    1e-4 * p.abs().max_element().max(1.0)
+}
+
+impl Scene {
+    /// Nearest surface hit along `ray` with `t` in `(t_min, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_best = t_max;
+        for (i, object) in self.objects.iter().enumerate() {
+            if let Some(h) = object.shape.intersect(ray, t_min, t_best) {
+                t_best = h.t;
+                best = Some(Hit {
+                    surface: h,
+                    object: i as u32,
+                });
+            }
+        }
+        best
+    }
+
+    /// The medium with id `id`.
+    #[inline]
+    pub fn medium(&self, id: MediumId) -> &Medium {
+        &self.media[id.0 as usize]
+    }
+
+    /// The object hit.
+    #[inline]
+    pub fn object(&self, hit: &Hit) -> &SceneObject {
+        &self.objects[hit.object as usize]
+    }
+
+    /// The medium a ray travelling along `d` is in after crossing the
+    /// index-matched boundary `hit`, given the medium it was in before.
+    #[inline]
+    pub fn medium_after_crossing(
+        &self,
+        hit: &Hit,
+        d: Vec3,
+        current: Option<MediumId>,
+    ) -> Option<MediumId> {
+        let object = self.object(hit);
+        if !object.bounds_medium {
+            return current;
+        }
+        if d.dot(hit.surface.n) < 0.0 {
+            object.interior
+        } else {
+            object.exterior
+        }
+    }
+
+    /// The medium at point `p`: the interior of the innermost (smallest) closed
+    /// shape with an interior medium that contains `p`, else the ambient medium.
+    pub fn medium_at(&self, p: Vec3) -> Option<MediumId> {
+        let mut best: Option<(f32, MediumId)> = None;
+        for object in &self.objects {
+            if let Some(id) = object.interior {
+                if object.shape.contains(p) {
+                    let v = object.shape.volume();
+                    if best.is_none_or(|(bv, _)| v < bv) {
+                        best = Some((v, id));
+                    }
+                }
+            }
+        }
+        best.map(|(_, id)| id).or(self.ambient_medium)
+    }
+
+    /// Transmittance from `p` (inside `medium`) along unit `wi` over `distance`
+    /// (may be infinite), crossing index-matched boundaries; zero if an opaque
+    /// surface is in the way.
+    pub fn transmittance(
+        &self,
+        p: Vec3,
+        mut medium: Option<MediumId>,
+        wi: Vec3,
+        distance: f32,
+        method: TransmittanceMethod,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let mut tr = Rgb::ONE;
+        let mut ray = Ray::new(p, wi);
+        let mut remaining = distance;
+        let mut t_min = 0.0;
+        for _ in 0..MAX_BOUNDARY_CROSSINGS {
+            let hit = self.intersect(&ray, t_min, remaining);
+            let t_end = hit.map_or(remaining, |h| h.surface.t);
+            if let Some(id) = medium {
+                tr *= segment_transmittance(self.medium(id), &ray, 0.0, t_end, method, sampler);
+                if tr.is_black() {
+                    return tr;
+                }
+            }
+            let Some(hit) = hit else {
+                return tr;
+            };
+            if !self.object(&hit).bsdf.is_null() {
+                return Rgb::ZERO;
+            }
+            // Cross the index-matched boundary: continue from the hit point itself
+            // (no path length is lost), ignoring hits closer than an epsilon.
+            medium = self.medium_after_crossing(&hit, wi, medium);
+            remaining -= hit.surface.t;
+            ray = Ray::new(hit.surface.p, wi);
+            t_min = surface_epsilon(hit.surface.p);
+            if remaining <= t_min {
+                return tr;
+            }
+        }
+        Rgb::ZERO
+    }
+
+    /// Radiance of environment lights seen along an escaping direction `d`.
+    #[inline]
+    pub fn escaped_radiance(&self, d: Vec3) -> Rgb {
+        let mut l = Rgb::ZERO;
+        for light in &self.lights {
+            l += light.le_escaped(d);
+        }
+        l
+    }
+
+    /// Length of the diagonal of the scene bounds (a scale for default steps).
+    pub fn diagonal(&self) -> f32 {
+        (self.bounds.1 - self.bounds.0).length()
+    }
+}

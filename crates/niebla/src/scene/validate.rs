@@ -1,0 +1,490 @@
+//! Checks on a parsed [`SceneDesc`]: ranges, finiteness, geometric sanity and
+//! references between objects (medium names). Each failure names the JSON path
+//! of the offending value, down to the channel or component
+//! (`media.fog.sigma_s[2]`).
+
+use super::desc::*;
+use super::error::SceneError;
+
+/// Largest image side in pixels.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+/// Largest image size in pixels (2^26, e.g. 8192 x 8192).
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 26;
+
+impl SceneDesc {
+    /// Checks the description and returns the first problem found, as an
+    /// error in file `source` at the problem's JSON path.
+    ///
+    /// Checked: `version` is 1; every number is finite (values beyond the
+    /// 32-bit float range read as infinite); coefficients, intensities and
+    /// radiances are >= 0 and albedos and reflectances in [0, 1]; phase
+    /// parameters `g`, `g1`, `g2`, `k` in (-1, 1) and `w` in [0, 1]; the
+    /// camera has a valid resolution (each side 1 to 16384, at most 2^26
+    /// pixels), a field of view in (0, 180) degrees, `position != target` and
+    /// an `up` not parallel to the view direction; shapes are non-degenerate;
+    /// every medium name used (`interior`, `exterior`, `ambient_medium`) is
+    /// defined in `media`. [`parse_scene_str`](super::parse_scene_str) calls
+    /// this; call it again after editing a description in code.
+    pub fn validate(&self, source: &str) -> Result<(), SceneError> {
+        validate_scene(self).map_err(|e| SceneError::new(source, e.path, e.message))
+    }
+}
+
+/// A failed check: where and what.
+struct Invalid {
+    path: String,
+    message: String,
+}
+
+type Check = Result<(), Invalid>;
+
+fn fail(path: impl Into<String>, message: impl Into<String>) -> Check {
+    Err(Invalid {
+        path: path.into(),
+        message: message.into(),
+    })
+}
+
+fn validate_scene(desc: &SceneDesc) -> Check {
+    if desc.version != SCENE_VERSION {
+        return fail(
+            "version",
+            format!(
+                "unsupported scene version {}; this build of niebla reads version {SCENE_VERSION}",
+                desc.version
+            ),
+        );
+    }
+    validate_camera(&desc.camera)?;
+    validate_render(&desc.render)?;
+    for (name, medium) in &desc.media {
+        if name.is_empty() {
+            return fail("media", "medium names must not be empty");
+        }
+        validate_medium(&format!("media.{name}"), medium)?;
+    }
+    for (i, shape) in desc.shapes.iter().enumerate() {
+        validate_shape(desc, &format!("shapes[{i}]"), shape)?;
+    }
+    for (i, light) in desc.lights.iter().enumerate() {
+        validate_light(&format!("lights[{i}]"), light)?;
+    }
+    if let Some(name) = &desc.ambient_medium {
+        medium_exists(desc, "ambient_medium", name)?;
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------
+// Numbers, vectors and colors
+// ---------------------------------------------------------------------------
+
+fn finite(path: &str, x: f32) -> Check {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        fail(
+            path,
+            format!("expected a finite number, got {x} (magnitude must be below 3.4e38)"),
+        )
+    }
+}
+
+fn non_negative(path: &str, x: f32) -> Check {
+    finite(path, x)?;
+    if x >= 0.0 {
+        Ok(())
+    } else {
+        fail(path, format!("must be >= 0, got {x}"))
+    }
+}
+
+fn positive(path: &str, x: f32) -> Check {
+    finite(path, x)?;
+    if x > 0.0 {
+        Ok(())
+    } else {
+        fail(path, format!("must be > 0, got {x}"))
+    }
+}
+
+fn in_unit_interval(path: &str, x: f32) -> Check {
+    finite(path, x)?;
+    if (0.0..=1.0).contains(&x) {
+        Ok(())
+    } else {
+        fail(path, format!("must be in [0, 1], got {x}"))
+    }
+}
+
+/// An asymmetry-like parameter in the open interval (-1, 1).
+fn asymmetry(path: &str, x: f32) -> Check {
+    finite(path, x)?;
+    if x > -1.0 && x < 1.0 {
+        Ok(())
+    } else {
+        fail(
+            path,
+            format!("must be in the open interval (-1, 1), got {x}"),
+        )
+    }
+}
+
+/// Applies `check` to a color: to the value itself for a scalar, to each
+/// channel (path `name[i]`) for an RGB triple.
+fn color(path: &str, c: &ColorDesc, check: fn(&str, f32) -> Check) -> Check {
+    match c {
+        ColorDesc::Gray(v) => check(path, *v),
+        ColorDesc::Rgb(rgb) => {
+            for (i, v) in rgb.iter().enumerate() {
+                check(&format!("{path}[{i}]"), *v)?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn vector(path: &str, v: &[f32; 3]) -> Check {
+    for (i, x) in v.iter().enumerate() {
+        finite(&format!("{path}[{i}]"), *x)?;
+    }
+    Ok(())
+}
+
+fn non_zero_vector(path: &str, v: &[f32; 3]) -> Check {
+    vector(path, v)?;
+    if v.iter().all(|x| *x == 0.0) {
+        return fail(path, "must be a non-zero vector");
+    }
+    Ok(())
+}
+
+fn length(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+fn difference(a: &[f32; 3], b: &[f32; 3]) -> [f64; 3] {
+    [
+        f64::from(a[0]) - f64::from(b[0]),
+        f64::from(a[1]) - f64::from(b[1]),
+        f64::from(a[2]) - f64::from(b[2]),
+    ]
+}
+
+// ---------------------------------------------------------------------------
+// Camera and render settings
+// ---------------------------------------------------------------------------
+
+fn validate_camera(camera: &CameraDesc) -> Check {
+    match camera {
+        CameraDesc::Perspective(c) => {
+            vector("camera.position", &c.position)?;
+            vector("camera.target", &c.target)?;
+            vector("camera.up", &c.up)?;
+            finite("camera.fov_y", c.fov_y)?;
+            if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
+                return fail(
+                    "camera.fov_y",
+                    format!(
+                        "vertical field of view must be in the open interval (0, 180) degrees, got {}",
+                        c.fov_y
+                    ),
+                );
+            }
+            image_side("camera.width", c.width)?;
+            image_side("camera.height", c.height)?;
+            let pixels = u64::from(c.width) * u64::from(c.height);
+            if pixels > MAX_IMAGE_PIXELS {
+                return fail(
+                    "camera",
+                    format!(
+                        "width x height = {} x {} = {pixels} pixels exceeds the limit of \
+                         {MAX_IMAGE_PIXELS} (2^26) pixels",
+                        c.width, c.height
+                    ),
+                );
+            }
+            let view = difference(&c.target, &c.position);
+            if length(view) == 0.0 {
+                return fail("camera.target", "must differ from `position`");
+            }
+            let up = c.up.map(f64::from);
+            let cross = [
+                view[1] * up[2] - view[2] * up[1],
+                view[2] * up[0] - view[0] * up[2],
+                view[0] * up[1] - view[1] * up[0],
+            ];
+            if length(up) == 0.0 {
+                return fail("camera.up", "must be a non-zero vector");
+            }
+            if length(cross) <= 1e-6 * length(view) * length(up) {
+                return fail(
+                    "camera.up",
+                    "must not be parallel to the view direction (target - position)",
+                );
+            }
+            Ok(())
+        }
+    }
+}
+
+fn image_side(path: &str, pixels: u32) -> Check {
+    if pixels == 0 {
+        fail(path, "must be at least 1 pixel, got 0")
+    } else if pixels > MAX_IMAGE_SIDE {
+        fail(
+            path,
+            format!("must be at most {MAX_IMAGE_SIDE} pixels, got {pixels}"),
+        )
+    } else {
+        Ok(())
+    }
+}
+
+fn validate_render(render: &RenderDesc) -> Check {
+    if render.spp == 0 {
+        return fail("render.spp", "samples per pixel must be at least 1, got 0");
+    }
+    finite("render.exposure", render.exposure)?;
+    let march = match &render.integrator {
+        IntegratorDesc::Single(s) => s.march,
+        IntegratorDesc::Emission(e) => e.march,
+    };
+    match march {
+        MarchStepDesc::Auto => Ok(()),
+        MarchStepDesc::Length(step) => positive("render.integrator.step", step),
+        MarchStepDesc::PerSegment(0) => {
+            fail("render.integrator.steps", "must be at least 1, got 0")
+        }
+        MarchStepDesc::PerSegment(_) => Ok(()),
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Media and phase functions
+// ---------------------------------------------------------------------------
+
+fn validate_medium(base: &str, medium: &MediumDesc) -> Check {
+    match medium {
+        MediumDesc::Homogeneous(m) => {
+            match &m.coefficients {
+                CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s } => {
+                    color(&format!("{base}.sigma_a"), sigma_a, non_negative)?;
+                    color(&format!("{base}.sigma_s"), sigma_s, non_negative)?;
+                }
+                CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo } => {
+                    color(&format!("{base}.sigma_t"), sigma_t, non_negative)?;
+                    color(&format!("{base}.albedo"), albedo, in_unit_interval)?;
+                }
+            }
+            positive(&format!("{base}.scale"), m.scale)?;
+            validate_phase(&format!("{base}.phase"), &m.phase)?;
+            if let Some(emission) = &m.emission {
+                color(
+                    &format!("{base}.emission.L_ve"),
+                    &emission.l_ve,
+                    non_negative,
+                )?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn validate_phase(base: &str, phase: &PhaseDesc) -> Check {
+    match phase {
+        PhaseDesc::Isotropic | PhaseDesc::Rayleigh | PhaseDesc::Fog | PhaseDesc::MieFog => Ok(()),
+        PhaseDesc::HenyeyGreenstein { g } | PhaseDesc::CornetteShanks { g } => {
+            asymmetry(&format!("{base}.g"), *g)
+        }
+        PhaseDesc::DoubleHenyeyGreenstein { w, g1, g2 } => {
+            in_unit_interval(&format!("{base}.w"), *w)?;
+            asymmetry(&format!("{base}.g1"), *g1)?;
+            asymmetry(&format!("{base}.g2"), *g2)
+        }
+        PhaseDesc::Schlick(SchlickDesc::K(k)) => asymmetry(&format!("{base}.k"), *k),
+        PhaseDesc::Schlick(SchlickDesc::G(g)) => asymmetry(&format!("{base}.g"), *g),
+        PhaseDesc::Tabulated { file, column } => {
+            if file.is_empty() {
+                return fail(format!("{base}.file"), "expected a file name, got \"\"");
+            }
+            if column.is_empty() {
+                return fail(format!("{base}.column"), "expected a column name, got \"\"");
+            }
+            Ok(())
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Shapes
+// ---------------------------------------------------------------------------
+
+fn medium_exists(desc: &SceneDesc, path: &str, name: &str) -> Check {
+    if desc.media.contains_key(name) {
+        return Ok(());
+    }
+    if desc.media.is_empty() {
+        return fail(
+            path,
+            format!("unknown medium {name:?}; the scene defines no media (add it under `media`)"),
+        );
+    }
+    let known: Vec<&str> = desc.media.keys().map(String::as_str).collect();
+    fail(
+        path,
+        format!("unknown medium {name:?}; known media: {}", known.join(", ")),
+    )
+}
+
+fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
+    match &shape.geometry {
+        GeometryDesc::Sphere(s) => {
+            vector(&format!("{base}.center"), &s.center)?;
+            positive(&format!("{base}.radius"), s.radius)?;
+        }
+        GeometryDesc::Box(b) => {
+            vector(&format!("{base}.min"), &b.min)?;
+            vector(&format!("{base}.max"), &b.max)?;
+            for axis in 0..3 {
+                if b.min[axis] >= b.max[axis] {
+                    return fail(
+                        format!("{base}.max[{axis}]"),
+                        format!(
+                            "must be greater than min[{axis}] = {}, got {}",
+                            b.min[axis], b.max[axis]
+                        ),
+                    );
+                }
+            }
+        }
+        GeometryDesc::Rectangle(r) => validate_transform(&format!("{base}.to_world"), &r.to_world)?,
+    }
+    if let Some(name) = &shape.interior {
+        medium_exists(desc, &format!("{base}.interior"), name)?;
+    }
+    if let Some(name) = &shape.exterior {
+        medium_exists(desc, &format!("{base}.exterior"), name)?;
+    }
+    match &shape.bsdf {
+        BsdfDesc::Null => Ok(()),
+        BsdfDesc::Diffuse { reflectance } => color(
+            &format!("{base}.bsdf.reflectance"),
+            reflectance,
+            in_unit_interval,
+        ),
+    }
+}
+
+fn validate_transform(base: &str, transform: &TransformDesc) -> Check {
+    match transform {
+        TransformDesc::Components {
+            scale,
+            rotate_x,
+            rotate_y,
+            rotate_z,
+            translate,
+        } => {
+            // A uniform scale may have been written as one number: point at
+            // the field rather than at a component.
+            let uniform = scale[0] == scale[1] && scale[1] == scale[2];
+            for (i, s) in scale.iter().enumerate() {
+                let path = if uniform {
+                    format!("{base}.scale")
+                } else {
+                    format!("{base}.scale[{i}]")
+                };
+                finite(&path, *s)?;
+                if *s == 0.0 {
+                    return fail(path, "scale factors must be non-zero");
+                }
+            }
+            finite(&format!("{base}.rotate_x"), *rotate_x)?;
+            finite(&format!("{base}.rotate_y"), *rotate_y)?;
+            finite(&format!("{base}.rotate_z"), *rotate_z)?;
+            vector(&format!("{base}.translate"), translate)
+        }
+        TransformDesc::Matrix(m) => {
+            for (r, row) in m.iter().enumerate() {
+                for (c, x) in row.iter().enumerate() {
+                    finite(&format!("{base}.matrix[{r}][{c}]"), *x)?;
+                }
+            }
+            if m[3] != [0.0, 0.0, 0.0, 1.0] {
+                return fail(
+                    format!("{base}.matrix[3]"),
+                    "the last row must be [0, 0, 0, 1] (only affine transforms are supported)",
+                );
+            }
+            let a = |r: usize, c: usize| f64::from(m[r][c]);
+            let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
+                - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
+                + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+            let size = (0..3)
+                .flat_map(|r| (0..3).map(move |c| (r, c)))
+                .map(|(r, c)| a(r, c).abs())
+                .fold(0.0, f64::max);
+            if det.abs() <= 1e-12 * size * size * size {
+                return fail(
+                    format!("{base}.matrix"),
+                    "the upper 3x3 block is singular; the transform must be invertible",
+                );
+            }
+            Ok(())
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Lights
+// ---------------------------------------------------------------------------
+
+fn validate_light(base: &str, light: &LightDesc) -> Check {
+    match light {
+        LightDesc::Point(p) => {
+            vector(&format!("{base}.position"), &p.position)?;
+            color(&format!("{base}.intensity"), &p.intensity, non_negative)
+        }
+        LightDesc::Spot(s) => {
+            vector(&format!("{base}.position"), &s.position)?;
+            match &s.aim {
+                SpotAimDesc::Target(target) => {
+                    let path = format!("{base}.target");
+                    vector(&path, target)?;
+                    if length(difference(target, &s.position)) == 0.0 {
+                        return fail(path, "must differ from `position`");
+                    }
+                }
+                SpotAimDesc::Direction(direction) => {
+                    non_zero_vector(&format!("{base}.direction"), direction)?;
+                }
+            }
+            color(&format!("{base}.intensity"), &s.intensity, non_negative)?;
+            let cutoff_path = format!("{base}.cutoff_angle");
+            finite(&cutoff_path, s.cutoff_angle)?;
+            if !(s.cutoff_angle > 0.0 && s.cutoff_angle <= 90.0) {
+                return fail(
+                    cutoff_path,
+                    format!("must be in (0, 90] degrees, got {}", s.cutoff_angle),
+                );
+            }
+            let beam_path = format!("{base}.beam_width");
+            finite(&beam_path, s.beam_width)?;
+            if !(s.beam_width > 0.0 && s.beam_width <= s.cutoff_angle) {
+                return fail(
+                    beam_path,
+                    format!(
+                        "must be in (0, cutoff_angle = {}] degrees, got {}",
+                        s.cutoff_angle, s.beam_width
+                    ),
+                );
+            }
+            Ok(())
+        }
+        LightDesc::Directional(d) => {
+            non_zero_vector(&format!("{base}.direction"), &d.direction)?;
+            color(&format!("{base}.irradiance"), &d.irradiance, non_negative)
+        }
+        LightDesc::Constant(c) => color(&format!("{base}.radiance"), &c.radiance, non_negative),
+    }
+}

@@ -1,0 +1,124 @@
+//! Helpers shared by the integration tests: scenes built directly from runtime
+//! types, reference CSV reading, and Monte Carlo statistics.
+#![allow(dead_code)]
+
+use niebla::camera::PerspectiveCamera;
+use niebla::color::Rgb;
+use niebla::light::Light;
+use niebla::math::Vec3;
+use niebla::medium::{HomogeneousMedium, Medium, MediumId};
+use niebla::phase::PhaseFunction;
+use niebla::scene::{Scene, SceneObject};
+
+/// Rows of a reference CSV (comment lines start with '#', then a header).
+pub fn read_reference_csv(name: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/reference")
+        .join(name);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(|s| s.trim().to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+/// A parsed float field (`inf` allowed).
+pub fn field(row: &std::collections::HashMap<String, String>, key: &str) -> f64 {
+    let v = &row[key];
+    if v == "inf" {
+        f64::INFINITY
+    } else {
+        v.parse().unwrap_or_else(|_| panic!("{key} = {v}"))
+    }
+}
+
+/// A homogeneous medium from sigma_a, sigma_s (gray), emission and phase.
+/// Runtime types do not validate, so tests may build the non-physical
+/// `sigma_a < 0` needed for "attenuation neglected" reference rows.
+pub fn homogeneous(sigma_a: f32, sigma_s: f32, l_ve: Rgb, phase: PhaseFunction) -> Medium {
+    Medium::Homogeneous(HomogeneousMedium {
+        sigma_a: Rgb::splat(sigma_a),
+        sigma_s: Rgb::splat(sigma_s),
+        l_ve,
+        phase,
+    })
+}
+
+/// A scene made of its parts, with bounds from the camera, shapes and lights.
+pub fn scene(
+    camera: PerspectiveCamera,
+    objects: Vec<SceneObject>,
+    media: Vec<Medium>,
+    lights: Vec<Light>,
+    ambient: Option<MediumId>,
+) -> Scene {
+    let mut lo = camera.position;
+    let mut hi = camera.position;
+    for o in &objects {
+        let (a, b) = o.shape.bounds();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    for l in &lights {
+        if let Some(p) = l.point_position() {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    let names = (0..media.len()).map(|i| format!("m{i}")).collect();
+    let mut s = Scene {
+        camera,
+        objects,
+        media,
+        medium_names: names,
+        lights,
+        ambient_medium: ambient,
+        camera_medium: None,
+        bounds: (lo, hi),
+    };
+    s.camera_medium = s.medium_at(s.camera.position);
+    s
+}
+
+/// A camera at the origin looking along +x.
+pub fn camera_along_x(width: u32, height: u32, fov_y: f32) -> PerspectiveCamera {
+    PerspectiveCamera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, fov_y, width, height).unwrap()
+}
+
+/// Running mean and standard error of a scalar estimator.
+#[derive(Default, Clone, Copy, Debug)]
+pub struct Stats {
+    n: u64,
+    sum: f64,
+    sum2: f64,
+}
+
+impl Stats {
+    pub fn add(&mut self, x: f64) {
+        self.n += 1;
+        self.sum += x;
+        self.sum2 += x * x;
+    }
+    pub fn mean(&self) -> f64 {
+        self.sum / self.n as f64
+    }
+    /// Standard error of the mean.
+    pub fn standard_error(&self) -> f64 {
+        let m = self.mean();
+        ((self.sum2 / self.n as f64 - m * m).max(0.0) / self.n as f64).sqrt()
+    }
+}

@@ -1,0 +1,858 @@
+//! Scene files: a valid scene parses, and every bad input is an error that
+//! names the file, the exact JSON path and what was expected, never a panic.
+//!
+//! Each error test takes the valid scene [`FULL`], changes one thing in its
+//! text and checks the error's `file`, `path` and message.
+
+use niebla::scene::{
+    load_scene_file, parse_scene_str, BsdfDesc, CameraDesc, CoefficientsDesc, ColorDesc,
+    GeometryDesc, IntegratorDesc, LightDesc, MarchStepDesc, MediumDesc, PhaseDesc,
+    ScatterSamplingDesc, SceneError, SchlickDesc, SpotAimDesc, TransformDesc,
+};
+
+const FILE: &str = "test.json";
+
+/// A valid scene using most of the schema.
+const FULL: &str = r#"{
+  "version": 1,
+  "camera": {"type": "perspective", "position": [0, 1, 4], "target": [0, 1, 0],
+             "up": [0, 1, 0], "fov_y": 35, "width": 64, "height": 48},
+  "render": {"integrator": {"type": "single", "step": 0.05, "sampling": "mis",
+                            "transmittance": "analytic"},
+             "spp": 4, "seed": 7, "exposure": 0.5},
+  "media": {
+    "fog": {"sigma_a": 0.01, "sigma_s": [0.08, 0.09, 0.1], "phase": {"type": "isotropic"}},
+    "smoke": {"type": "homogeneous", "sigma_t": 3, "albedo": 0.8, "scale": 2,
+              "phase": {"type": "hg", "g": 0.3}, "emission": {"L_ve": [0.1, 0.05, 0.01]}},
+    "haze": {"sigma_a": 0, "sigma_s": 0.2,
+             "phase": {"type": "double_hg", "w": 0.7, "g1": 0.8, "g2": -0.3}},
+    "mist": {"sigma_a": 0, "sigma_s": 0.2, "phase": {"type": "schlick", "k": 0.5}},
+    "cloud": {"sigma_t": [1, 2, 3], "albedo": [0.9, 0.95, 1],
+              "phase": {"type": "tabulated", "file": "mie.csv"}}
+  },
+  "shapes": [
+    {"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "interior": "smoke"},
+    {"type": "sphere", "center": [0, 1, 0], "radius": 0.5, "interior": "haze", "exterior": "smoke"},
+    {"type": "rectangle", "to_world": {"translate": [0, 0, 0], "scale": 10, "rotate_x": -90},
+     "bsdf": {"type": "diffuse", "reflectance": 0.5}},
+    {"type": "rectangle", "interior": "mist",
+     "to_world": {"matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], [0, 0, 0, 1]]}}
+  ],
+  "lights": [
+    {"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 3.0},
+    {"type": "point", "position": [2, 3, 1], "intensity": [50, 45, 40]},
+    {"type": "spot", "position": [0, 3, 0], "target": [0, 0, 0], "intensity": 100,
+     "cutoff_angle": 30},
+    {"type": "constant", "radiance": [0.05, 0.07, 0.1]}
+  ],
+  "ambient_medium": "fog"
+}"#;
+
+/// `FULL` with the one occurrence of `from` replaced by `to`.
+fn edit(from: &str, to: &str) -> String {
+    assert_eq!(
+        FULL.matches(from).count(),
+        1,
+        "`{from}` must occur once in FULL"
+    );
+    FULL.replacen(from, to, 1)
+}
+
+/// Parses `text`, expects an error at `path` whose message contains
+/// `expected`, and checks the file name and the Display form.
+#[track_caller]
+fn assert_error(text: &str, path: &str, expected: &str) -> SceneError {
+    let err = match parse_scene_str(text, FILE) {
+        Ok(_) => panic!("expected an error at `{path}`, but the scene parsed"),
+        Err(e) => e,
+    };
+    assert_eq!(err.file, FILE, "{err}");
+    assert_eq!(err.path, path, "{err}");
+    assert!(
+        err.message.contains(expected),
+        "message of `{err}` lacks `{expected}`"
+    );
+    let shown = err.to_string();
+    if path.is_empty() {
+        assert_eq!(shown, format!("{FILE}: {}", err.message));
+    } else {
+        assert_eq!(shown, format!("{FILE}: {path}: {}", err.message));
+    }
+    err
+}
+
+// ---------------------------------------------------------------------------
+// The valid scene
+// ---------------------------------------------------------------------------
+
+#[test]
+fn full_scene_parses_with_defaults_filled_in() {
+    let desc = parse_scene_str(FULL, FILE).unwrap();
+    let CameraDesc::Perspective(camera) = &desc.camera;
+    assert_eq!((camera.width, camera.height, camera.fov_y), (64, 48, 35.0));
+    assert_eq!(desc.render.spp, 4);
+    assert_eq!(desc.render.seed, 7);
+    match &desc.render.integrator {
+        IntegratorDesc::Single(s) => {
+            assert_eq!(s.march, MarchStepDesc::Length(0.05));
+            assert_eq!(s.sampling, ScatterSamplingDesc::Mis);
+        }
+        other => panic!("wrong integrator {other:?}"),
+    }
+    assert_eq!(desc.media.len(), 5);
+    let MediumDesc::Homogeneous(smoke) = &desc.media["smoke"];
+    assert_eq!(
+        smoke.coefficients,
+        CoefficientsDesc::ExtinctionAlbedo {
+            sigma_t: ColorDesc::Gray(3.0),
+            albedo: ColorDesc::Gray(0.8)
+        }
+    );
+    let (sigma_a, sigma_s) = smoke.sigma_a_sigma_s();
+    assert!((sigma_s.r() - 4.8).abs() < 1e-5 && (sigma_a.g() - 1.2).abs() < 1e-5);
+    assert_eq!(smoke.phase, PhaseDesc::HenyeyGreenstein { g: 0.3 });
+    let MediumDesc::Homogeneous(fog) = &desc.media["fog"];
+    assert_eq!(fog.scale, 1.0);
+    assert_eq!(fog.emission, None);
+    let MediumDesc::Homogeneous(mist) = &desc.media["mist"];
+    assert_eq!(mist.phase, PhaseDesc::Schlick(SchlickDesc::K(0.5)));
+    let MediumDesc::Homogeneous(cloud) = &desc.media["cloud"];
+    assert_eq!(
+        cloud.phase,
+        PhaseDesc::Tabulated {
+            file: "mie.csv".into(),
+            column: "p_mie_poly".into()
+        }
+    );
+
+    assert_eq!(desc.shapes.len(), 4);
+    assert_eq!(desc.shapes[0].bsdf, BsdfDesc::Null);
+    assert_eq!(desc.shapes[1].exterior.as_deref(), Some("smoke"));
+    match &desc.shapes[2].geometry {
+        GeometryDesc::Rectangle(r) => assert_eq!(
+            r.to_world,
+            TransformDesc::Components {
+                scale: [10.0; 3],
+                rotate_x: -90.0,
+                rotate_y: 0.0,
+                rotate_z: 0.0,
+                translate: [0.0; 3]
+            }
+        ),
+        other => panic!("wrong shape {other:?}"),
+    }
+    assert!(matches!(
+        &desc.shapes[3].geometry,
+        GeometryDesc::Rectangle(r) if matches!(r.to_world, TransformDesc::Matrix(_))
+    ));
+    match &desc.lights[2] {
+        LightDesc::Spot(s) => {
+            assert_eq!(s.aim, SpotAimDesc::Target([0.0; 3]));
+            assert_eq!((s.cutoff_angle, s.beam_width), (30.0, 22.5));
+        }
+        other => panic!("wrong light {other:?}"),
+    }
+    assert_eq!(desc.ambient_medium.as_deref(), Some("fog"));
+}
+
+#[test]
+fn minimal_scene_gets_documented_defaults() {
+    let text = r#"{"version": 1, "camera": {"type": "perspective", "position": [0, 0, 5],
+                   "target": [0, 0, 0], "width": 8, "height": 8}}"#;
+    let desc = parse_scene_str(text, FILE).unwrap();
+    let CameraDesc::Perspective(camera) = &desc.camera;
+    assert_eq!((camera.up, camera.fov_y), ([0.0, 1.0, 0.0], 40.0));
+    assert_eq!(
+        (desc.render.spp, desc.render.seed, desc.render.exposure),
+        (16, 0, 0.0)
+    );
+    assert_eq!(desc.render.integrator, IntegratorDesc::default());
+    assert!(desc.media.is_empty() && desc.shapes.is_empty() && desc.lights.is_empty());
+    assert_eq!(desc.ambient_medium, None);
+}
+
+#[test]
+fn scene_file_loads_from_disk() {
+    let path = std::env::temp_dir().join(format!("niebla_scene_{}.json", std::process::id()));
+    std::fs::write(&path, FULL).unwrap();
+    let loaded = load_scene_file(&path);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(loaded.unwrap(), parse_scene_str(FULL, FILE).unwrap());
+}
+
+// ---------------------------------------------------------------------------
+// Unknown keys
+// ---------------------------------------------------------------------------
+
+#[test]
+fn unknown_top_level_key_names_the_key() {
+    let text = edit(
+        r#""ambient_medium": "fog""#,
+        r#""ambient_medium": "fog", "ambient_mediun": 1"#,
+    );
+    assert_error(
+        &text,
+        "ambient_mediun",
+        "unknown field `ambient_mediun`, expected one of",
+    );
+}
+
+#[test]
+fn unknown_medium_key_names_the_key() {
+    let text = edit(r#""sigma_s": [0.08"#, r#""sigam_s": [0.08"#);
+    let err = assert_error(&text, "media.fog.sigam_s", "unknown field `sigam_s`");
+    assert!(err.message.contains("`sigma_s`"), "{err}");
+}
+
+#[test]
+fn unknown_light_key_names_the_key() {
+    let text = edit(r#""intensity": [50"#, r#""intensty": [50"#);
+    assert_error(&text, "lights[1].intensty", "unknown field `intensty`");
+}
+
+#[test]
+fn unknown_phase_key_names_the_key() {
+    let text = edit(r#""g": 0.3"#, r#""g": 0.3, "gg": 1"#);
+    assert_error(
+        &text,
+        "media.smoke.phase.gg",
+        "unknown field `gg`, expected `g`",
+    );
+    let text = edit(
+        r#"{"type": "isotropic"}"#,
+        r#"{"type": "isotropic", "g": 0}"#,
+    );
+    assert_error(
+        &text,
+        "media.fog.phase.g",
+        "unknown field `g`; this type has no fields besides `type`",
+    );
+}
+
+#[test]
+fn unknown_keys_in_camera_render_integrator_and_emission_name_the_key() {
+    let text = edit(r#""fov_y": 35"#, r#""fovy": 35"#);
+    assert_error(&text, "camera.fovy", "unknown field `fovy`");
+    let text = edit(r#""spp": 4"#, r#""spp": 4, "max_depth": 3"#);
+    assert_error(&text, "render.max_depth", "unknown field `max_depth`");
+    let text = edit(r#""sampling": "mis""#, r#""sampling": "mis", "sampels": 1"#);
+    assert_error(
+        &text,
+        "render.integrator.sampels",
+        "unknown field `sampels`",
+    );
+    let text = edit(r#""L_ve""#, r#""L_e""#);
+    assert_error(
+        &text,
+        "media.smoke.emission.L_e",
+        "unknown field `L_e`, expected `L_ve`",
+    );
+}
+
+#[test]
+fn unknown_keys_in_shapes_list_the_common_fields_too() {
+    let text = edit(r#""interior": "smoke"}"#, r#""interor": "smoke"}"#);
+    let err = assert_error(&text, "shapes[0].interor", "unknown field `interor`");
+    assert!(err.message.contains("`interior`"), "{err}");
+}
+
+#[test]
+fn unknown_keys_two_tagged_levels_deep_keep_the_full_path() {
+    let text = edit(r#""reflectance": 0.5"#, r#""reflectanse": 0.5"#);
+    assert_error(
+        &text,
+        "shapes[2].bsdf.reflectanse",
+        "unknown field `reflectanse`",
+    );
+    let text = edit(r#""rotate_x": -90"#, r#""rotate": -90"#);
+    assert_error(&text, "shapes[2].to_world.rotate", "unknown field `rotate`");
+}
+
+#[test]
+fn duplicate_key_is_an_error_at_its_path() {
+    let text = edit(r#""radius": 0.5"#, r#""radius": 0.5, "radius": 2"#);
+    assert_error(&text, "shapes[1].radius", "duplicate key `radius`");
+}
+
+// ---------------------------------------------------------------------------
+// Wrong types and shapes of values
+// ---------------------------------------------------------------------------
+
+#[test]
+fn string_where_number_expected_names_the_element() {
+    let text = edit("[50, 45, 40]", r#"[50, 45, "40"]"#);
+    assert_error(&text, "lights[1].intensity[2]", "expected a number");
+    let text = edit(r#""fov_y": 35"#, r#""fov_y": "wide""#);
+    assert_error(
+        &text,
+        "camera.fov_y",
+        "invalid type: string \"wide\", expected a number",
+    );
+    let text = edit(r#""radius": 0.5"#, r#""radius": "0.5""#);
+    assert_error(&text, "shapes[1].radius", "expected a number");
+}
+
+#[test]
+fn two_element_vector_is_rejected() {
+    let text = edit(r#""position": [0, 1, 4]"#, r#""position": [0, 1]"#);
+    assert_error(
+        &text,
+        "camera.position",
+        "invalid length 2, expected an array of 3 numbers",
+    );
+    let text = edit(r#""translate": [0, 0, 0]"#, r#""translate": [0, 0, 0, 0]"#);
+    assert_error(&text, "shapes[2].to_world.translate", "invalid length 4");
+}
+
+#[test]
+fn two_element_color_is_rejected() {
+    let text = edit("[0.08, 0.09, 0.1]", "[0.08, 0.09]");
+    assert_error(
+        &text,
+        "media.fog.sigma_s",
+        "invalid length 2, expected a number or an array of 3 numbers",
+    );
+}
+
+#[test]
+fn object_where_array_expected_is_rejected() {
+    let text = edit(r#""intensity": 100"#, r#""intensity": {"r": 100}"#);
+    assert_error(
+        &text,
+        "lights[2].intensity",
+        "invalid type: map, expected a number or an array of 3 numbers",
+    );
+    let text = edit(r#""center": [0, 1, 0]"#, r#""center": {"x": 0}"#);
+    assert_error(&text, "shapes[1].center", "expected an array of 3 numbers");
+    let text = r#"{"version": 1, "camera": {"type": "perspective", "position": [0, 0, 5],
+                  "target": [0, 0, 0], "width": 8, "height": 8}, "lights": {"type": "point"}}"#;
+    assert_error(text, "lights", "invalid type: map, expected a sequence");
+}
+
+#[test]
+fn scalar_where_object_expected_is_rejected() {
+    let text = edit(r#""phase": {"type": "hg", "g": 0.3}"#, r#""phase": 0.3"#);
+    assert_error(
+        &text,
+        "media.smoke.phase",
+        "expected a phase function object",
+    );
+}
+
+#[test]
+fn fractional_or_negative_pixel_counts_are_rejected() {
+    let text = edit(r#""width": 64"#, r#""width": 64.5"#);
+    assert_error(&text, "camera.width", "expected a whole number");
+    let text = edit(r#""width": 64"#, r#""width": -64"#);
+    assert_error(&text, "camera.width", "expected a whole number");
+}
+
+// ---------------------------------------------------------------------------
+// Medium names
+// ---------------------------------------------------------------------------
+
+#[test]
+fn unknown_interior_medium_lists_known_media() {
+    let text = edit(r#""interior": "mist""#, r#""interior": "fgo""#);
+    assert_error(
+        &text,
+        "shapes[3].interior",
+        r#"unknown medium "fgo"; known media: cloud, fog, haze, mist, smoke"#,
+    );
+}
+
+#[test]
+fn unknown_exterior_medium_lists_known_media() {
+    let text = edit(r#""exterior": "smoke""#, r#""exterior": "smok""#);
+    assert_error(
+        &text,
+        "shapes[1].exterior",
+        r#"unknown medium "smok"; known media:"#,
+    );
+}
+
+#[test]
+fn unknown_ambient_medium_lists_known_media() {
+    let text = edit(r#""ambient_medium": "fog""#, r#""ambient_medium": "vapor""#);
+    assert_error(
+        &text,
+        "ambient_medium",
+        r#"unknown medium "vapor"; known media: cloud"#,
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Value ranges
+// ---------------------------------------------------------------------------
+
+#[test]
+fn negative_coefficient_channel_names_the_channel() {
+    let text = edit("[0.08, 0.09, 0.1]", "[0.08, 0.09, -0.1]");
+    assert_error(&text, "media.fog.sigma_s[2]", "must be >= 0, got -0.1");
+}
+
+#[test]
+fn negative_scalar_coefficient_names_the_field() {
+    let text = edit(r#""sigma_a": 0.01"#, r#""sigma_a": -0.01"#);
+    assert_error(&text, "media.fog.sigma_a", "must be >= 0, got -0.01");
+    let text = edit(r#""sigma_t": 3"#, r#""sigma_t": -3"#);
+    assert_error(&text, "media.smoke.sigma_t", "must be >= 0");
+}
+
+#[test]
+fn albedo_above_one_is_rejected() {
+    let text = edit(r#""albedo": 0.8"#, r#""albedo": 1.5"#);
+    assert_error(&text, "media.smoke.albedo", "must be in [0, 1], got 1.5");
+    let text = edit("[0.9, 0.95, 1]", "[0.9, 0.95, 1.01]");
+    assert_error(&text, "media.cloud.albedo[2]", "must be in [0, 1]");
+}
+
+#[test]
+fn asymmetry_outside_open_interval_is_rejected() {
+    let text = edit(r#""g": 0.3"#, r#""g": 1"#);
+    assert_error(
+        &text,
+        "media.smoke.phase.g",
+        "must be in the open interval (-1, 1), got 1",
+    );
+    let text = edit(r#""g": 0.3"#, r#""g": -1.5"#);
+    assert_error(&text, "media.smoke.phase.g", "got -1.5");
+    let text = edit(r#""g2": -0.3"#, r#""g2": -1"#);
+    assert_error(&text, "media.haze.phase.g2", "open interval (-1, 1)");
+    let text = edit(r#""w": 0.7"#, r#""w": 1.2"#);
+    assert_error(&text, "media.haze.phase.w", "must be in [0, 1]");
+    let text = edit(r#""k": 0.5"#, r#""k": 1"#);
+    assert_error(&text, "media.mist.phase.k", "open interval (-1, 1)");
+}
+
+#[test]
+fn non_positive_scale_is_rejected() {
+    let text = edit(r#""scale": 2"#, r#""scale": 0"#);
+    assert_error(&text, "media.smoke.scale", "must be > 0");
+}
+
+#[test]
+fn zero_width_is_rejected() {
+    let text = edit(r#""width": 64"#, r#""width": 0"#);
+    assert_error(&text, "camera.width", "must be at least 1 pixel");
+}
+
+#[test]
+fn absurd_resolution_names_the_field_and_the_limit() {
+    let text = edit(r#""width": 64"#, r#""width": 100000"#);
+    assert_error(
+        &text,
+        "camera.width",
+        "must be at most 16384 pixels, got 100000",
+    );
+    let text = edit(r#""height": 48"#, r#""height": 10000000000"#);
+    assert_error(
+        &text,
+        "camera.height",
+        "expected a whole number from 0 to 4294967295",
+    );
+    let text = edit(
+        r#""width": 64, "height": 48"#,
+        r#""width": 16384, "height": 16384"#,
+    );
+    assert_error(
+        &text,
+        "camera",
+        "exceeds the limit of 67108864 (2^26) pixels",
+    );
+}
+
+#[test]
+fn degenerate_camera_is_rejected() {
+    let text = edit(r#""target": [0, 1, 0],"#, r#""target": [0, 1, 4],"#);
+    assert_error(&text, "camera.target", "must differ from `position`");
+    let text = edit(r#""up": [0, 1, 0]"#, r#""up": [0, 0, -2]"#);
+    assert_error(
+        &text,
+        "camera.up",
+        "must not be parallel to the view direction",
+    );
+    let text = edit(r#""fov_y": 35"#, r#""fov_y": 180"#);
+    assert_error(&text, "camera.fov_y", "(0, 180)");
+}
+
+#[test]
+fn non_finite_numbers_are_rejected_with_their_path() {
+    // Beyond f64: serde_json refuses it while parsing; the scanner finds the path.
+    let text = edit("[50, 45, 40]", "[50, 1e400, 40]");
+    let err = assert_error(&text, "lights[1].intensity[1]", "number out of range");
+    assert!(err.message.contains("line"), "{err}");
+    // Beyond f32: reads as infinite and fails validation.
+    let text = edit(r#""radius": 0.5"#, r#""radius": 1e39"#);
+    assert_error(&text, "shapes[1].radius", "expected a finite number");
+    let text = edit(r#""exposure": 0.5"#, r#""exposure": -1e300"#);
+    assert_error(&text, "render.exposure", "expected a finite number");
+}
+
+#[test]
+fn degenerate_shapes_are_rejected() {
+    let text = edit(r#""max": [1, 2, 1]"#, r#""max": [1, 0, 1]"#);
+    assert_error(&text, "shapes[0].max[1]", "must be greater than min[1] = 0");
+    let text = edit(r#""radius": 0.5"#, r#""radius": 0"#);
+    assert_error(&text, "shapes[1].radius", "must be > 0");
+    let text = edit(r#""scale": 10"#, r#""scale": 0"#);
+    assert_error(&text, "shapes[2].to_world.scale", "non-zero");
+    let text = edit("[0, 0, 0, 1]]", "[0, 0, 1, 1]]");
+    assert_error(
+        &text,
+        "shapes[3].to_world.matrix[3]",
+        "last row must be [0, 0, 0, 1]",
+    );
+    let text = edit(r#""reflectance": 0.5"#, r#""reflectance": [0.5, 1.2, 0.5]"#);
+    assert_error(&text, "shapes[2].bsdf.reflectance[1]", "must be in [0, 1]");
+}
+
+#[test]
+fn invalid_lights_are_rejected() {
+    let text = edit(
+        r#""cutoff_angle": 30"#,
+        r#""cutoff_angle": 30, "beam_width": 40"#,
+    );
+    assert_error(
+        &text,
+        "lights[2].beam_width",
+        "must be in (0, cutoff_angle = 30]",
+    );
+    let text = edit(r#""cutoff_angle": 30"#, r#""cutoff_angle": 120"#);
+    assert_error(&text, "lights[2].cutoff_angle", "(0, 90]");
+    let text = edit("[-0.3, -1, -0.2]", "[0, 0, 0]");
+    assert_error(&text, "lights[0].direction", "non-zero");
+    let text = edit(r#""irradiance": 3.0"#, r#""irradiance": -3.0"#);
+    assert_error(&text, "lights[0].irradiance", "must be >= 0");
+}
+
+#[test]
+fn non_positive_step_is_rejected() {
+    let text = edit(r#""step": 0.05"#, r#""step": 0"#);
+    assert_error(&text, "render.integrator.step", "must be > 0, got 0");
+    let text = edit(r#""step": 0.05"#, r#""step": -1"#);
+    assert_error(&text, "render.integrator.step", "must be > 0, got -1");
+    let text = edit(r#""step": 0.05"#, r#""steps": 0"#);
+    assert_error(&text, "render.integrator.steps", "must be at least 1");
+}
+
+#[test]
+fn zero_spp_is_rejected() {
+    let text = edit(r#""spp": 4"#, r#""spp": 0"#);
+    assert_error(&text, "render.spp", "at least 1");
+}
+
+// ---------------------------------------------------------------------------
+// Missing and conflicting fields
+// ---------------------------------------------------------------------------
+
+#[test]
+fn missing_camera_is_reported_at_camera() {
+    assert_error(
+        r#"{"version": 1}"#,
+        "camera",
+        "missing required field `camera`",
+    );
+}
+
+#[test]
+fn missing_required_field_in_a_tagged_object_names_it() {
+    let text = edit(r#", "radius": 0.5"#, "");
+    assert_error(&text, "shapes[1].radius", "missing required field `radius`");
+    let text = edit(
+        r#"{"type": "constant", "radiance": [0.05, 0.07, 0.1]}"#,
+        r#"{"radiance": 1}"#,
+    );
+    assert_error(
+        &text,
+        "lights[3].type",
+        "missing required field `type`; expected one of: point",
+    );
+}
+
+#[test]
+fn unsupported_version_is_rejected() {
+    let text = edit(r#""version": 1"#, r#""version": 2"#);
+    assert_error(&text, "version", "unsupported scene version 2");
+    let text = edit(r#""version": 1"#, r#""version": "1""#);
+    assert_error(&text, "version", "expected a whole number");
+    let text = edit(r#""version": 1,"#, "");
+    assert_error(&text, "version", "missing required field `version`");
+}
+
+#[test]
+fn unknown_types_list_the_valid_ones() {
+    let text = edit(r#""type": "box""#, r#""type": "cylinder""#);
+    assert_error(
+        &text,
+        "shapes[0].type",
+        r#"unknown shape type "cylinder"; expected one of: sphere, box, rectangle"#,
+    );
+    let text = edit(r#""type": "point""#, r#""type": "laser""#);
+    assert_error(
+        &text,
+        "lights[1].type",
+        r#"unknown light type "laser"; expected one of: point, spot, directional, constant"#,
+    );
+    let text = edit(r#""type": "hg""#, r#""type": "mie""#);
+    assert_error(
+        &text,
+        "media.smoke.phase.type",
+        r#"unknown phase function type "mie"; expected one of: isotropic, hg,"#,
+    );
+    let text = edit(r#""type": "single""#, r#""type": "volpath""#);
+    assert_error(
+        &text,
+        "render.integrator.type",
+        r#"unknown integrator type "volpath"; expected one of: single, emission"#,
+    );
+    let text = edit(r#""type": "homogeneous""#, r#""type": "grid""#);
+    assert_error(&text, "media.smoke.type", r#"unknown medium type "grid""#);
+    let text = edit(r#""type": "diffuse""#, r#""type": "plastic""#);
+    assert_error(
+        &text,
+        "shapes[2].bsdf.type",
+        r#"unknown bsdf type "plastic""#,
+    );
+    let text = edit(r#""type": "perspective""#, r#""type": "orthographic""#);
+    assert_error(
+        &text,
+        "camera.type",
+        r#"unknown camera type "orthographic""#,
+    );
+    let text = edit(r#""sampling": "mis""#, r#""sampling": "importance""#);
+    assert_error(
+        &text,
+        "render.integrator.sampling",
+        "unknown value `importance`, expected one of `march`, `equiangular`, `mis`",
+    );
+}
+
+#[test]
+fn both_coefficient_forms_are_rejected() {
+    let text = edit(r#""sigma_t": 3"#, r#""sigma_t": 3, "sigma_a": 1"#);
+    assert_error(
+        &text,
+        "media.smoke.sigma_t",
+        "`sigma_t` cannot be combined with `sigma_a`",
+    );
+}
+
+#[test]
+fn half_a_coefficient_form_names_the_missing_field() {
+    let text = edit(r#", "sigma_s": [0.08, 0.09, 0.1]"#, "");
+    assert_error(
+        &text,
+        "media.fog.sigma_s",
+        "missing required field `sigma_s`, which goes with `sigma_a`",
+    );
+    let text = edit(r#""albedo": 0.8, "#, "");
+    assert_error(
+        &text,
+        "media.smoke.albedo",
+        "missing required field `albedo`",
+    );
+    let text = edit(r#""sigma_a": 0.01, "sigma_s": [0.08, 0.09, 0.1], "#, "");
+    assert_error(&text, "media.fog", "missing coefficients");
+}
+
+#[test]
+fn step_and_steps_together_are_rejected() {
+    let text = edit(r#""step": 0.05"#, r#""step": 0.05, "steps": 8"#);
+    assert_error(&text, "render.integrator.steps", "mutually exclusive");
+}
+
+#[test]
+fn other_exclusive_pairs_are_rejected() {
+    let text = edit(
+        r#""target": [0, 0, 0], "intensity""#,
+        r#""target": [0, 0, 0], "direction": [0, -1, 0], "intensity""#,
+    );
+    assert_error(&text, "lights[2].direction", "mutually exclusive");
+    let text = edit(r#""k": 0.5"#, r#""k": 0.5, "g": 0.2"#);
+    assert_error(&text, "media.mist.phase.g", "mutually exclusive");
+    let text = edit(r#"{"matrix""#, r#"{"translate": [1, 0, 0], "matrix""#);
+    assert_error(
+        &text,
+        "shapes[3].to_world.translate",
+        "cannot be combined with `matrix`",
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Whole-file errors
+// ---------------------------------------------------------------------------
+
+#[test]
+fn missing_file_names_the_path() {
+    let path = std::path::Path::new("/nonexistent/niebla/fog_scene.json");
+    let err = load_scene_file(path).unwrap_err();
+    assert_eq!(err.file, "/nonexistent/niebla/fog_scene.json");
+    assert_eq!(err.path, "");
+    assert!(err.message.contains("cannot read scene file"), "{err}");
+    assert!(err
+        .to_string()
+        .starts_with("/nonexistent/niebla/fog_scene.json: cannot read"));
+}
+
+#[test]
+fn json_syntax_error_gives_line_and_column() {
+    let text = edit(r#""fov_y": 35,"#, r#""fov_y": 35"#);
+    let err = assert_error(
+        &text,
+        "",
+        "invalid JSON: expected `,` or `}` at line 4 column",
+    );
+    assert!(
+        err.to_string().starts_with("test.json: invalid JSON"),
+        "{err}"
+    );
+    assert_error(
+        "",
+        "",
+        "invalid JSON: EOF while parsing a value at line 1 column 0",
+    );
+}
+
+#[test]
+fn non_object_top_level_is_rejected() {
+    assert_error(
+        "[1, 2]",
+        "",
+        "expected a JSON object at the top level, got an array",
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Robustness
+// ---------------------------------------------------------------------------
+
+/// xorshift64 (Marsaglia 2003): deterministic randomness without a dependency.
+struct XorShift(u64);
+
+impl XorShift {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// Byte ranges of the numbers in `text` (ASCII only).
+fn number_spans(text: &str) -> Vec<(usize, usize)> {
+    let bytes = text.as_bytes();
+    let mut spans = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i].is_ascii_digit() || bytes[i] == b'-' {
+            let start = i;
+            while i < bytes.len() && (bytes[i].is_ascii_digit() || b"-+.eE".contains(&bytes[i])) {
+                i += 1;
+            }
+            spans.push((start, i));
+        } else {
+            i += 1;
+        }
+    }
+    spans
+}
+
+/// One random change: delete a character, insert junk, replace a number by
+/// an extreme, or drop a key with its value.
+fn mutate(text: &str, rng: &mut XorShift) -> String {
+    const JUNK: &[&str] = &[
+        "{",
+        "}",
+        "[",
+        "]",
+        ",",
+        ":",
+        "\"",
+        "-",
+        "1e400",
+        "null",
+        "\"x\"",
+        "0",
+        "nan",
+        "\\",
+        "é",
+        "1e39",
+        "-1",
+        "true",
+        "[1, 2]",
+        "{\"type\": \"x\"}",
+        "\"type\": \"sphere\", ",
+    ];
+    let chars: Vec<(usize, char)> = text.char_indices().collect();
+    let at = |i: usize| chars.get(i).map_or(text.len(), |(b, _)| *b);
+    match rng.below(4) {
+        0 if !chars.is_empty() => {
+            let i = rng.below(chars.len());
+            let (start, c) = chars[i];
+            format!("{}{}", &text[..start], &text[start + c.len_utf8()..])
+        }
+        1 => {
+            let position = at(rng.below(chars.len() + 1));
+            let junk = JUNK[rng.below(JUNK.len())];
+            format!("{}{junk}{}", &text[..position], &text[position..])
+        }
+        2 => {
+            let spans = number_spans(text);
+            if spans.is_empty() {
+                return text.to_string();
+            }
+            let (start, end) = spans[rng.below(spans.len())];
+            let replacement = ["-1", "1e400", "1e39", "0", "-0", "1.5", "4294967296"][rng.below(7)];
+            format!("{}{replacement}{}", &text[..start], &text[end..])
+        }
+        _ => {
+            // Drop from a key's opening quote to the next comma or closing brace.
+            let keys: Vec<usize> = text.match_indices("\": ").map(|(i, _)| i).collect();
+            if keys.is_empty() {
+                return text.to_string();
+            }
+            let colon = keys[rng.below(keys.len())];
+            let start = text[..colon].rfind('"').unwrap_or(colon);
+            let end = text[colon..].find([',', '}']).map_or(text.len(), |j| {
+                colon + j + usize::from(&text[colon + j..colon + j + 1] == ",")
+            });
+            format!("{}{}", &text[..start], &text[end..])
+        }
+    }
+}
+
+#[test]
+fn random_mutations_never_panic_and_always_name_the_file() {
+    let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
+    let (mut accepted, mut rejected) = (0, 0);
+    for round in 0..600 {
+        let mut text = FULL.to_string();
+        for _ in 0..1 + rng.below(3) {
+            text = mutate(&text, &mut rng);
+        }
+        let result = std::panic::catch_unwind(|| parse_scene_str(&text, FILE));
+        match result {
+            Err(_) => panic!("round {round}: parse_scene_str panicked on:\n{text}"),
+            Ok(Ok(desc)) => {
+                accepted += 1;
+                assert!(desc.validate(FILE).is_ok(), "round {round}");
+            }
+            Ok(Err(err)) => {
+                rejected += 1;
+                assert_eq!(err.file, FILE);
+                assert!(!err.message.is_empty(), "round {round}: {err}");
+                assert!(!err.message.contains('\u{1}'), "round {round}: {err:?}");
+                assert!(err.to_string().starts_with("test.json: "), "round {round}");
+            }
+        }
+    }
+    // The mutations exercise both outcomes.
+    assert!(
+        accepted > 10 && rejected > 300,
+        "accepted {accepted}, rejected {rejected}"
+    );
+}
