@@ -39,7 +39,12 @@ fn block_stats(sampling: SingleSampling, spp: u32, batches: u64) -> Vec<(f64, f6
     };
     let mut per_batch: Vec<Vec<f64>> = Vec::new();
     for b in 0..batches {
-        let options = RenderOptions { spp, seed: 1000 + b, first_sample: 0, threads: None };
+        let options = RenderOptions {
+            spp,
+            seed: 1000 + b,
+            first_sample: 0,
+            threads: None,
+        };
         let image = render(&built.scene, &settings, &options, &|_, _| {}, None).unwrap();
         let mut blocks = vec![0.0f64; 16 * 3];
         for y in 0..16 {
@@ -76,7 +81,12 @@ fn march_equiangular_and_mis_agree_on_a_spot_lit_fog() {
             worst = worst.max(z.abs());
             // 96 comparisons: 4.5 standard errors keeps the family-wise false
             // alarm rate below 1e-3 for normal batch means.
-            assert!(z.abs() < 4.5, "block {} channel {}: march {a:.5} +- {sa:.1e} vs {name} {b:.5} +- {sb:.1e}", k / 3, k % 3);
+            assert!(
+                z.abs() < 4.5,
+                "block {} channel {}: march {a:.5} +- {sa:.1e} vs {name} {b:.5} +- {sb:.1e}",
+                k / 3,
+                k % 3
+            );
         }
     }
     assert!(march.iter().map(|m| m.0).sum::<f64>() > 0.0);

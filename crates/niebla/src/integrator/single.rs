@@ -339,7 +339,13 @@ fn equiangular_target(light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget 
         return PointLightTarget::Degenerate;
     };
     let (t_a, t_b) = match light {
-        Light::Spot(spot) => match cone_hull(ray, spot.position, spot.frame.z, spot.cutoff_angle.cos(), t_end) {
+        Light::Spot(spot) => match cone_hull(
+            ray,
+            spot.position,
+            spot.frame.z,
+            spot.cutoff_angle.cos(),
+            t_end,
+        ) {
             Some(range) => range,
             None => return PointLightTarget::Missed,
         },
@@ -385,7 +391,11 @@ fn cone_hull(ray: &Ray, apex: Vec3, axis: Vec3, cos_cutoff: f32, t_end: f32) -> 
         if hi <= lo {
             continue;
         }
-        let mid = if hi.is_finite() { 0.5 * (lo + hi) } else { lo + 1.0 + lo.abs() };
+        let mid = if hi.is_finite() {
+            0.5 * (lo + hi)
+        } else {
+            lo + 1.0 + lo.abs()
+        };
         if inside(mid) {
             hull = Some(match hull {
                 Some((a, _)) => (a, hi),
@@ -449,15 +459,28 @@ mod tests {
                     nonempty += 1;
                     let l = last.unwrap();
                     let tol = 2.0 * t_end / n as f32;
-                    assert!(a <= f + 1e-4 && b >= l - 1e-4, "hull {a}..{b} misses {f}..{l}");
-                    assert!(a >= f - tol && b <= l + tol, "hull {a}..{b} too wide for {f}..{l}");
+                    assert!(
+                        a <= f + 1e-4 && b >= l - 1e-4,
+                        "hull {a}..{b} misses {f}..{l}"
+                    );
+                    assert!(
+                        a >= f - tol && b <= l + tol,
+                        "hull {a}..{b} too wide for {f}..{l}"
+                    );
                 }
                 (Some(f), None) => {
                     // Only a sliver thinner than the walk could be missed by rounding.
-                    assert!(last.unwrap() - f < 1e-2, "missed inside range {f}..{:?}", last);
+                    assert!(
+                        last.unwrap() - f < 1e-2,
+                        "missed inside range {f}..{:?}",
+                        last
+                    );
                 }
                 (None, Some((a, b))) => {
-                    assert!(b - a < 2.0 * t_end / n as f32, "hull {a}..{b} where the walk finds nothing");
+                    assert!(
+                        b - a < 2.0 * t_end / n as f32,
+                        "hull {a}..{b} where the walk finds nothing"
+                    );
                 }
             }
         }
