@@ -52,15 +52,18 @@ impl Image {
         )
     }
 
-    /// Relative mean squared error against `reference`:
-    /// mean over pixels and channels of `(x - r)^2 / (r^2 + 1e-2)` (the 1e-2
-    /// keeps black reference pixels from dominating, as in common practice).
+    /// Relative mean squared error against `reference`: the mean over pixels
+    /// and channels of `(x - r)^2 / (r^2 + eps)`, with `eps = (0.01 * mean(r))^2`
+    /// so that black reference pixels do not dominate while the measure stays
+    /// independent of the image's overall brightness.
     pub fn relative_mse(&self, reference: &Image) -> f64 {
+        let mean = reference.mean().average() as f64;
+        let eps = (0.01 * mean).powi(2).max(f64::MIN_POSITIVE);
         let mut sum = 0.0f64;
         for (a, b) in self.pixels.iter().zip(&reference.pixels) {
             for c in 0..3 {
                 let (x, r) = (a[c] as f64, b[c] as f64);
-                sum += (x - r).powi(2) / (r * r + 1e-2);
+                sum += (x - r).powi(2) / (r * r + eps);
             }
         }
         sum / (3.0 * self.pixels.len().max(1) as f64)
