@@ -1,1 +1,99 @@
-//! Voxel data for niebla.
+//! Voxel data for niebla: dense and sparse grids with trilinear lookup,
+//! majorant grids walked by a 3D DDA, and readers for OpenVDB (`.vdb`),
+//! Mitsuba 3 (`.vol`) and NumPy (`.npy`) files. No rendering here.
+//!
+//! # Spaces and conventions
+//! - **Dense grids** ([`DenseGrid`], [`DenseRgbGrid`]) live in their own
+//!   *local* space: `nx * ny * nz` values at the cell centers of the box
+//!   `bounds_min..bounds_max`, trilinear in between; within half a cell of a
+//!   face the nearest cells' values extend to the face (clamp), and outside
+//!   the box the value is zero (Mitsuba 3's convention). Storage is
+//!   `[z][y][x]`, x fastest.
+//! - **Sparse grids** ([`SparseGrid`]) keep a VDB tree's leaves and tiles in
+//!   *index* space (voxel `(i, j, k)` has its value at the point `(i, j, k)`,
+//!   OpenVDB's convention), with the background value wherever nothing is
+//!   stored. [`SparseGrid::transform`] is the file's index-to-world
+//!   [`Affine`]; the renderer composes a medium's `to_world` after it.
+//! - **Majorant grids** ([`MajorantGrid`]) cover a box in the source grid's
+//!   space (local space for dense grids, index space for sparse grids) and
+//!   bound every value trilinear interpolation can produce inside each cell.
+//!   [`MajorantGrid::walk`] runs a 3D DDA along a ray given in that space
+//!   and reports [`Segment`]s in order through a `ControlFlow` callback. A
+//!   ray mapped into that space by an affine map keeps its `t` parameter as
+//!   long as the direction is mapped as a vector and not renormalized.
+//!
+//! # Files
+//! - [`VdbFile`]: OpenVDB files (format versions 222-224, as written by
+//!   OpenVDB 6-12): float, double and half-float scalar grids by name, every
+//!   linear transform map, compression none, zip and blosc (lz4 and zlib
+//!   codecs), mask-compressed nodes, root and internal-node tiles.
+//! - [`read_vol`]: Mitsuba 3 binary `VOL` version 3, float32, 1 or 3
+//!   channels, with the bounding box stored in the file.
+//! - [`read_npy`]: `.npy` float32/float64 little-endian C-order arrays of
+//!   shape `(nz, ny, nx)` (scalar, indexed `[z][y][x]`) or `(nz, ny, nx, 3)`
+//!   (RGB), mapped to the unit box until given bounds.
+//!
+//! Every failure is a [`VolumeError`] naming the file and what was expected;
+//! corrupt or truncated files give errors, never panics, and no size read
+//! from a file is trusted before it is checked against the remaining bytes
+//! (memory grows at most linearly with the file: a node is allocated only
+//! after its masks have been read).
+//!
+//! # Example
+//! ```
+//! use std::ops::ControlFlow;
+//! use niebla_volume::{DenseGrid, MajorantGrid};
+//!
+//! // A 4^3 density grid filling [-1, 1]^3, one bright cell.
+//! let mut data = vec![0.0; 64];
+//! data[(2 * 4 + 1) * 4 + 3] = 5.0; // [z = 2][y = 1][x = 3]
+//! let density = DenseGrid::new([4, 4, 4], data, [-1.0; 3], [1.0; 3])?;
+//! assert_eq!(density.lookup([0.75, -0.25, 0.25]), 5.0); // that cell's center
+//!
+//! // Majorants for a tracker, and the pieces of a ray with their bounds.
+//! let majorants = MajorantGrid::from_dense(&density, [2, 2, 2]);
+//! let mut pieces = Vec::new();
+//! let _ = majorants.walk([-2.0, 0.0, 0.0], [1.0, 0.0, 0.0], 0.0, f32::INFINITY, |s| {
+//!     pieces.push((s.t0, s.t1, s.max_density));
+//!     ControlFlow::Continue(())
+//! });
+//! assert_eq!(pieces, [(1.0, 2.0, 0.0), (2.0, 3.0, 5.0)]);
+//! # Ok::<(), niebla_volume::VolumeError>(())
+//! ```
+//!
+//! # Decisions
+//! - Sparse grids keep OpenVDB's 5-4-3 node tables (flat `u32` arrays under
+//!   a hash map of root entries) rather than a single leaf hash map, so
+//!   that root and internal-node tiles are kept exactly, constant regions
+//!   cost one entry, and a voxel fetch is one hash plus two array reads.
+//! - Sparse majorant grids use cubic cells of `8 * 2^k` voxels aligned to
+//!   the VDB leaves (one cell per leaf when the cell budget allows), over
+//!   the box where the field can differ from the background; a uniform
+//!   grid keeps the DDA identical for dense and sparse media.
+//! - The DDA reports zero-majorant cells instead of skipping them, so the
+//!   caller always sees contiguous `t`; [`MajorantGrid::walk_merged`] merges
+//!   runs of equal majorant, which makes empty space one callback.
+//! - Readers load the whole file into memory; [`VdbFile`] decodes grids on
+//!   demand, so reading `density` and `temperature` reads the file once.
+
+mod affine;
+mod dda;
+mod dense;
+mod error;
+mod io;
+mod majorant;
+mod rgb;
+mod sparse;
+mod sparse_builder;
+
+pub use affine::Affine;
+pub use dda::Segment;
+pub use dense::{DenseGrid, GridStorage};
+pub use error::VolumeError;
+pub use io::npy::read_npy;
+pub use io::vdb::{VdbFile, VdbGridInfo};
+pub use io::vol::read_vol;
+pub use majorant::MajorantGrid;
+pub use rgb::{DenseRgbGrid, DenseVolume};
+pub use sparse::{Leaf, SparseGrid, Tile, LEAF_DIM};
+pub use sparse_builder::SparseGridBuilder;

@@ -1,0 +1,234 @@
+//! Density lookups per second for dense f32, dense f16 and sparse grids at
+//! random points inside their bounds, plus DDA segments per second.
+//!
+//! Run: `cargo bench -p niebla-volume --bench lookup`
+//! (set `NIEBLA_BENCH_VDB=file.vdb` to also time the `density` grid of a file).
+
+use std::hint::black_box;
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use niebla_volume::{Affine, DenseGrid, MajorantGrid, SparseGrid, SparseGridBuilder, VdbFile};
+
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn point(&mut self, lo: [f32; 3], hi: [f32; 3]) -> [f32; 3] {
+        [0, 1, 2].map(|a| lo[a] + (hi[a] - lo[a]) * self.uniform())
+    }
+}
+
+/// Smooth bounded test field: a ball with a ripple, zero outside radius 1.
+fn field(p: [f32; 3]) -> f32 {
+    let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+    if r < 1.0 {
+        (1.0 - r) * (0.75 + 0.25 * (p[0] * 12.0 + p[2] * 3.0).sin())
+    } else {
+        0.0
+    }
+}
+
+/// `count` points marched along random chords of [-1, 1]^3 with the given
+/// step: the access pattern of a tracker, coherent in memory.
+fn ray_march_points(rng: &mut Rng, count: usize, step: f32) -> Vec<[f32; 3]> {
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let (o, q) = (
+            rng.point([-1.0; 3], [1.0; 3]),
+            rng.point([-1.0; 3], [1.0; 3]),
+        );
+        let d = [q[0] - o[0], q[1] - o[1], q[2] - o[2]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-6);
+        let steps = (len / step) as usize;
+        for s in 0..steps.min(count - out.len()) {
+            let t = s as f32 / steps as f32;
+            out.push([o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]]);
+        }
+    }
+    out
+}
+
+/// Runs `f` over `points` repeatedly for about `budget`; returns calls per second.
+fn rate(points: &[[f32; 3]], budget: Duration, f: impl Fn([f32; 3]) -> f32) -> f64 {
+    let start = Instant::now();
+    let mut calls = 0u64;
+    let mut sum = 0.0f32;
+    while start.elapsed() < budget {
+        for &p in points {
+            sum += f(p);
+        }
+        calls += points.len() as u64;
+    }
+    black_box(sum);
+    calls as f64 / start.elapsed().as_secs_f64()
+}
+
+fn report(name: &str, per_second: f64) {
+    println!(
+        "{name:<44} {:>8.1} M lookups/s  ({:.2} ns each)",
+        per_second / 1e6,
+        1e9 / per_second
+    );
+}
+
+fn main() {
+    let budget = Duration::from_millis(1500);
+    let mut rng = Rng(42);
+    let n = 256;
+
+    // Dense 256^3 over [-1, 1]^3.
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let c = |i: usize| (i as f32 + 0.5) / n as f32 * 2.0 - 1.0;
+                data.push(field([c(x), c(y), c(z)]));
+            }
+        }
+    }
+    let dense = DenseGrid::new([n; 3], data, [-1.0; 3], [1.0; 3]).unwrap();
+    let dense_f16 = dense.to_f16();
+    let points: Vec<[f32; 3]> = (0..1 << 20)
+        .map(|_| rng.point([-1.0; 3], [1.0; 3]))
+        .collect();
+    let coherent = ray_march_points(&mut rng, 1 << 20, 0.5 / n as f32 * 2.0);
+    let small_data: Vec<f32> = (0..32 * 32 * 32).map(|i| (i % 97) as f32 / 97.0).collect();
+    let small = DenseGrid::new([32; 3], small_data, [-1.0; 3], [1.0; 3]).unwrap();
+    report(
+        "dense f32 32^3 lookup (in cache)",
+        rate(&points, budget, |p| small.lookup(p)),
+    );
+    report(
+        "dense f32 256^3 lookup, random points",
+        rate(&points, budget, |p| dense.lookup(p)),
+    );
+    report(
+        "dense f16 256^3 lookup, random points",
+        rate(&points, budget, |p| dense_f16.lookup(p)),
+    );
+    report(
+        "dense f32 256^3 lookup, along rays",
+        rate(&coherent, budget, |p| dense.lookup(p)),
+    );
+    report(
+        "dense f16 256^3 lookup, along rays",
+        rate(&coherent, budget, |p| dense_f16.lookup(p)),
+    );
+
+    // Sparse: the same ball, voxels at index (i, j, k) = world * 128.
+    let start = Instant::now();
+    let mut b = SparseGridBuilder::new(0.0, Affine::scale_translate([1.0 / 128.0; 3], [0.0; 3]));
+    for k in -128..128 {
+        for j in -128..128 {
+            for i in -128..128 {
+                let v = field([i as f32 / 128.0, j as f32 / 128.0, k as f32 / 128.0]);
+                if v > 0.0 {
+                    b.set_voxel([i, j, k], v, true);
+                }
+            }
+        }
+    }
+    let sparse = b.build();
+    println!(
+        "(built sparse ball: {} leaves, {} active voxels in {:.2} s)",
+        sparse.leaf_count(),
+        sparse.active_voxel_count(),
+        start.elapsed().as_secs_f64()
+    );
+    let index_points: Vec<[f32; 3]> = points.iter().map(|p| p.map(|v| v * 128.0)).collect();
+    let index_coherent: Vec<[f32; 3]> = coherent.iter().map(|p| p.map(|v| v * 128.0)).collect();
+    report(
+        "sparse ball lookup_index, random points",
+        rate(&index_points, budget, |p| sparse.lookup_index(p)),
+    );
+    report(
+        "sparse ball lookup_world, random points",
+        rate(&points, budget, |p| sparse.lookup_world(p)),
+    );
+    report(
+        "sparse ball lookup_index, along rays",
+        rate(&index_coherent, budget, |p| sparse.lookup_index(p)),
+    );
+    report(
+        "sparse ball lookup_world, along rays",
+        rate(&coherent, budget, |p| sparse.lookup_world(p)),
+    );
+    bench_majorant(&dense, &sparse, &mut rng, budget);
+
+    if let Ok(path) = std::env::var("NIEBLA_BENCH_VDB") {
+        let start = Instant::now();
+        let grid: SparseGrid = match VdbFile::open(&path).and_then(|f| f.read_float_grid("density"))
+        {
+            Ok(g) => g,
+            Err(e) => {
+                eprintln!("NIEBLA_BENCH_VDB: {e}");
+                return;
+            }
+        };
+        println!(
+            "(read {path}: {} leaves in {:.2} s)",
+            grid.leaf_count(),
+            start.elapsed().as_secs_f64()
+        );
+        let (lo, hi) = grid.data_bounds_index().unwrap();
+        let (lo, hi) = (lo.map(|v| v as f32), hi.map(|v| v as f32));
+        let pts: Vec<[f32; 3]> = (0..1 << 20).map(|_| rng.point(lo, hi)).collect();
+        report(
+            "VDB file lookup_index",
+            rate(&pts, budget, |p| grid.lookup_index(p)),
+        );
+    }
+}
+
+fn bench_majorant(dense: &DenseGrid, sparse: &SparseGrid, rng: &mut Rng, budget: Duration) {
+    let start = Instant::now();
+    let m_dense = MajorantGrid::from_dense(dense, MajorantGrid::DEFAULT_RESOLUTION);
+    let t_dense = start.elapsed();
+    let start = Instant::now();
+    let m_sparse = MajorantGrid::from_sparse(sparse, MajorantGrid::DEFAULT_MAX_CELLS);
+    let t_sparse = start.elapsed();
+    println!(
+        "(majorant grids: dense 16^3 in {:.1} ms, sparse {:?} in {:.1} ms)",
+        t_dense.as_secs_f64() * 1e3,
+        m_sparse.res(),
+        t_sparse.as_secs_f64() * 1e3
+    );
+    for (name, m) in [
+        ("DDA walk, dense 16^3 majorants", &m_dense),
+        ("DDA walk, sparse per-leaf majorants", &m_sparse),
+    ] {
+        let (lo, hi) = m.bounds();
+        let rays: Vec<([f32; 3], [f32; 3])> = (0..1 << 14)
+            .map(|_| {
+                let (o, q) = (rng.point(lo, hi), rng.point(lo, hi));
+                (o, [q[0] - o[0], q[1] - o[1], q[2] - o[2]])
+            })
+            .collect();
+        let start = Instant::now();
+        let (mut segments, mut walks) = (0u64, 0u64);
+        while start.elapsed() < budget {
+            for (o, d) in &rays {
+                let _ = m.walk(*o, *d, 0.0, f32::INFINITY, |s| {
+                    black_box(s);
+                    segments += 1;
+                    ControlFlow::Continue(())
+                });
+            }
+            walks += rays.len() as u64;
+        }
+        let secs = start.elapsed().as_secs_f64();
+        println!(
+            "{name:<44} {:>8.1} M segments/s  ({:.1} segments per ray, {:.2} M rays/s)",
+            segments as f64 / secs / 1e6,
+            segments as f64 / walks as f64,
+            walks as f64 / secs / 1e6
+        );
+    }
+}

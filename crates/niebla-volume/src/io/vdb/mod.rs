@@ -1,0 +1,304 @@
+//! OpenVDB `.vdb` files: the header, the grid descriptors, and reading
+//! scalar grids into [`SparseGrid`]s.
+//!
+//! File layout (format versions 222-224; `openvdb/io/Archive.cc`,
+//! `File.cc`, `GridDescriptor.cc`): magic `0x56444220` as i64, format
+//! version u32, library major and minor u32, a "has grid offsets" byte, a
+//! 36-character UUID, the file metadata, the grid count, then per grid a
+//! descriptor (unique name, type name with an optional `_HalfFloat` suffix,
+//! instance parent name, and the i64 offsets of the grid, its buffers and
+//! its end) followed by the grid itself: compression flags u32, grid
+//! metadata, transform, tree topology, leaf buffers. All little-endian;
+//! strings are a u32 length and bytes; metadata entries are name, type
+//! name, u32 size and that many bytes.
+
+mod transform;
+mod tree;
+mod values;
+
+use std::path::{Path, PathBuf};
+
+use crate::io::bytes::{read_file, ByteReader};
+use crate::{SparseGrid, VolumeError};
+use values::{ScalarKind, ValueCodec};
+
+const MAGIC: i64 = 0x5644_4220;
+/// OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION: the oldest layout read here.
+const MIN_VERSION: u32 = 222;
+/// The newest layout known (OpenVDB 6 to 12 write 224).
+const MAX_VERSION: u32 = 224;
+/// Separator between a grid's name and the suffix that makes it unique.
+const UNIQUE_SEPARATOR: char = '\u{1e}';
+const HALF_SUFFIX: &str = "_HalfFloat";
+
+/// What a VDB file says about one of its grids (read without loading it).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VdbGridInfo {
+    /// The grid's name, e.g. `density`.
+    pub name: String,
+    /// The name as stored: `name`, or `name` + `\u{1e}` + a suffix when
+    /// several grids share a name.
+    pub unique_name: String,
+    /// The tree type without the half suffix, e.g. `Tree_float_5_4_3`.
+    pub grid_type: String,
+    /// Whether the values are stored as 16-bit half floats.
+    pub half: bool,
+    /// The grid whose tree this grid shares (an instance), if any.
+    pub instance_parent: Option<String>,
+    grid_pos: u64,
+    end_pos: u64,
+}
+
+impl VdbGridInfo {
+    /// The type as written in the file (with `_HalfFloat` for half grids).
+    pub fn file_type_name(&self) -> String {
+        if self.half {
+            format!("{}{HALF_SUFFIX}", self.grid_type)
+        } else {
+            self.grid_type.clone()
+        }
+    }
+
+    fn scalar_kind(&self) -> Option<ScalarKind> {
+        match self.grid_type.as_str() {
+            "Tree_float_5_4_3" => Some(ScalarKind::Float),
+            "Tree_double_5_4_3" => Some(ScalarKind::Double),
+            _ => None,
+        }
+    }
+}
+
+/// An OpenVDB file held in memory, with its grid list.
+///
+/// ```no_run
+/// use niebla_volume::VdbFile;
+/// let file = VdbFile::open("plume.vdb")?;
+/// println!("{:?}", file.grid_names());
+/// let density = file.read_float_grid("density")?;
+/// let d = density.lookup_world([0.0, 1.0, 0.0]);
+/// # Ok::<(), niebla_volume::VolumeError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct VdbFile {
+    path: PathBuf,
+    data: Vec<u8>,
+    version: u32,
+    library_version: (u32, u32),
+    grids: Vec<VdbGridInfo>,
+}
+
+impl VdbFile {
+    /// Reads the file at `path` and its grid descriptors (grids are decoded
+    /// on demand by [`VdbFile::read_float_grid`]).
+    pub fn open(path: impl AsRef<Path>) -> Result<VdbFile, VolumeError> {
+        let path = path.as_ref();
+        VdbFile::from_bytes(read_file(path)?, path)
+    }
+
+    /// Parses a file already in memory; `path` is used in error messages.
+    pub fn from_bytes(data: Vec<u8>, path: impl Into<PathBuf>) -> Result<VdbFile, VolumeError> {
+        let path = path.into();
+        let (version, library_version, grids) = parse_header(&data, &path)?;
+        Ok(VdbFile {
+            path,
+            data,
+            version,
+            library_version,
+            grids,
+        })
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The file format version (224 for OpenVDB 6 to 12).
+    pub fn file_version(&self) -> u32 {
+        self.version
+    }
+
+    /// The (major, minor) version of the library that wrote the file.
+    pub fn library_version(&self) -> (u32, u32) {
+        self.library_version
+    }
+
+    /// The grids in file order.
+    pub fn grids(&self) -> &[VdbGridInfo] {
+        &self.grids
+    }
+
+    /// The grids' unique names in file order.
+    pub fn grid_names(&self) -> Vec<&str> {
+        self.grids.iter().map(|g| g.unique_name.as_str()).collect()
+    }
+
+    /// The grid called `name`: an exact unique name first, else the first
+    /// grid (in file order) whose name is `name`.
+    pub fn grid(&self, name: &str) -> Result<&VdbGridInfo, VolumeError> {
+        self.grids
+            .iter()
+            .find(|g| g.unique_name == name)
+            .or_else(|| self.grids.iter().find(|g| g.name == name))
+            .ok_or_else(|| VolumeError::GridNotFound {
+                path: self.path.clone(),
+                name: name.to_string(),
+                available: self.grids.iter().map(|g| g.unique_name.clone()).collect(),
+            })
+    }
+
+    /// Decodes the scalar grid `name` (float, double or half; see
+    /// [`VdbFile::grid`] for how names match) into a [`SparseGrid`] in index
+    /// space with the grid's index-to-world transform. Other value types
+    /// (vectors, booleans, integers, points) are a
+    /// [`VolumeError::UnsupportedGridType`].
+    pub fn read_float_grid(&self, name: &str) -> Result<SparseGrid, VolumeError> {
+        let info = self.grid(name)?;
+        let Some(kind) = info.scalar_kind() else {
+            return Err(VolumeError::UnsupportedGridType {
+                path: self.path.clone(),
+                grid: info.unique_name.clone(),
+                grid_type: info.file_type_name(),
+            });
+        };
+        // An instance stores its own metadata and transform, and shares the
+        // tree of its parent.
+        let tree_source = match &info.instance_parent {
+            None => info,
+            Some(parent) => self
+                .grids
+                .iter()
+                .find(|g| &g.unique_name == parent)
+                .filter(|g| g.instance_parent.is_none() && g.grid_type == info.grid_type)
+                .ok_or_else(|| VolumeError::Corrupt {
+                    path: self.path.clone(),
+                    offset: info.grid_pos,
+                    what: format!(
+                        "instance parent {parent:?} of grid {:?} is missing",
+                        info.unique_name
+                    ),
+                })?,
+        };
+        let (_, _, map_type, affine) = self.grid_reader(info)?;
+        let mut grid = SparseGrid::empty(0.0, affine);
+        grid.name = info.name.clone();
+        grid.map_type = map_type;
+
+        let (mut r, compression, _, _) = self.grid_reader(tree_source)?;
+        let mut codec = ValueCodec {
+            kind,
+            half: info.half,
+            compression,
+            background: 0.0,
+        };
+        tree::read_tree(&mut r, &mut codec, &mut grid)?;
+        Ok(grid)
+    }
+
+    /// A reader positioned at the grid's tree, with its compression and
+    /// transform.
+    fn grid_reader(
+        &self,
+        info: &VdbGridInfo,
+    ) -> Result<(ByteReader<'_>, u32, String, crate::Affine), VolumeError> {
+        // Descriptor offsets were checked against the file size.
+        let data = &self.data[..info.end_pos as usize];
+        let mut r = ByteReader::new(data, info.grid_pos as usize, &self.path);
+        let pos = r.pos();
+        let compression = r.u32("grid compression flags")?;
+        if compression & !0x7 != 0 {
+            return Err(r.corrupt_at(pos, format!("grid compression flags {compression:#x}")));
+        }
+        skip_metadata(&mut r, "grid metadata")?;
+        let (map_type, affine) = transform::read_transform(&mut r)?;
+        Ok((r, compression, map_type, affine))
+    }
+}
+
+/// Skips a metadata map (count, then name, type name, size, bytes).
+fn skip_metadata(r: &mut ByteReader, what: &str) -> Result<(), VolumeError> {
+    let count = r.u32(what)?;
+    for _ in 0..count {
+        r.string(what)?;
+        r.string(what)?;
+        let size = r.u32(what)? as usize;
+        r.skip(size, what)?;
+    }
+    Ok(())
+}
+
+type Header = (u32, (u32, u32), Vec<VdbGridInfo>);
+
+fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
+    let mut r = ByteReader::new(data, 0, path);
+    let magic = match data.get(..8) {
+        Some(b) => i64::from_le_bytes(b.try_into().expect("8 bytes")),
+        None => -1,
+    };
+    if magic != MAGIC {
+        return Err(VolumeError::WrongFormat {
+            path: path.to_path_buf(),
+            expected: "an OpenVDB",
+            found: format!("first bytes {:02x?}", &data[..data.len().min(8)]),
+        });
+    }
+    r.skip(8, "magic number")?;
+    let version = r.u32("file format version")?;
+    if !(MIN_VERSION..=MAX_VERSION).contains(&version) {
+        return Err(r.unsupported(format!(
+            "file format version {version} (versions {MIN_VERSION} to {MAX_VERSION} are read)"
+        )));
+    }
+    let library_version = (r.u32("library version")?, r.u32("library version")?);
+    let has_offsets = r.u8("grid offsets flag")?;
+    if has_offsets == 0 {
+        return Err(r.unsupported("VDB streams without grid offsets"));
+    }
+    r.skip(36, "file UUID")?;
+    skip_metadata(&mut r, "file metadata")?;
+    let count = r.u32("grid count")?;
+    let mut grids = Vec::new();
+    for _ in 0..count {
+        let desc_pos = r.pos();
+        let unique_name = r.string("grid name")?;
+        let mut grid_type = r.string("grid type")?;
+        let instance_parent = r.string("grid instance parent")?;
+        let grid_pos = r.i64("grid offset")?;
+        let _block_pos = r.i64("grid block offset")?;
+        let end_pos = r.i64("grid end offset")?;
+        let here = r.pos() as i64;
+        if !(here <= grid_pos && grid_pos < end_pos) {
+            return Err(r.corrupt_at(
+                desc_pos,
+                format!("grid {unique_name:?} has offsets {grid_pos}..{end_pos} (descriptor ends at {here})"),
+            ));
+        }
+        if end_pos as u64 > data.len() as u64 {
+            return Err(VolumeError::Truncated {
+                path: path.to_path_buf(),
+                offset: data.len() as u64,
+                what: format!("grid {unique_name:?}, which should end at byte {end_pos}"),
+            });
+        }
+        let half = grid_type.ends_with(HALF_SUFFIX);
+        if half {
+            grid_type.truncate(grid_type.len() - HALF_SUFFIX.len());
+        }
+        let name = unique_name
+            .split(UNIQUE_SEPARATOR)
+            .next()
+            .unwrap_or_default()
+            .to_string();
+        grids.push(VdbGridInfo {
+            name,
+            unique_name,
+            grid_type,
+            half,
+            instance_parent: (!instance_parent.is_empty()).then_some(instance_parent),
+            grid_pos: grid_pos as u64,
+            end_pos: end_pos as u64,
+        });
+        r = ByteReader::new(data, end_pos as usize, path);
+    }
+    Ok((version, library_version, grids))
+}

@@ -1,0 +1,268 @@
+//! Majorant grids: a coarse grid of upper bounds of a density field, one
+//! per cell, for trackers that need a local bound `sigma_maj` (pbrt-v4
+//! section 11.4.3, `MajorantGrid`).
+//!
+//! A cell's value is the largest voxel value whose interpolation support
+//! touches the cell: for every point `p` in the closed cell, the 8 voxels
+//! that trilinear interpolation at `p` reads are included, with a margin of
+//! 1/1000 voxel so that a point an ulp outside the cell (rounding in
+//! `o + t d`) is still covered. Majorants are clamped below at zero.
+//!
+//! - Dense grids: the majorant grid covers the grid's local-space box with
+//!   `res` cells ([`MajorantGrid::DEFAULT_RESOLUTION`] is 16^3).
+//! - Sparse grids: the majorant grid covers, in index space, the box where
+//!   the interpolated field can differ from the background
+//!   ([`SparseGrid::data_bounds_index`] grown by one voxel), with cubic
+//!   cells of `8 * 2^k` voxels aligned to the VDB leaves: one cell per leaf
+//!   when that fits in `max_cells`, else the smallest power-of-two multiple
+//!   that does. Outside that box the field is exactly the background.
+
+use crate::{DenseGrid, SparseGrid, VolumeError};
+
+/// Margin, in voxels, by which each cell's interpolation support is grown.
+const SUPPORT_EPSILON: f64 = 1e-3;
+
+/// A coarse grid of per-cell maxima over a box, indexed `[z][y][x]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MajorantGrid {
+    pub(crate) res: [usize; 3],
+    pub(crate) bounds_min: [f32; 3],
+    pub(crate) bounds_max: [f32; 3],
+    pub(crate) values: Vec<f32>,
+}
+
+impl MajorantGrid {
+    /// Default resolution for dense grids.
+    pub const DEFAULT_RESOLUTION: [usize; 3] = [16, 16, 16];
+    /// Default cell budget for sparse grids (2^21 cells, 8 MiB).
+    pub const DEFAULT_MAX_CELLS: usize = 1 << 21;
+
+    /// A majorant grid from explicit values (`[z][y][x]`, x fastest) over
+    /// the box `bounds_min..bounds_max`.
+    pub fn new(
+        res: [usize; 3],
+        bounds_min: [f32; 3],
+        bounds_max: [f32; 3],
+        values: Vec<f32>,
+    ) -> Result<Self, VolumeError> {
+        // Same shape rules as a dense grid.
+        DenseGrid::new(res, values.clone(), bounds_min, bounds_max)?;
+        Ok(Self {
+            res,
+            bounds_min,
+            bounds_max,
+            values,
+        })
+    }
+
+    /// The majorants of a dense grid over its local-space box, with `res`
+    /// cells per axis (each at least 1).
+    ///
+    /// ```
+    /// use niebla_volume::{DenseGrid, MajorantGrid};
+    /// let g = DenseGrid::new([4, 1, 1], vec![0.0, 0.0, 1.0, 0.0], [0.0; 3], [4.0, 1.0, 1.0]).unwrap();
+    /// let m = MajorantGrid::from_dense(&g, [2, 1, 1]);
+    /// // Cell 0 spans x in [0, 2]: interpolation there reaches voxel 2 (center 2.5).
+    /// assert_eq!(m.values(), &[1.0, 1.0]);
+    /// ```
+    pub fn from_dense(grid: &DenseGrid, res: [usize; 3]) -> MajorantGrid {
+        let res = res.map(|r| r.max(1));
+        let dims = grid.dims();
+        let (bounds_min, bounds_max) = grid.bounds();
+        // Voxel range read by interpolation inside each majorant cell, per axis.
+        let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|a| {
+            let (n, r) = (dims[a], res[a]);
+            (0..r)
+                .map(|c| {
+                    let u_lo = c as f64 * n as f64 / r as f64 - 0.5 - SUPPORT_EPSILON;
+                    let u_hi = (c + 1) as f64 * n as f64 / r as f64 - 0.5 + SUPPORT_EPSILON;
+                    let lo = u_lo.floor().max(0.0) as usize;
+                    let hi = (u_hi.floor() + 1.0).max(0.0) as usize;
+                    (lo.min(n - 1), hi.min(n - 1))
+                })
+                .collect()
+        });
+        let storage = grid.storage();
+        let [nx, ny, nz] = dims;
+        let [rx, ry, rz] = res;
+        // Separable box maximum: along x, then y, then z.
+        let mut mx = vec![f32::NEG_INFINITY; rx * ny * nz];
+        for zy in 0..ny * nz {
+            for (cx, &(lo, hi)) in ranges[0].iter().enumerate() {
+                let mut m = f32::NEG_INFINITY;
+                for x in lo..=hi {
+                    m = m.max(storage.get(zy * nx + x));
+                }
+                mx[zy * rx + cx] = m;
+            }
+        }
+        let mut my = vec![f32::NEG_INFINITY; rx * ry * nz];
+        for z in 0..nz {
+            for (cy, &(lo, hi)) in ranges[1].iter().enumerate() {
+                for cx in 0..rx {
+                    let mut m = f32::NEG_INFINITY;
+                    for y in lo..=hi {
+                        m = m.max(mx[(z * ny + y) * rx + cx]);
+                    }
+                    my[(z * ry + cy) * rx + cx] = m;
+                }
+            }
+        }
+        let mut values = vec![0f32; rx * ry * rz];
+        for (cz, &(lo, hi)) in ranges[2].iter().enumerate() {
+            for cyx in 0..ry * rx {
+                let mut m = 0f32;
+                for z in lo..=hi {
+                    m = m.max(my[z * ry * rx + cyx]);
+                }
+                values[cz * ry * rx + cyx] = m;
+            }
+        }
+        MajorantGrid {
+            res,
+            bounds_min,
+            bounds_max,
+            values,
+        }
+    }
+
+    /// The majorants of a sparse grid in its index space (see the module
+    /// docs), with at most `max(max_cells, 8)` cells: cells are aligned to
+    /// multiples of their size, so data straddling a cell boundary always
+    /// takes two cells along that axis.
+    pub fn from_sparse(grid: &SparseGrid, max_cells: usize) -> MajorantGrid {
+        let floor = grid.background().max(0.0);
+        let Some((lo, hi)) = grid.data_bounds_index() else {
+            return MajorantGrid {
+                res: [1; 3],
+                bounds_min: [-1.0; 3],
+                bounds_max: [1.0; 3],
+                values: vec![floor],
+            };
+        };
+        // Cell size 8 * 2^k voxels, aligned to multiples of itself.
+        let mut size: i64 = 8;
+        let (origin, res) = loop {
+            let origin: [i64; 3] =
+                std::array::from_fn(|a| (lo[a] as i64 - 1).div_euclid(size) * size);
+            let res: [i64; 3] =
+                std::array::from_fn(|a| (hi[a] as i64 + 1 - origin[a]).div_euclid(size) + 1);
+            let cells = res.iter().map(|&r| r as u128).product::<u128>();
+            if cells <= max_cells.max(1) as u128 || size >= 1 << 40 {
+                break (origin, res.map(|r| r as usize));
+            }
+            size *= 2;
+        };
+        let mut m = MajorantGrid {
+            res,
+            bounds_min: std::array::from_fn(|a| origin[a] as f32),
+            bounds_max: std::array::from_fn(|a| (origin[a] + res[a] as i64 * size) as f32),
+            values: vec![floor; res[0] * res[1] * res[2]],
+        };
+        // The cells whose (grown) support meets voxels lo..=hi along axis a.
+        let cells_touching = |a: usize, lo: i64, hi: i64| {
+            // ceil((lo - 1 - origin - size) / size) for integers.
+            let first = (lo - 2 - origin[a] - size).div_euclid(size) + 1;
+            let last = (hi + 1 - origin[a]).div_euclid(size);
+            (first.max(0), last.min(res[a] as i64 - 1))
+        };
+        let support = |a: usize, c: i64| {
+            let start = origin[a] + c * size;
+            (start - 1, start + size + 1)
+        };
+        for leaf in grid.leaves() {
+            let o = leaf.origin.map(|v| v as i64);
+            let ranges: [(i64, i64); 3] =
+                std::array::from_fn(|a| cells_touching(a, o[a], o[a] + 7));
+            for cz in ranges[2].0..=ranges[2].1 {
+                for cy in ranges[1].0..=ranges[1].1 {
+                    for cx in ranges[0].0..=ranges[0].1 {
+                        let c = [cx, cy, cz];
+                        // Leaf voxels inside this cell's support.
+                        let sub: [(usize, usize); 3] = std::array::from_fn(|a| {
+                            let (s0, s1) = support(a, c[a]);
+                            (
+                                (s0.max(o[a]) - o[a]) as usize,
+                                (s1.min(o[a] + 7) - o[a]) as usize,
+                            )
+                        });
+                        let mut v = f32::NEG_INFINITY;
+                        for i in sub[0].0..=sub[0].1 {
+                            for j in sub[1].0..=sub[1].1 {
+                                for k in sub[2].0..=sub[2].1 {
+                                    v = v.max(leaf.values[(i << 6) | (j << 3) | k]);
+                                }
+                            }
+                        }
+                        m.raise(c, v);
+                    }
+                }
+            }
+        }
+        for tile in grid.tiles() {
+            let o = tile.origin.map(|v| v as i64);
+            let n = tile.size() as i64;
+            let ranges: [(i64, i64); 3] =
+                std::array::from_fn(|a| cells_touching(a, o[a], o[a] + n - 1));
+            for cz in ranges[2].0..=ranges[2].1 {
+                for cy in ranges[1].0..=ranges[1].1 {
+                    for cx in ranges[0].0..=ranges[0].1 {
+                        m.raise([cx, cy, cz], tile.value);
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    fn raise(&mut self, c: [i64; 3], v: f32) {
+        let i = (c[2] as usize * self.res[1] + c[1] as usize) * self.res[0] + c[0] as usize;
+        self.values[i] = self.values[i].max(v);
+    }
+
+    /// Cells per axis.
+    pub fn res(&self) -> [usize; 3] {
+        self.res
+    }
+
+    /// The box covered, in the source grid's space (local space for dense
+    /// grids, index space for sparse grids).
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        (self.bounds_min, self.bounds_max)
+    }
+
+    /// All majorants, `[z][y][x]` with x fastest.
+    pub fn values(&self) -> &[f32] {
+        &self.values
+    }
+
+    /// The majorant of cell `(x, y, z)`; panics out of range.
+    pub fn value(&self, x: usize, y: usize, z: usize) -> f32 {
+        assert!(x < self.res[0] && y < self.res[1] && z < self.res[2]);
+        self.values[(z * self.res[1] + y) * self.res[0] + x]
+    }
+
+    /// The largest majorant (a global bound for the whole box).
+    pub fn max_value(&self) -> f32 {
+        self.values.iter().copied().fold(0.0, f32::max)
+    }
+
+    /// The box of cell `(x, y, z)`.
+    pub fn cell_bounds(&self, x: usize, y: usize, z: usize) -> ([f32; 3], [f32; 3]) {
+        let c = [x, y, z];
+        let lo = std::array::from_fn(|a| self.plane(a, c[a]));
+        let hi = std::array::from_fn(|a| self.plane(a, c[a] + 1));
+        (lo, hi)
+    }
+
+    /// Coordinate of the cell boundary plane `k` along axis `a` (the same
+    /// formula the DDA uses, so both agree to the bit).
+    #[inline(always)]
+    pub(crate) fn plane(&self, a: usize, k: usize) -> f32 {
+        if k >= self.res[a] {
+            return self.bounds_max[a];
+        }
+        let f = k as f32 / self.res[a] as f32;
+        self.bounds_min[a] + (self.bounds_max[a] - self.bounds_min[a]) * f
+    }
+}

@@ -1,0 +1,513 @@
+//! Sparse grids: the non-empty 8^3 leaf blocks and the constant tiles of a
+//! VDB tree, read by trilinear interpolation in index space.
+//!
+//! Layout (OpenVDB's 5-4-3 tree, kept so that tiles survive exactly):
+//! - a root hash map from `ijk >> 12` to either a constant *root tile*
+//!   (4096^3 voxels) or an *upper node*;
+//! - an upper node is a table of 32^3 entries, each background, a tile of
+//!   128^3 voxels, or a *lower node*;
+//! - a lower node is a table of 16^3 entries, each background, a tile of
+//!   8^3 voxels, or a *leaf* of 8^3 stored values.
+//!
+//! Node tables are flat `u32` arrays (one allocation for all upper nodes,
+//! one for all lower nodes), so a voxel fetch is one hash and two array
+//! reads. Empty regions cost nothing below the root, and a large constant
+//! region costs one tile.
+//!
+//! Index space: voxel `(i, j, k)` has its value at the point `(i, j, k)`;
+//! [`SparseGrid::lookup_index`] interpolates between the 8 voxels around a
+//! point (OpenVDB's `BoxSampler`), with the background value wherever
+//! nothing is stored. [`SparseGrid::transform`] maps index to world space.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use crate::Affine;
+
+/// Number of voxels along a leaf's edge.
+pub const LEAF_DIM: i32 = 8;
+pub(crate) const LEAF_SIZE: usize = 512;
+pub(crate) const UPPER_SIZE: usize = 32 * 32 * 32;
+pub(crate) const LOWER_SIZE: usize = 16 * 16 * 16;
+/// Log2 of the edge (in voxels) of a root child, lower node and leaf.
+pub(crate) const UPPER_TOTAL: u32 = 12;
+pub(crate) const LOWER_TOTAL: u32 = 7;
+pub(crate) const LEAF_TOTAL: u32 = 3;
+
+/// Node-table entry meaning "background, inactive".
+pub(crate) const EMPTY: u32 = u32::MAX;
+/// Node-table entries with this bit are tile indices; others child indices.
+pub(crate) const TILE_BIT: u32 = 1 << 31;
+
+/// A constant region of a VDB tree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tile {
+    /// Index-space coordinates of the tile's lowest voxel.
+    pub origin: [i32; 3],
+    /// Tree depth of the node holding the tile: 0 = root (4096^3 voxels),
+    /// 1 = upper node (128^3), 2 = lower node (8^3).
+    pub depth: u8,
+    /// The value of every voxel in the tile.
+    pub value: f32,
+    /// Whether the tile's voxels are active.
+    pub active: bool,
+}
+
+impl Tile {
+    /// Edge length in voxels.
+    pub fn size(&self) -> i32 {
+        1 << tile_log2(self.depth)
+    }
+}
+
+pub(crate) fn tile_log2(depth: u8) -> u32 {
+    match depth {
+        0 => UPPER_TOTAL,
+        1 => LOWER_TOTAL,
+        _ => LEAF_TOTAL,
+    }
+}
+
+/// An 8^3 block of stored voxel values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Leaf {
+    /// Index-space coordinates of the lowest voxel (multiples of 8).
+    pub origin: [i32; 3],
+    /// Values indexed `(i & 7) << 6 | (j & 7) << 3 | (k & 7)` (z fastest,
+    /// OpenVDB's order).
+    pub values: [f32; LEAF_SIZE],
+    /// Active-state bits, bit `n % 64` of word `n / 64` for value `n`.
+    pub active: [u64; 8],
+}
+
+impl Leaf {
+    pub(crate) fn new(origin: [i32; 3], fill: f32, active: bool) -> Self {
+        Leaf {
+            origin,
+            values: [fill; LEAF_SIZE],
+            active: [if active { u64::MAX } else { 0 }; 8],
+        }
+    }
+
+    /// Offset of voxel `ijk` (any coordinates; only the low 3 bits count).
+    #[inline(always)]
+    pub fn offset(ijk: [i32; 3]) -> usize {
+        (((ijk[0] & 7) << 6) | ((ijk[1] & 7) << 3) | (ijk[2] & 7)) as usize
+    }
+
+    /// Whether value `n` is active.
+    pub fn is_active(&self, n: usize) -> bool {
+        self.active[n / 64] >> (n % 64) & 1 == 1
+    }
+}
+
+/// A fast hash for integer coordinates (the root map is hit on every voxel
+/// fetch; SipHash would dominate the lookup).
+#[derive(Default, Clone, Copy)]
+pub(crate) struct CoordHasher(u64);
+
+impl Hasher for CoordHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_i32(&mut self, v: i32) {
+        self.write_u64(v as u32 as u64);
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+}
+
+pub(crate) type RootMap = HashMap<[i32; 3], u32, BuildHasherDefault<CoordHasher>>;
+
+/// Where a voxel's value is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Slot {
+    Background,
+    Tile(u32),
+    Leaf(u32),
+}
+
+/// A sparse scalar grid in the layout of a VDB tree (see the module docs).
+///
+/// ```
+/// use niebla_volume::{Affine, SparseGridBuilder};
+/// let mut b = SparseGridBuilder::new(0.0, Affine::scale_translate([0.5; 3], [0.0; 3]));
+/// b.set_voxel([1, 2, 3], 4.0, true);
+/// let g = b.build();
+/// assert_eq!(g.value([1, 2, 3]), 4.0);
+/// assert_eq!(g.lookup_index([1.5, 2.0, 3.0]), 2.0);
+/// assert_eq!(g.lookup_world([0.5, 1.0, 1.5]), 4.0);
+/// ```
+#[derive(Clone, Debug)]
+pub struct SparseGrid {
+    pub(crate) name: String,
+    pub(crate) map_type: String,
+    pub(crate) background: f32,
+    pub(crate) index_to_world: Affine,
+    pub(crate) world_to_index: Affine,
+    pub(crate) root: RootMap,
+    /// All upper-node tables, `UPPER_SIZE` entries each.
+    pub(crate) uppers: Vec<u32>,
+    /// Index-space origin of each upper node.
+    pub(crate) upper_origins: Vec<[i32; 3]>,
+    /// All lower-node tables, `LOWER_SIZE` entries each.
+    pub(crate) lowers: Vec<u32>,
+    pub(crate) lower_origins: Vec<[i32; 3]>,
+    pub(crate) leaves: Vec<Leaf>,
+    pub(crate) tiles: Vec<Tile>,
+}
+
+#[inline(always)]
+fn root_key(ijk: [i32; 3]) -> [i32; 3] {
+    ijk.map(|v| v >> UPPER_TOTAL)
+}
+
+#[inline(always)]
+pub(crate) fn upper_offset(ijk: [i32; 3]) -> usize {
+    let m = |v: i32| ((v & 4095) >> LOWER_TOTAL) as usize;
+    (m(ijk[0]) << 10) | (m(ijk[1]) << 5) | m(ijk[2])
+}
+
+#[inline(always)]
+pub(crate) fn lower_offset(ijk: [i32; 3]) -> usize {
+    let m = |v: i32| ((v & 127) >> LEAF_TOTAL) as usize;
+    (m(ijk[0]) << 8) | (m(ijk[1]) << 4) | m(ijk[2])
+}
+
+impl SparseGrid {
+    /// An empty grid (every voxel is `background`, inactive).
+    pub fn empty(background: f32, index_to_world: Affine) -> SparseGrid {
+        SparseGrid {
+            name: String::new(),
+            map_type: String::new(),
+            background,
+            world_to_index: index_to_world.inverse().unwrap_or(Affine::IDENTITY),
+            index_to_world,
+            root: RootMap::default(),
+            uppers: Vec::new(),
+            upper_origins: Vec::new(),
+            lowers: Vec::new(),
+            lower_origins: Vec::new(),
+            leaves: Vec::new(),
+            tiles: Vec::new(),
+        }
+    }
+
+    /// The grid's name (from its file; empty for grids built in code).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The OpenVDB map type the transform was read from, e.g.
+    /// `"UniformScaleTranslateMap"` or `"AffineMap"` (empty if built in code).
+    pub fn map_type(&self) -> &str {
+        &self.map_type
+    }
+
+    /// The value of every voxel where nothing is stored.
+    pub fn background(&self) -> f32 {
+        self.background
+    }
+
+    /// The index-to-world map.
+    pub fn transform(&self) -> &Affine {
+        &self.index_to_world
+    }
+
+    /// The world-to-index map (inverse of [`SparseGrid::transform`]).
+    pub fn inverse_transform(&self) -> &Affine {
+        &self.world_to_index
+    }
+
+    /// Maps a world-space point to (continuous) index space.
+    #[inline]
+    pub fn world_to_index(&self, p: [f32; 3]) -> [f32; 3] {
+        self.world_to_index.transform_point_f32(p)
+    }
+
+    /// Maps an index-space point to world space.
+    #[inline]
+    pub fn index_to_world(&self, p: [f32; 3]) -> [f32; 3] {
+        self.index_to_world.transform_point_f32(p)
+    }
+
+    /// The stored leaves (8^3 blocks), in file order for grids read from VDB.
+    pub fn leaves(&self) -> &[Leaf] {
+        &self.leaves
+    }
+
+    /// The constant tiles that hold a value other than the background or
+    /// are active (inactive background tiles are not kept).
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
+    }
+
+    /// Number of stored 8^3 leaves.
+    pub fn leaf_count(&self) -> usize {
+        self.leaves.len()
+    }
+
+    #[inline(always)]
+    pub(crate) fn slot(&self, ijk: [i32; 3]) -> Slot {
+        let Some(&e) = self.root.get(&root_key(ijk)) else {
+            return Slot::Background;
+        };
+        if e & TILE_BIT != 0 {
+            return if e == EMPTY {
+                Slot::Background
+            } else {
+                Slot::Tile(e & !TILE_BIT)
+            };
+        }
+        let e = self.uppers[e as usize * UPPER_SIZE + upper_offset(ijk)];
+        if e & TILE_BIT != 0 {
+            return if e == EMPTY {
+                Slot::Background
+            } else {
+                Slot::Tile(e & !TILE_BIT)
+            };
+        }
+        let e = self.lowers[e as usize * LOWER_SIZE + lower_offset(ijk)];
+        if e & TILE_BIT != 0 {
+            return if e == EMPTY {
+                Slot::Background
+            } else {
+                Slot::Tile(e & !TILE_BIT)
+            };
+        }
+        Slot::Leaf(e)
+    }
+
+    /// The value of voxel `ijk` (stored for active and inactive voxels alike,
+    /// as OpenVDB's `probeValue`).
+    #[inline]
+    pub fn value(&self, ijk: [i32; 3]) -> f32 {
+        match self.slot(ijk) {
+            Slot::Background => self.background,
+            Slot::Tile(t) => self.tiles[t as usize].value,
+            Slot::Leaf(l) => self.leaves[l as usize].values[Leaf::offset(ijk)],
+        }
+    }
+
+    /// The value and active state of voxel `ijk`.
+    pub fn probe(&self, ijk: [i32; 3]) -> (f32, bool) {
+        match self.slot(ijk) {
+            Slot::Background => (self.background, false),
+            Slot::Tile(t) => {
+                let t = &self.tiles[t as usize];
+                (t.value, t.active)
+            }
+            Slot::Leaf(l) => {
+                let leaf = &self.leaves[l as usize];
+                let n = Leaf::offset(ijk);
+                (leaf.values[n], leaf.is_active(n))
+            }
+        }
+    }
+
+    /// Trilinear interpolation at index-space point `p` between the voxels
+    /// `floor(p)` and `floor(p) + 1` (the background where nothing is stored;
+    /// `p` must be within about +-2^30 of the origin).
+    #[inline]
+    pub fn lookup_index(&self, p: [f32; 3]) -> f32 {
+        if !(p.iter().all(|v| v.abs() < 1.0e9)) {
+            return self.background;
+        }
+        let base = p.map(|v| v.floor());
+        let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
+        let ijk = base.map(|v| v as i32);
+        let v = self.corners(ijk);
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        // corners are ordered (dx, dy, dz) with dz fastest.
+        let c00 = lerp(v[0], v[4], f[0]);
+        let c01 = lerp(v[1], v[5], f[0]);
+        let c10 = lerp(v[2], v[6], f[0]);
+        let c11 = lerp(v[3], v[7], f[0]);
+        lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+    }
+
+    /// Trilinear interpolation at world-space point `p`.
+    #[inline]
+    pub fn lookup_world(&self, p: [f32; 3]) -> f32 {
+        self.lookup_index(self.world_to_index(p))
+    }
+
+    /// The 8 voxels `ijk + (dx, dy, dz)`, `d in {0,1}`, ordered with dz
+    /// fastest, fetching one leaf when all 8 lie in the same leaf.
+    #[inline(always)]
+    fn corners(&self, ijk: [i32; 3]) -> [f32; 8] {
+        if (ijk[0] & 7) != 7 && (ijk[1] & 7) != 7 && (ijk[2] & 7) != 7 {
+            match self.slot(ijk) {
+                Slot::Background => return [self.background; 8],
+                Slot::Tile(t) => return [self.tiles[t as usize].value; 8],
+                Slot::Leaf(l) => {
+                    let values = &self.leaves[l as usize].values;
+                    let n = Leaf::offset(ijk);
+                    return [
+                        values[n],
+                        values[n + 1],
+                        values[n + 8],
+                        values[n + 9],
+                        values[n + 64],
+                        values[n + 65],
+                        values[n + 72],
+                        values[n + 73],
+                    ];
+                }
+            }
+        }
+        std::array::from_fn(|c| {
+            let d = [(c >> 2) as i32 & 1, (c >> 1) as i32 & 1, c as i32 & 1];
+            self.value([ijk[0] + d[0], ijk[1] + d[1], ijk[2] + d[2]])
+        })
+    }
+
+    /// Number of active voxels (leaf voxels plus the volume of active tiles).
+    pub fn active_voxel_count(&self) -> u64 {
+        let leaf: u64 = self
+            .leaves
+            .iter()
+            .map(|l| l.active.iter().map(|w| w.count_ones() as u64).sum::<u64>())
+            .sum();
+        let tiles: u64 = self
+            .tiles
+            .iter()
+            .filter(|t| t.active)
+            .map(|t| (t.size() as u64).pow(3))
+            .sum();
+        leaf + tiles
+    }
+
+    /// Sum of the values of all active voxels, in f64.
+    pub fn active_value_sum(&self) -> f64 {
+        let mut sum = 0.0f64;
+        for l in &self.leaves {
+            for n in 0..LEAF_SIZE {
+                if l.is_active(n) {
+                    sum += l.values[n] as f64;
+                }
+            }
+        }
+        for t in self.tiles.iter().filter(|t| t.active) {
+            sum += t.value as f64 * (t.size() as f64).powi(3);
+        }
+        sum
+    }
+
+    /// Number of active tiles at tree depth 0 (root, 4096^3), 1 (128^3) and
+    /// 2 (8^3).
+    pub fn active_tile_counts(&self) -> [usize; 3] {
+        let mut counts = [0; 3];
+        for t in self.tiles.iter().filter(|t| t.active) {
+            counts[t.depth.min(2) as usize] += 1;
+        }
+        counts
+    }
+
+    /// Inclusive index-space bounds `(min, max)` of the active voxels
+    /// (OpenVDB's `evalActiveVoxelBoundingBox`), or `None` if none is active.
+    pub fn active_bounds_index(&self) -> Option<([i32; 3], [i32; 3])> {
+        let mut b = Bounds::new();
+        for l in &self.leaves {
+            for n in 0..LEAF_SIZE {
+                if l.is_active(n) {
+                    let d = [(n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32];
+                    b.add(std::array::from_fn(|a| l.origin[a] + d[a]));
+                }
+            }
+        }
+        for t in self.tiles.iter().filter(|t| t.active) {
+            b.add(t.origin);
+            b.add(t.origin.map(|v| v + t.size() - 1));
+        }
+        b.get()
+    }
+
+    /// Inclusive index-space bounds of every stored voxel that may differ
+    /// from the background: all leaves (whole 8^3 blocks) and all kept
+    /// tiles. Outside this box the grid is exactly the background.
+    pub fn data_bounds_index(&self) -> Option<([i32; 3], [i32; 3])> {
+        let mut b = Bounds::new();
+        for l in &self.leaves {
+            b.add(l.origin);
+            b.add(l.origin.map(|v| v + LEAF_DIM - 1));
+        }
+        for t in &self.tiles {
+            b.add(t.origin);
+            b.add(t.origin.map(|v| v + t.size() - 1));
+        }
+        b.get()
+    }
+
+    /// World-space axis-aligned box enclosing the region where the
+    /// interpolated field can differ from the background: the data bounds
+    /// grown by one voxel (interpolation reaches one voxel further), mapped
+    /// to world space. `None` for an empty grid.
+    pub fn world_bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let (lo, hi) = self.data_bounds_index()?;
+        let lo = lo.map(|v| v as f64 - 1.0);
+        let hi = hi.map(|v| v as f64 + 1.0);
+        let mut out_lo = [f64::INFINITY; 3];
+        let mut out_hi = [f64::NEG_INFINITY; 3];
+        for c in 0..8 {
+            let corner = [
+                if c & 1 == 0 { lo[0] } else { hi[0] },
+                if c & 2 == 0 { lo[1] } else { hi[1] },
+                if c & 4 == 0 { lo[2] } else { hi[2] },
+            ];
+            let w = self.index_to_world.transform_point(corner);
+            for a in 0..3 {
+                out_lo[a] = out_lo[a].min(w[a]);
+                out_hi[a] = out_hi[a].max(w[a]);
+            }
+        }
+        Some((out_lo.map(|v| v as f32), out_hi.map(|v| v as f32)))
+    }
+
+    /// Largest value the grid holds anywhere (stored voxels, tiles and the
+    /// background), an upper bound of every interpolated value.
+    pub fn max_value(&self) -> f32 {
+        let leaf_max = self
+            .leaves
+            .iter()
+            .flat_map(|l| l.values.iter().copied())
+            .fold(f32::NEG_INFINITY, f32::max);
+        let tile_max = self
+            .tiles
+            .iter()
+            .map(|t| t.value)
+            .fold(f32::NEG_INFINITY, f32::max);
+        self.background.max(leaf_max).max(tile_max)
+    }
+}
+
+/// Running inclusive integer bounds.
+struct Bounds {
+    lo: [i32; 3],
+    hi: [i32; 3],
+}
+
+impl Bounds {
+    fn new() -> Self {
+        Bounds {
+            lo: [i32::MAX; 3],
+            hi: [i32::MIN; 3],
+        }
+    }
+    fn add(&mut self, p: [i32; 3]) {
+        self.lo = std::array::from_fn(|a| self.lo[a].min(p[a]));
+        self.hi = std::array::from_fn(|a| self.hi[a].max(p[a]));
+    }
+    fn get(&self) -> Option<([i32; 3], [i32; 3])> {
+        (self.lo[0] <= self.hi[0]).then_some((self.lo, self.hi))
+    }
+}
