@@ -6,6 +6,10 @@
 //! medium emission `L_ve` is radiance per unit length, and linear RGB uses
 //! Rec.709 primaries.
 
+// Negated comparisons such as `!(t < t_end)` are deliberate throughout: they
+// also catch NaN, which the rewritten comparison would let through.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod bsdf;
 pub mod camera;
 pub mod color;

@@ -3,10 +3,11 @@
 
 use crate::color::Rgb;
 use crate::math::Ray;
+use crate::medium::MediumPoint;
 use crate::medium::{Medium, MediumId};
 use crate::sampling::PixelSampler;
 use crate::scene::Scene;
-use crate::tracking::{MarchStep, TransmittanceMethod};
+use crate::tracking::{medium_range, segment_transmittance, MarchStep, TransmittanceMethod};
 
 use super::{
     default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance,
@@ -55,8 +56,12 @@ impl Integrator for EmissionIntegrator {
 }
 
 /// Emission integral and transmittance over `[0, t_end)` of `ray` in medium `m`.
-/// Unbounded segments are cut where their remaining contribution is below 1e-6
-/// (or at 1000 scene diagonals for channels without extinction).
+/// Homogeneous media with analytic transmittance use the closed form;
+/// otherwise the emission integral is ray marched over the part of the
+/// segment where the medium is, with the transmittance between march points
+/// from `method`. Unbounded homogeneous segments are cut where their
+/// remaining contribution is below 1e-6 (or at 1000 scene diagonals for
+/// channels without extinction).
 pub(crate) fn emission_segment(
     m: &Medium,
     ray: &Ray,
@@ -85,60 +90,110 @@ pub(crate) fn emission_segment(
             transmittance,
         };
     }
-    let t_max = bounded_length(m, t_end, diagonal);
-    let step = step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
-    march_segment(ray, t_max, step, sampler.next_1d(), |p| {
-        let mp = m.at(p);
-        (mp.sigma_t(), mp.l_ve)
-    })
-}
-
-/// Length over which an unbounded segment is integrated (see [`emission_segment`]).
-pub(crate) fn bounded_length(m: &Medium, t_end: f32, diagonal: f32) -> f32 {
-    if t_end.is_finite() {
-        return t_end;
+    if !m.is_emissive() {
+        return SegmentRadiance {
+            radiance: Rgb::ZERO,
+            transmittance: segment_transmittance(m, ray, 0.0, t_end, method, sampler),
+        };
     }
-    let sigma_t = match m.as_homogeneous() {
-        Some(h) => h.sigma_t(),
-        None => Rgb::splat(m.max_sigma_t()),
+    let Some((t_a, t_b)) = marched_range(m, ray, t_end, diagonal) else {
+        return SegmentRadiance {
+            radiance: Rgb::ZERO,
+            transmittance: Rgb::ONE,
+        };
     };
-    negligible_distance(sigma_t).unwrap_or(1000.0 * diagonal.max(1.0))
+    let step = step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
+    let mut s = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, _, _| mp.l_ve);
+    if !t_end.is_finite() && m.as_homogeneous().is_some() {
+        s.transmittance = segment_transmittance(m, ray, 0.0, t_end, method, sampler);
+    }
+    s
 }
 
-/// Jittered ray march of `integral T(0, t) S(t) dt` over `[0, t_max]`, where
-/// `source(p)` returns `(sigma_t, S)` at a point: samples at `(i + u) dt`, the
-/// transmittance to each sample accumulated step by step with the extinction
-/// at the step's end (pbrt-v2's scheme; exact for homogeneous media).
-pub(crate) fn march_segment(
+/// The range `[t_a, t_b]` of `[0, t_end)` that is ray marched: the medium's
+/// extent (a grid's box), with unbounded homogeneous segments cut where their
+/// remaining contribution is negligible (see [`emission_segment`]).
+pub(crate) fn marched_range(
+    m: &Medium,
     ray: &Ray,
-    t_max: f32,
+    t_end: f32,
+    diagonal: f32,
+) -> Option<(f32, f32)> {
+    let (t_a, t_b) = medium_range(m, ray, 0.0, t_end)?;
+    if t_b.is_finite() {
+        return Some((t_a, t_b));
+    }
+    let sigma_t = m
+        .as_homogeneous()
+        .map_or(Rgb::splat(m.max_sigma_t()), |h| h.sigma_t());
+    Some((
+        t_a,
+        t_a + negligible_distance(sigma_t).unwrap_or(1000.0 * diagonal.max(1.0)),
+    ))
+}
+
+/// Jittered ray march of `integral T(t_a, t) S(t) dt` over `[t_a, t_b]` in
+/// medium `m`, where `source(point, position, sampler)` gives `S`: samples at
+/// `t_a + (i + u) dt`. The transmittance from one sample to the next is the
+/// extinction at the sample times the step for `RayMarch` (pbrt-v2's scheme,
+/// biased, consistent) and an estimate by `method` otherwise (exact for a
+/// homogeneous medium, unbiased trackers for grids), so that with an
+/// unbiased `method` the stratified sum is an unbiased estimate of the
+/// integral. Returns the integral and the transmittance over `[t_a, t_b]`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn march_segment(
+    m: &Medium,
+    ray: &Ray,
+    t_a: f32,
+    t_b: f32,
     step: MarchStep,
-    u: f32,
-    mut source: impl FnMut(crate::math::Vec3) -> (Rgb, Rgb),
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+    mut source: impl FnMut(&MediumPoint, crate::math::Vec3, &mut PixelSampler) -> Rgb,
 ) -> SegmentRadiance {
-    let n = step.count_for(t_max);
-    let dt = t_max / n as f32;
+    let n = step.count_for(t_b - t_a);
+    let dt = (t_b - t_a) / n as f32;
+    let u = sampler.next_1d();
     let mut tr = Rgb::ONE;
     let mut l = Rgb::ZERO;
-    let mut t_prev = 0.0;
+    let mut t_prev = t_a;
     let mut sigma_t = Rgb::ZERO;
     for i in 0..n {
-        let t = (i as f32 + u) * dt;
-        let (st, s) = source(ray.at(t));
-        sigma_t = st;
-        tr *= (sigma_t * (t - t_prev)).exp_neg();
-        l += tr * s * dt;
-        t_prev = t;
-        if tr.max_channel() < 1e-7 {
+        let t = t_a + (i as f32 + u) * dt;
+        let p = ray.at(t);
+        let mp = m.at(p);
+        sigma_t = mp.sigma_t();
+        tr *= step_transmittance(m, ray, t_prev, t, sigma_t, method, sampler);
+        if tr.max_channel() <= 0.0 {
             return SegmentRadiance {
                 radiance: l,
                 transmittance: Rgb::ZERO,
             };
         }
+        let s = source(&mp, p, sampler);
+        l += tr * s * dt;
+        t_prev = t;
     }
-    tr *= (sigma_t * (t_max - t_prev)).exp_neg();
+    tr *= step_transmittance(m, ray, t_prev, t_b, sigma_t, method, sampler);
     SegmentRadiance {
         radiance: l,
         transmittance: tr,
+    }
+}
+
+/// Transmittance between consecutive march points.
+#[inline]
+fn step_transmittance(
+    m: &Medium,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    sigma_t_at_t1: Rgb,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    match method {
+        TransmittanceMethod::RayMarch(_) => (sigma_t_at_t1 * (t1 - t0)).exp_neg(),
+        _ => segment_transmittance(m, ray, t0, t1, method, sampler),
     }
 }

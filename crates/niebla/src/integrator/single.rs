@@ -7,14 +7,11 @@ use crate::color::Rgb;
 use crate::light::Light;
 use crate::math::{Ray, Vec3};
 use crate::medium::{Medium, MediumId};
-use crate::sampling::{
-    balance_heuristic, equiangular_pdf, sample_equiangular, sample_truncated_exponential,
-    truncated_exponential_pdf, PixelSampler,
-};
+use crate::sampling::{balance_heuristic, equiangular_pdf, sample_equiangular, PixelSampler};
 use crate::scene::Scene;
-use crate::tracking::{segment_transmittance, MarchStep, TransmittanceMethod};
+use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
 
-use super::emission::{bounded_length, emission_segment, march_segment};
+use super::emission::{emission_segment, march_segment, marched_range};
 use super::{
     default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance,
 };
@@ -134,14 +131,15 @@ impl SingleIntegrator {
             diagonal,
             sampler,
         );
-        let t_max = bounded_length(m, t_end, diagonal);
+        let Some((t_a, t_b)) = marched_range(m, ray, t_end, diagonal) else {
+            return emitted;
+        };
         let step = self
             .step
             .unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
-        let u = sampler.next_1d();
         let wo = -ray.d;
-        let scattered = march_segment(ray, t_max, step, u, |p| {
-            let mp = m.at(p);
+        let method = self.transmittance;
+        let scattered = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, p, sampler| {
             let mut source = Rgb::ZERO;
             if !mp.sigma_s.is_black() {
                 for light in &scene.lights {
@@ -152,13 +150,13 @@ impl SingleIntegrator {
                         wo,
                         m.phase(),
                         Some(id),
-                        self.transmittance,
+                        method,
                         sampler,
                     );
                 }
                 source *= mp.sigma_s;
             }
-            (mp.sigma_t(), source)
+            source
         });
         SegmentRadiance {
             radiance: emitted.radiance + scattered.radiance,
@@ -192,15 +190,16 @@ impl SingleIntegrator {
         let wo = -ray.d;
         let mis = self.sampling == SingleSampling::Mis;
 
-        // Distance sampling: pdf proportional to sigma exp(-sigma t) on [0, t_end)
-        // with sigma the channel-averaged extinction (any positive density keeps the
-        // estimator unbiased; this one follows the average transmittance).
-        let sigma = distance_sampling_sigma(m);
-        let can_distance_sample = sigma > 0.0 || t_end.is_finite();
+        // Distance sampling: a piecewise-exponential density over the majorant
+        // segments with the channel-averaged extinction (for a homogeneous
+        // medium, sigma_t_avg exp(-sigma_t_avg t) truncated to the segment).
+        // Any density that covers the medium keeps the estimator unbiased; this
+        // one is computable exactly, so MIS can weigh it against equiangular.
+        let profile = majorant_profile(m, ray, 0.0, t_end, m.sigma_t_per_density().average());
+        let can_distance_sample = !profile.is_empty();
         let u_distance = sampler.next_1d();
-        if can_distance_sample {
-            let t = sample_truncated_exponential(u_distance, sigma, t_end);
-            let pdf = truncated_exponential_pdf(t, sigma, t_end);
+        if let Some(t) = profile.sample(u_distance) {
+            let pdf = profile.pdf(t);
             if pdf > 0.0 && pdf.is_finite() {
                 let p = ray.at(t);
                 let mp = m.at(p);
@@ -250,7 +249,7 @@ impl SingleIntegrator {
                 continue;
             }
             let weight = if mis && can_distance_sample {
-                balance_heuristic(pdf, truncated_exponential_pdf(t, sigma, t_end))
+                balance_heuristic(pdf, profile.pdf(t))
             } else {
                 1.0
             };
@@ -273,14 +272,6 @@ impl SingleIntegrator {
             seg.radiance += tr * mp.sigma_s * li * (weight / pdf);
         }
         seg
-    }
-}
-
-/// Extinction used for distance sampling in `m`: the channel average.
-fn distance_sampling_sigma(m: &Medium) -> f32 {
-    match m.as_homogeneous() {
-        Some(h) => h.sigma_t().average(),
-        None => m.max_sigma_t(),
     }
 }
 

@@ -6,8 +6,10 @@
 //! `S = L_ve + sigma_s * integral p L_i`, and a deep purely absorbing emitting
 //! medium looks like `L_ve / sigma_a`.
 
+mod grid;
 mod homogeneous;
 
+pub use grid::{DensityGrid, GridEmission, GridField, GridMedium};
 pub use homogeneous::HomogeneousMedium;
 
 use crate::color::Rgb;
@@ -37,19 +39,24 @@ impl MediumPoint {
     }
 }
 
-/// A closed set of media (style.md rule 3).
+/// A closed set of media (style.md rule 3). A scene holds a handful of media
+/// in a table, so the size difference between variants costs nothing.
 #[derive(Clone, Debug)]
+#[allow(clippy::large_enum_variant)]
 pub enum Medium {
     /// Constant coefficients everywhere (unbounded; shapes bound it).
     Homogeneous(HomogeneousMedium),
+    /// Coefficients times a voxel density, zero outside the grid's box.
+    Grid(GridMedium),
 }
 
 impl Medium {
     /// Coefficients at world point `p`.
     #[inline]
-    pub fn at(&self, _p: Vec3) -> MediumPoint {
+    pub fn at(&self, p: Vec3) -> MediumPoint {
         match self {
             Medium::Homogeneous(m) => m.point(),
+            Medium::Grid(m) => m.point(p),
         }
     }
 
@@ -58,6 +65,16 @@ impl Medium {
     pub fn phase(&self) -> &PhaseFunction {
         match self {
             Medium::Homogeneous(m) => &m.phase,
+            Medium::Grid(m) => &m.phase,
+        }
+    }
+
+    /// Extinction per unit density (the homogeneous medium's own sigma_t).
+    #[inline]
+    pub fn sigma_t_per_density(&self) -> Rgb {
+        match self {
+            Medium::Homogeneous(m) => m.sigma_t(),
+            Medium::Grid(m) => m.sigma_t(),
         }
     }
 
@@ -70,6 +87,7 @@ impl Medium {
                 // 0 * inf would be NaN: a channel without extinction has zero depth.
                 Some(m.sigma_t().map(|s| if s == 0.0 { 0.0 } else { s * length }))
             }
+            Medium::Grid(_) => None,
         }
     }
 
@@ -78,6 +96,7 @@ impl Medium {
     pub fn as_homogeneous(&self) -> Option<&HomogeneousMedium> {
         match self {
             Medium::Homogeneous(m) => Some(m),
+            Medium::Grid(_) => None,
         }
     }
 
@@ -85,6 +104,7 @@ impl Medium {
     pub fn max_sigma_t(&self) -> f32 {
         match self {
             Medium::Homogeneous(m) => m.sigma_t().max_channel(),
+            Medium::Grid(m) => m.max_sigma_t(),
         }
     }
 
@@ -92,6 +112,7 @@ impl Medium {
     pub fn is_emissive(&self) -> bool {
         match self {
             Medium::Homogeneous(m) => !m.l_ve.is_black(),
+            Medium::Grid(m) => !matches!(m.emission, GridEmission::None),
         }
     }
 }

@@ -5,25 +5,37 @@
 //! takes a medium, a ray, a parameter range and random numbers, and returns a
 //! per-channel transmittance estimate.
 
+mod along_ray;
+mod distance;
 mod ray_march;
+mod trackers;
 
+pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, UnitDensity};
+pub use distance::MajorantProfile;
 pub use ray_march::{ray_march_optical_depth, MarchStep};
+pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking};
 
 use crate::color::Rgb;
 use crate::math::Ray;
-use crate::medium::Medium;
+use crate::medium::{DensityGrid, GridMedium, Medium};
 use crate::sampling::PixelSampler;
 
 /// How transmittance along a segment is estimated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TransmittanceMethod {
-    /// Closed form `exp(-sigma_t d)` where the medium allows it (homogeneous);
-    /// media without a closed form fall back to ray marching with the default step.
+    /// Closed form `exp(-sigma_t d)` for homogeneous media; heterogeneous media
+    /// have none and use ratio tracking instead (unbiased).
     Analytic,
     /// Deterministic ray marching with one jittered offset (pbrt-v2
     /// `DensityRegion::tau`): unbiased optical depth, but `exp(-tau_hat)` is
     /// biased upward; consistent as the step shrinks.
     RayMarch(MarchStep),
+    /// Delta tracking: a binary (0 or weight) estimate per call.
+    Delta,
+    /// Ratio tracking.
+    Ratio,
+    /// Residual ratio tracking with a per-cell control extinction.
+    ResidualRatio,
 }
 
 /// Transmittance estimate over `[t0, t1]` of `ray` inside `medium`.
@@ -37,29 +49,153 @@ pub fn segment_transmittance(
     method: TransmittanceMethod,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    if t1 <= t0 {
+    if !(t1 > t0) {
         return Rgb::ONE;
     }
-    match method {
-        TransmittanceMethod::RayMarch(step) if t1.is_finite() => {
-            let u = sampler.next_1d();
-            let tau = ray_march_optical_depth(|t| medium.at(ray.at(t)).sigma_t(), t0, t1, step, u);
-            tau.exp_neg()
-        }
-        _ => match medium.exact_optical_depth(ray, t0, t1) {
-            Some(tau) => tau.exp_neg(),
-            None => {
-                let u = sampler.next_1d();
-                let tau = ray_march_optical_depth(
-                    |t| medium.at(ray.at(t)).sigma_t(),
-                    t0,
-                    t1,
-                    MarchStep::Count(64),
-                    u,
-                );
-                tau.exp_neg()
+    match medium {
+        Medium::Homogeneous(h) => {
+            let sigma_t = h.sigma_t();
+            if !t1.is_finite() {
+                // Only the closed form handles an unbounded homogeneous segment.
+                return medium
+                    .exact_optical_depth(ray, t0, t1)
+                    .unwrap_or(Rgb::ZERO)
+                    .exp_neg();
             }
-        },
+            let r = UnitDensity { t0, t1 };
+            match method {
+                TransmittanceMethod::Analytic => (sigma_t * (t1 - t0)).exp_neg(),
+                TransmittanceMethod::RayMarch(step) => {
+                    let u = sampler.next_1d();
+                    ray_march_optical_depth(|_| sigma_t, t0, t1, step, u).exp_neg()
+                }
+                TransmittanceMethod::Delta => delta_tracking(&r, sigma_t, sampler),
+                TransmittanceMethod::Ratio => ratio_tracking(&r, sigma_t, sampler),
+                TransmittanceMethod::ResidualRatio => residual_ratio_tracking(&r, sigma_t, sampler),
+            }
+        }
+        Medium::Grid(g) => grid_transmittance(g, ray, t0, t1, method, sampler),
+    }
+}
+
+/// [`segment_transmittance`] in a grid medium: the density grid's type is
+/// matched once, then the tracker runs concretely.
+fn grid_transmittance(
+    g: &GridMedium,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let Some((a, b)) = g.clip(ray, t0, t1) else {
+        return Rgb::ONE;
+    };
+    let (o, d) = g.ray_to_grid(ray);
+    match &g.density {
+        DensityGrid::Dense(grid) => {
+            let r = GridAlongRay {
+                grid: grid.as_ref(),
+                majorant: &g.majorant,
+                minorant: g.minorant.as_ref(),
+                o,
+                d,
+                t0: a,
+                t1: b,
+            };
+            run_tracker(&r, g.sigma_t(), a, b, method, sampler)
+        }
+        DensityGrid::Sparse(grid) => {
+            let r = GridAlongRay {
+                grid: grid.as_ref(),
+                majorant: &g.majorant,
+                minorant: g.minorant.as_ref(),
+                o,
+                d,
+                t0: a,
+                t1: b,
+            };
+            run_tracker(&r, g.sigma_t(), a, b, method, sampler)
+        }
+    }
+}
+
+#[inline]
+fn run_tracker<R: DensityAlongRay>(
+    r: &R,
+    sigma_t: Rgb,
+    t0: f32,
+    t1: f32,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    match method {
+        TransmittanceMethod::RayMarch(step) => {
+            let u = sampler.next_1d();
+            ray_march_optical_depth(|t| sigma_t * r.density(t), t0, t1, step, u).exp_neg()
+        }
+        TransmittanceMethod::Delta => delta_tracking(r, sigma_t, sampler),
+        TransmittanceMethod::Analytic | TransmittanceMethod::Ratio => {
+            ratio_tracking(r, sigma_t, sampler)
+        }
+        TransmittanceMethod::ResidualRatio => residual_ratio_tracking(r, sigma_t, sampler),
+    }
+}
+
+/// The piecewise-exponential distance-sampling profile of `ray` over
+/// `[t0, t1]` in `medium`: rate `d_max * rate_per_density` per majorant
+/// segment (one segment for a homogeneous medium).
+pub fn majorant_profile(
+    medium: &Medium,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    rate_per_density: f32,
+) -> MajorantProfile {
+    match medium {
+        Medium::Homogeneous(_) => MajorantProfile::new(&UnitDensity { t0, t1 }, rate_per_density),
+        Medium::Grid(g) => {
+            let Some((a, b)) = g.clip(ray, t0, t1) else {
+                return MajorantProfile::default();
+            };
+            let (o, d) = g.ray_to_grid(ray);
+            match &g.density {
+                DensityGrid::Dense(grid) => MajorantProfile::new(
+                    &GridAlongRay {
+                        grid: grid.as_ref(),
+                        majorant: &g.majorant,
+                        minorant: None,
+                        o,
+                        d,
+                        t0: a,
+                        t1: b,
+                    },
+                    rate_per_density,
+                ),
+                DensityGrid::Sparse(grid) => MajorantProfile::new(
+                    &GridAlongRay {
+                        grid: grid.as_ref(),
+                        majorant: &g.majorant,
+                        minorant: None,
+                        o,
+                        d,
+                        t0: a,
+                        t1: b,
+                    },
+                    rate_per_density,
+                ),
+            }
+        }
+    }
+}
+
+/// The part of `[t0, t1]` of `ray` where `medium` can be non-zero: all of it
+/// for a homogeneous medium, the grid's box for a grid medium.
+#[inline]
+pub fn medium_range(medium: &Medium, ray: &Ray, t0: f32, t1: f32) -> Option<(f32, f32)> {
+    match medium {
+        Medium::Homogeneous(_) => (t1 > t0).then_some((t0, t1)),
+        Medium::Grid(g) => g.clip(ray, t0, t1),
     }
 }
 

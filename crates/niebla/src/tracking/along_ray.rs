@@ -1,0 +1,123 @@
+//! Density along one ray inside one medium, with its majorant segments: the
+//! concrete view the trackers loop over. The medium is matched once per ray
+//! (style.md rule 4) and the trackers are generic over [`DensityAlongRay`],
+//! so their inner loops have no type branches.
+
+use std::ops::ControlFlow;
+
+use niebla_volume::{DenseGrid, MajorantGrid, SparseGrid};
+
+use crate::math::Vec3;
+
+/// A piece `[t0, t1]` of a ray with bounds on the density inside it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DensitySegment {
+    /// Start (ray parameter).
+    pub t0: f32,
+    /// End (ray parameter, may be infinite for unbounded media).
+    pub t1: f32,
+    /// Lower bound of the density (0 when unknown).
+    pub d_min: f32,
+    /// Upper bound of the density (the majorant).
+    pub d_max: f32,
+}
+
+/// Density (a multiplier of the medium's coefficients) along a ray.
+pub trait DensityAlongRay {
+    /// Density at ray parameter `t`.
+    fn density(&self, t: f32) -> f32;
+    /// The ray's majorant segments in increasing `t`, contiguous where the
+    /// medium is; `f` may stop the walk.
+    fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, f: F) -> ControlFlow<()>;
+}
+
+/// Density 1 over `[t0, t1]`: a homogeneous medium.
+#[derive(Clone, Copy, Debug)]
+pub struct UnitDensity {
+    /// Start.
+    pub t0: f32,
+    /// End.
+    pub t1: f32,
+}
+
+impl DensityAlongRay for UnitDensity {
+    #[inline]
+    fn density(&self, _t: f32) -> f32 {
+        1.0
+    }
+    #[inline]
+    fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
+        f(DensitySegment {
+            t0: self.t0,
+            t1: self.t1,
+            d_min: 1.0,
+            d_max: 1.0,
+        })
+    }
+}
+
+/// Trilinear lookup in a grid's own space.
+pub trait GridLookup {
+    /// Value at grid-space point `p`.
+    fn lookup_grid(&self, p: Vec3) -> f32;
+}
+
+impl GridLookup for DenseGrid {
+    #[inline]
+    fn lookup_grid(&self, p: Vec3) -> f32 {
+        self.lookup(p.to_array())
+    }
+}
+
+impl GridLookup for SparseGrid {
+    #[inline]
+    fn lookup_grid(&self, p: Vec3) -> f32 {
+        self.lookup_index(p.to_array())
+    }
+}
+
+/// A grid seen along a ray given in the grid's space (`o + t d`, `d` not unit,
+/// `t` the world ray's parameter), restricted to `[t0, t1]`.
+pub struct GridAlongRay<'a, G: GridLookup> {
+    /// The voxels.
+    pub grid: &'a G,
+    /// Per-cell maxima.
+    pub majorant: &'a MajorantGrid,
+    /// Per-cell minima (same layout), if known.
+    pub minorant: Option<&'a MajorantGrid>,
+    /// Ray origin in grid space.
+    pub o: Vec3,
+    /// Ray direction in grid space.
+    pub d: Vec3,
+    /// Start of the range.
+    pub t0: f32,
+    /// End of the range.
+    pub t1: f32,
+}
+
+impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
+    #[inline]
+    fn density(&self, t: f32) -> f32 {
+        self.grid.lookup_grid(self.o + self.d * t)
+    }
+
+    #[inline]
+    fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
+        let minorant = self.minorant;
+        self.majorant.walk_cells(
+            self.o.to_array(),
+            self.d.to_array(),
+            self.t0,
+            self.t1,
+            |cell, s| {
+                let d_min = minorant.map_or(0.0, |m| m.value(cell[0], cell[1], cell[2]));
+                f(DensitySegment {
+                    t0: s.t0,
+                    t1: s.t1,
+                    d_min: d_min.min(s.max_density),
+                    d_max: s.max_density,
+                })
+            },
+        )
+    }
+}
