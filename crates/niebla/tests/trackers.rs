@@ -64,7 +64,8 @@ fn trackers_match_beer_lambert_and_documented_variances_on_a_ramp() {
     let n = 200_000;
     let exact = (-1.0f64).exp();
     let sigma_t = Rgb::splat(2.0); // sigma_t(t) = 2 * density(t) = 2t
-    let cases: [(&str, Ramp, fn(&Ramp, Rgb, &mut PixelSampler) -> Rgb, f64); 4] = [
+    type Tracker = fn(&Ramp, Rgb, &mut PixelSampler) -> Rgb;
+    let cases: [(&str, Ramp, Tracker, f64); 4] = [
         (
             "delta",
             Ramp {
