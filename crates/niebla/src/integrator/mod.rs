@@ -7,12 +7,14 @@ mod camera_ray;
 mod direct;
 mod emission;
 mod single;
+mod volpath;
 
 pub(crate) use camera_ray::trace_camera_ray;
 pub use camera_ray::SegmentRadiance;
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
 pub use emission::EmissionIntegrator;
 pub use single::{SingleIntegrator, SingleSampling};
+pub use volpath::VolPathIntegrator;
 
 use crate::color::Rgb;
 use crate::math::Ray;

@@ -172,6 +172,32 @@ impl Light {
         }
     }
 
+    /// Density per steradian with which [`Light::sample_li`] at `p` (with the
+    /// same `normal` argument) returns direction `wi`; 0 for delta lights.
+    #[inline]
+    pub fn pdf_li(&self, _p: Vec3, normal: Option<Vec3>, wi: Vec3) -> f32 {
+        match self {
+            Light::Constant(_) => match normal {
+                Some(n) => cosine_hemisphere_pdf(wi.dot(n)),
+                None => uniform_sphere_pdf(),
+            },
+            _ => 0.0,
+        }
+    }
+
+    /// True for lights described by a delta distribution (point, spot,
+    /// directional): no ray can hit them, so they take no MIS.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        !matches!(self, Light::Constant(_))
+    }
+
+    /// True for lights at infinity that escaping rays see.
+    #[inline]
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Constant(_))
+    }
+
     /// Radiance seen along a ray that escapes the scene in direction `d`.
     #[inline]
     pub fn le_escaped(&self, _d: Vec3) -> Rgb {

@@ -7,11 +7,13 @@
 
 mod along_ray;
 mod distance;
+mod free_flight;
 mod ray_march;
 mod trackers;
 
 pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, UnitDensity};
 pub use distance::MajorantProfile;
+pub use free_flight::{sample_t_maj, MajorantCollision};
 pub use ray_march::{ray_march_optical_depth, MarchStep};
 pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking};
 

@@ -1,0 +1,416 @@
+//! Volumetric path tracing with the null-scattering path integral (Miller,
+//! Georgiev, Jarosz 2019), after pbrt-v4's `VolPathIntegrator`: free flight by
+//! delta tracking over majorant segments with real, null and absorption
+//! events; medium emission at every tentative collision; next-event
+//! estimation at every scattering vertex with shadow transmittance by ratio
+//! tracking; MIS between phase or BSDF sampling and light sampling; spectral
+//! MIS over the RGB channels with a hero channel chosen per path; Russian
+//! roulette on throughput.
+//!
+//! Path state (pbrt-v4's notation): `beta` is the throughput divided by the
+//! hero channel's path pdf; `r_u` and `r_l` are the unidirectional and
+//! light-sampling path pdfs of every channel divided by that same hero pdf.
+//! A contribution found by phase/BSDF sampling is divided by the channel mean
+//! of `r_u + r_l` (or of `r_u` alone where light sampling could not have made
+//! it), one found by light sampling by the mean of `r_l + r_u`.
+
+use crate::bsdf::Bsdf;
+use crate::color::Rgb;
+use crate::light::Light;
+use crate::math::{Frame, Ray, Vec3};
+use crate::medium::MediumId;
+use crate::phase::PhaseFunction;
+use crate::sampling::{sample_cosine_hemisphere, PixelSampler};
+use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
+use crate::tracking::sample_t_maj;
+
+use super::Integrator;
+
+/// The volumetric path tracer.
+#[derive(Clone, Copy, Debug)]
+pub struct VolPathIntegrator {
+    /// Largest number of scattering events (medium or surface) on a path.
+    pub max_depth: u32,
+}
+
+/// How the previous vertex scattered: what light sampling there would have done.
+#[derive(Clone, Copy, Debug)]
+struct PreviousVertex {
+    p: Vec3,
+    /// Surface normal (facing the outgoing direction) for surface vertices.
+    normal: Option<Vec3>,
+}
+
+/// The scattering function at a vertex, for next-event estimation.
+#[derive(Clone, Copy)]
+enum Scatter<'a> {
+    Phase(&'a PhaseFunction),
+    /// Opaque surface with its normal facing `wo`.
+    Surface(&'a Bsdf, Vec3),
+}
+
+impl Scatter<'_> {
+    /// `f * |cos|` (surfaces) or `p` (media), and the sampling pdf of `wi`.
+    #[inline]
+    fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        match *self {
+            Scatter::Phase(phase) => {
+                let p = phase.eval(wo, wi);
+                (Rgb::splat(p), phase.pdf(wo, wi))
+            }
+            Scatter::Surface(bsdf, n) => {
+                let cos = wi.dot(n);
+                if cos <= 0.0 {
+                    return (Rgb::ZERO, 0.0);
+                }
+                (bsdf.eval(n, wo, wi) * cos, cos * crate::math::INV_PI)
+            }
+        }
+    }
+}
+
+impl Integrator for VolPathIntegrator {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut r_u = Rgb::ONE;
+        let mut r_l = Rgb::ONE;
+        let mut depth = 0u32;
+        let mut specular_bounce = false;
+        let mut previous = PreviousVertex {
+            p: ray.o,
+            normal: None,
+        };
+        let mut t_min = 0.0f32;
+        let mut crossings = 0u32;
+
+        loop {
+            let hit = scene.intersect(&ray, t_min, f32::INFINITY);
+            let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
+
+            // Free flight through the medium up to the surface.
+            if let Some(id) = medium {
+                let m = scene.medium(id);
+                let mut scattered: Option<Ray> = None;
+                let mut terminated = false;
+                let wo = -ray.d;
+                let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
+                    // Medium emission, a collision estimator at every tentative collision.
+                    if depth < self.max_depth && !c.point.l_ve.is_black() {
+                        let pdf = c.sigma_maj[hero] * c.t_maj[hero];
+                        let beta_e = beta * c.t_maj / pdf;
+                        let r_e = r_u * c.sigma_maj * c.t_maj / pdf;
+                        if r_e.average() > 0.0 {
+                            l += beta_e * c.point.l_ve / r_e.average();
+                        }
+                    }
+                    let sigma_a = c.point.sigma_a;
+                    let sigma_s = c.point.sigma_s;
+                    let p_absorb = sigma_a[hero] / c.sigma_maj[hero];
+                    let p_scatter = sigma_s[hero] / c.sigma_maj[hero];
+                    let u = sampler.next_1d();
+                    if u < p_absorb {
+                        // Absorption: the path ends.
+                        terminated = true;
+                        return false;
+                    }
+                    if u < p_absorb + p_scatter {
+                        // Real scattering.
+                        if depth >= self.max_depth {
+                            terminated = true;
+                            return false;
+                        }
+                        depth += 1;
+                        let pdf = c.t_maj[hero] * sigma_s[hero];
+                        beta *= c.t_maj * sigma_s / pdf;
+                        r_u *= c.t_maj * sigma_s / pdf;
+                        if beta.is_black() || r_u.is_black() {
+                            terminated = true;
+                            return false;
+                        }
+                        let phase = m.phase();
+                        l += sample_ld(
+                            scene,
+                            c.p,
+                            wo,
+                            Scatter::Phase(phase),
+                            Some(id),
+                            hero,
+                            beta,
+                            r_u,
+                            sampler,
+                        );
+                        let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
+                            terminated = true;
+                            return false;
+                        };
+                        beta *= ps.value / ps.pdf;
+                        r_l = r_u / ps.pdf;
+                        previous = PreviousVertex {
+                            p: c.p,
+                            normal: None,
+                        };
+                        specular_bounce = false;
+                        scattered = Some(Ray::new(c.p, ps.wi));
+                        return false;
+                    }
+                    // Null collision: continue with the null-scattering weights.
+                    let sigma_n = (c.sigma_maj - sigma_a - sigma_s).map(|x| x.max(0.0));
+                    let pdf = c.t_maj[hero] * sigma_n[hero];
+                    if !(pdf > 0.0) {
+                        beta = Rgb::ZERO;
+                        return false;
+                    }
+                    beta *= c.t_maj * sigma_n / pdf;
+                    r_u *= c.t_maj * sigma_n / pdf;
+                    r_l *= c.t_maj * c.sigma_maj / pdf;
+                    !(beta.is_black() || r_u.is_black())
+                });
+                if terminated || beta.is_black() || r_u.is_black() || !beta.is_finite() {
+                    return l;
+                }
+                if let Some(next) = scattered {
+                    ray = next;
+                    t_min = 0.0;
+                    continue;
+                }
+                // Passed through: the hero channel's majorant transmittance was the
+                // free-flight probability of reaching the surface.
+                let h = t_maj[hero];
+                if !(h > 0.0) {
+                    return l;
+                }
+                beta *= t_maj / h;
+                r_u *= t_maj / h;
+                r_l *= t_maj / h;
+            }
+
+            // Escaped: environment lights, MIS against light sampling.
+            let Some(hit) = hit else {
+                for light in scene.lights.iter().filter(|l| l.is_infinite()) {
+                    let le = light.le_escaped(ray.d);
+                    if le.is_black() {
+                        continue;
+                    }
+                    if depth == 0 || specular_bounce {
+                        l += beta * le / r_u.average();
+                    } else {
+                        let pmf = 1.0 / scene.lights.len() as f32;
+                        let r_l_env =
+                            r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        l += beta * le / (r_u + r_l_env).average();
+                    }
+                }
+                return l;
+            };
+
+            // Index-matched boundary: cross it without counting a bounce.
+            let object = scene.object(&hit);
+            if object.bsdf.is_null() {
+                crossings += 1;
+                if crossings > MAX_BOUNDARY_CROSSINGS * 16 {
+                    return l;
+                }
+                medium = scene.medium_after_crossing(&hit, ray.d, medium);
+                ray = Ray::new(hit.surface.p, ray.d);
+                t_min = surface_epsilon(hit.surface.p);
+                continue;
+            }
+
+            // Opaque surface: next-event estimation, then BSDF sampling.
+            if depth >= self.max_depth {
+                return l;
+            }
+            depth += 1;
+            let wo = -ray.d;
+            let n = if hit.surface.n.dot(wo) < 0.0 {
+                -hit.surface.n
+            } else {
+                hit.surface.n
+            };
+            let p = hit.surface.p;
+            l += sample_ld(
+                scene,
+                p,
+                wo,
+                Scatter::Surface(&object.bsdf, n),
+                medium,
+                hero,
+                beta,
+                r_u,
+                sampler,
+            );
+            match object.bsdf {
+                Bsdf::Diffuse { reflectance } => {
+                    let local = sample_cosine_hemisphere(sampler.next_2d());
+                    let wi = Frame::from_z(n).to_world(local);
+                    let pdf = local.z * crate::math::INV_PI;
+                    if !(pdf > 0.0) {
+                        return l;
+                    }
+                    // f cos / pdf = reflectance for a Lambertian surface.
+                    beta *= reflectance;
+                    r_l = r_u / pdf;
+                    specular_bounce = false;
+                    previous = PreviousVertex { p, normal: Some(n) };
+                    ray = Ray::new(p, wi);
+                    t_min = surface_epsilon(p);
+                }
+                Bsdf::Null => unreachable!("null surfaces are crossed above"),
+            }
+
+            // Russian roulette on the MIS-normalized throughput.
+            let rr_beta = beta / r_u.average();
+            let u = sampler.next_1d();
+            if rr_beta.max_channel() < 1.0 && depth > 1 {
+                let q = (1.0 - rr_beta.max_channel()).max(0.0);
+                if u < q {
+                    return l;
+                }
+                beta /= 1.0 - q;
+            }
+        }
+    }
+}
+
+/// Next-event estimation (pbrt-v4's `SampleLd`): one light chosen uniformly,
+/// one direction toward it, ratio tracking along the shadow ray through every
+/// medium and index-matched boundary, weighted against phase/BSDF sampling.
+#[allow(clippy::too_many_arguments)]
+fn sample_ld(
+    scene: &Scene,
+    p: Vec3,
+    wo: Vec3,
+    scatter: Scatter,
+    medium: Option<MediumId>,
+    hero: usize,
+    beta: Rgb,
+    r_p: Rgb,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let n_lights = scene.lights.len();
+    let u_light = sampler.next_1d();
+    let u_dir = sampler.next_2d();
+    if n_lights == 0 {
+        return Rgb::ZERO;
+    }
+    let light: &Light = &scene.lights[((u_light * n_lights as f32) as usize).min(n_lights - 1)];
+    let pmf = 1.0 / n_lights as f32;
+    let normal = match scatter {
+        Scatter::Surface(_, n) => Some(n),
+        Scatter::Phase(_) => None,
+    };
+    let Some(ls) = light.sample_li(p, normal, u_dir) else {
+        return Rgb::ZERO;
+    };
+    if ls.li.is_black() || !(ls.pdf > 0.0) {
+        return Rgb::ZERO;
+    }
+    let (f_hat, scatter_pdf) = scatter.eval(wo, ls.wi);
+    if f_hat.is_black() {
+        return Rgb::ZERO;
+    }
+    let origin = match normal {
+        Some(n) => p + n * surface_epsilon(p),
+        None => p,
+    };
+    let Some((t_ray, mut r_l, mut r_u)) =
+        shadow_transmittance(scene, origin, medium, ls.wi, ls.distance, hero, sampler)
+    else {
+        return Rgb::ZERO;
+    };
+    let light_pdf = pmf * ls.pdf;
+    r_l *= r_p * light_pdf;
+    r_u *= r_p * scatter_pdf;
+    if ls.is_delta {
+        beta * f_hat * t_ray * ls.li / r_l.average()
+    } else {
+        beta * f_hat * t_ray * ls.li / (r_l + r_u).average()
+    }
+}
+
+/// Ratio tracking along a shadow ray with the null-scattering MIS weights of
+/// pbrt-v4: returns `(T_ray, r_l, r_u)` or `None` when the ray is blocked by
+/// an opaque surface or its estimate was terminated.
+fn shadow_transmittance(
+    scene: &Scene,
+    p: Vec3,
+    mut medium: Option<MediumId>,
+    wi: Vec3,
+    distance: f32,
+    hero: usize,
+    sampler: &mut PixelSampler,
+) -> Option<(Rgb, Rgb, Rgb)> {
+    let mut t_ray = Rgb::ONE;
+    let mut r_l = Rgb::ONE;
+    let mut r_u = Rgb::ONE;
+    let mut ray = Ray::new(p, wi);
+    let mut remaining = distance;
+    let mut t_min = 0.0;
+    for _ in 0..MAX_BOUNDARY_CROSSINGS {
+        let hit = scene.intersect(&ray, t_min, remaining);
+        if let Some(h) = hit {
+            if !scene.object(&h).bsdf.is_null() {
+                return None;
+            }
+        }
+        let t_end = hit.map_or(remaining, |h| h.surface.t);
+        if let Some(id) = medium {
+            let t_maj = sample_t_maj(
+                scene.medium(id),
+                &ray,
+                t_end,
+                hero,
+                sampler,
+                |c, sampler| {
+                    let sigma_n =
+                        (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).map(|x| x.max(0.0));
+                    let pdf = c.t_maj[hero] * c.sigma_maj[hero];
+                    t_ray *= c.t_maj * sigma_n / pdf;
+                    r_l *= c.t_maj * c.sigma_maj / pdf;
+                    r_u *= c.t_maj * sigma_n / pdf;
+                    // Russian roulette on the MIS-normalized transmittance (pbrt-v4).
+                    let tr = t_ray / (r_l + r_u).average();
+                    if tr.max_channel() < 0.05 {
+                        if sampler.next_1d() < 0.75 {
+                            t_ray = Rgb::ZERO;
+                        } else {
+                            t_ray /= 0.25;
+                        }
+                    }
+                    !t_ray.is_black()
+                },
+            );
+            let h = t_maj[hero];
+            if h > 0.0 {
+                t_ray *= t_maj / h;
+                r_l *= t_maj / h;
+                r_u *= t_maj / h;
+            } else if !t_maj.is_black() {
+                // The hero channel cannot pass but others can: the hero-based pdfs are 0.
+                return None;
+            }
+        }
+        if t_ray.is_black() || !t_ray.is_finite() {
+            return None;
+        }
+        let Some(hit) = hit else {
+            return Some((t_ray, r_l, r_u));
+        };
+        medium = scene.medium_after_crossing(&hit, wi, medium);
+        remaining -= hit.surface.t;
+        ray = Ray::new(hit.surface.p, wi);
+        t_min = surface_epsilon(hit.surface.p);
+        if remaining <= t_min {
+            return Some((t_ray, r_l, r_u));
+        }
+    }
+    None
+}

@@ -1,0 +1,159 @@
+//! Free-flight sampling over majorant segments for the null-scattering path
+//! integral (Miller, Georgiev, Jarosz 2019; pbrt-v4's `SampleT_maj`).
+//!
+//! Tentative collisions are sampled with the hero channel of the RGB majorant
+//! `sigma_maj = d_max * sigma_t`; at each, the callback receives the point,
+//! the coefficients there, `sigma_maj` and the majorant transmittance since
+//! the previous collision, and decides (absorb, scatter, null) itself. The
+//! function returns the majorant transmittance from the last collision to
+//! the end of the range.
+
+use crate::color::Rgb;
+use crate::math::{Ray, Vec3};
+use crate::medium::{DensityGrid, Medium, MediumPoint};
+use crate::sampling::PixelSampler;
+
+use super::along_ray::{DensityAlongRay, GridAlongRay, UnitDensity};
+
+/// A tentative collision handed to the callback of [`sample_t_maj`].
+#[derive(Clone, Copy, Debug)]
+pub struct MajorantCollision {
+    /// Ray parameter of the collision.
+    pub t: f32,
+    /// World position.
+    pub p: Vec3,
+    /// Coefficients at `p`.
+    pub point: MediumPoint,
+    /// RGB majorant of the segment holding `p`.
+    pub sigma_maj: Rgb,
+    /// Majorant transmittance from the previous collision (or the start) to `p`.
+    pub t_maj: Rgb,
+}
+
+/// Sample tentative collisions along `[0, t_max)` of `ray` in `medium` with
+/// the majorant of channel `hero`. `callback(collision, sampler)` returns
+/// `false` to stop (then the function returns `Rgb::ONE`); otherwise sampling
+/// restarts at the collision (memorylessness). Returns the majorant
+/// transmittance from the last collision to `t_max`.
+pub fn sample_t_maj<F>(
+    medium: &Medium,
+    ray: &Ray,
+    t_max: f32,
+    hero: usize,
+    sampler: &mut PixelSampler,
+    callback: F,
+) -> Rgb
+where
+    F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
+{
+    match medium {
+        Medium::Homogeneous(h) => {
+            let r = UnitDensity { t0: 0.0, t1: t_max };
+            let point = h.point();
+            walk(&r, h.sigma_t(), ray, hero, sampler, |_, _| point, callback)
+        }
+        Medium::Grid(g) => {
+            let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
+                return Rgb::ONE;
+            };
+            let (o, d) = g.ray_to_grid(ray);
+            let at = |p: Vec3, density: f32| MediumPoint {
+                sigma_a: g.sigma_a * density,
+                sigma_s: g.sigma_s * density,
+                l_ve: g.l_ve(p, density),
+            };
+            match &g.density {
+                DensityGrid::Dense(grid) => {
+                    let r = GridAlongRay {
+                        grid: grid.as_ref(),
+                        majorant: &g.majorant,
+                        minorant: None,
+                        o,
+                        d,
+                        t0: a,
+                        t1: b,
+                    };
+                    walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
+                }
+                DensityGrid::Sparse(grid) => {
+                    let r = GridAlongRay {
+                        grid: grid.as_ref(),
+                        majorant: &g.majorant,
+                        minorant: None,
+                        o,
+                        d,
+                        t0: a,
+                        t1: b,
+                    };
+                    walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
+                }
+            }
+        }
+    }
+}
+
+/// The concrete loop of [`sample_t_maj`] over one density view.
+fn walk<R, P, F>(
+    r: &R,
+    sigma_t: Rgb,
+    ray: &Ray,
+    hero: usize,
+    sampler: &mut PixelSampler,
+    point_at: P,
+    mut callback: F,
+) -> Rgb
+where
+    R: DensityAlongRay,
+    P: Fn(Vec3, f32) -> MediumPoint,
+    F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
+{
+    let mut t_maj = Rgb::ONE;
+    let mut stopped = false;
+    let _ = r.segments(|seg| {
+        let sigma_maj = sigma_t * seg.d_max;
+        let mut t_min = seg.t0;
+        if !(sigma_maj[hero] > 0.0) {
+            // No collision for the hero channel: only attenuate the others.
+            t_maj *= (sigma_maj * finite_length(seg.t1 - t_min)).exp_neg();
+            return std::ops::ControlFlow::Continue(());
+        }
+        loop {
+            let t = t_min - (1.0 - sampler.next_1d()).ln() / sigma_maj[hero];
+            if !(t < seg.t1) {
+                t_maj *= (sigma_maj * finite_length(seg.t1 - t_min)).exp_neg();
+                return std::ops::ControlFlow::Continue(());
+            }
+            t_maj *= (sigma_maj * (t - t_min)).exp_neg();
+            let p = ray.at(t);
+            let collision = MajorantCollision {
+                t,
+                p,
+                point: point_at(p, r.density(t)),
+                sigma_maj,
+                t_maj,
+            };
+            if !callback(collision, sampler) {
+                stopped = true;
+                return std::ops::ControlFlow::Break(());
+            }
+            t_maj = Rgb::ONE;
+            t_min = t;
+        }
+    });
+    if stopped {
+        Rgb::ONE
+    } else {
+        t_maj
+    }
+}
+
+/// An infinite length replaced by the largest float, as pbrt-v4 does, so that
+/// `0 * length` stays 0 for channels without extinction.
+#[inline]
+fn finite_length(l: f32) -> f32 {
+    if l.is_finite() {
+        l
+    } else {
+        f32::MAX
+    }
+}
