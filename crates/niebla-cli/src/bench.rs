@@ -37,11 +37,7 @@ pub struct BenchArgs {
 }
 
 fn single(sampling: SingleSampling) -> IntegratorSettings {
-    IntegratorSettings::Single {
-        step: None,
-        sampling,
-        transmittance: TransmittanceMethod::Analytic,
-    }
+    IntegratorSettings::Single { step: None, sampling, transmittance: TransmittanceMethod::Analytic }
 }
 
 fn timed(
@@ -51,12 +47,7 @@ fn timed(
     seed: u64,
     threads: Option<usize>,
 ) -> Result<(Image, f64), String> {
-    let options = RenderOptions {
-        spp,
-        seed,
-        first_sample: 0,
-        threads,
-    };
+    let options = RenderOptions { spp, seed, first_sample: 0, threads };
     let start = Instant::now();
     let image = render(scene, settings, &options, &|_, _| {}, None).map_err(|e| e.to_string())?;
     Ok((image, start.elapsed().as_secs_f64()))
@@ -80,32 +71,19 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         args.threads.map_or("all".to_string(), |t| t.to_string()),
         args.reference_spp
     );
-    let (reference, ref_time) = timed(
-        &scene,
-        &single(SingleSampling::Mis),
-        args.reference_spp,
-        1_000_003,
-        args.threads,
-    )?;
+    let (reference, ref_time) =
+        timed(&scene, &single(SingleSampling::Mis), args.reference_spp, 1_000_003, args.threads)?;
     println!("reference rendered in {ref_time:.2} s");
-    println!(
-        "{:<12} {:>6} {:>10} {:>14} {:>12}",
-        "sampling", "spp", "time s", "samples/s", "rel MSE"
-    );
-    for (name, sampling) in [
-        ("march", SingleSampling::March),
-        ("equiangular", SingleSampling::Equiangular),
-        ("mis", SingleSampling::Mis),
-    ] {
+    println!("{:<12} {:>6} {:>10} {:>14} {:>12}", "sampling", "spp", "time s", "samples/s", "rel MSE");
+    for (name, sampling) in
+        [("march", SingleSampling::March), ("equiangular", SingleSampling::Equiangular), ("mis", SingleSampling::Mis)]
+    {
         let mut points: Vec<(f64, f64)> = Vec::new();
         let mut spp = 1;
         while spp <= args.max_spp {
             let (image, seconds) = timed(&scene, &single(sampling), spp, 7, args.threads)?;
             let error = image.relative_mse(&reference);
-            println!(
-                "{name:<12} {spp:>6} {seconds:>10.3} {:>14.3e} {error:>12.3e}",
-                pixels * spp as f64 / seconds
-            );
+            println!("{name:<12} {spp:>6} {seconds:>10.3} {:>14.3e} {error:>12.3e}", pixels * spp as f64 / seconds);
             points.push((seconds, error));
             if error < args.target {
                 break;
@@ -113,14 +91,8 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
             spp *= 2;
         }
         match time_to_reach(&points, args.target) {
-            Some(t) => println!(
-                "{name:<12} reaches relative MSE {:.0e} in {t:.3} s",
-                args.target
-            ),
-            None => println!(
-                "{name:<12} did not reach relative MSE {:.0e} within {} spp",
-                args.target, args.max_spp
-            ),
+            Some(t) => println!("{name:<12} reaches relative MSE {:.0e} in {t:.3} s", args.target),
+            None => println!("{name:<12} did not reach relative MSE {:.0e} within {} spp", args.target, args.max_spp),
         }
     }
     Ok(())

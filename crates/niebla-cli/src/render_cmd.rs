@@ -1,13 +1,14 @@
 //! `niebla render` and `niebla info`.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use niebla::film::write_image;
 use niebla::integrator::{IntegratorSettings, SingleSampling};
-use niebla::render::{render, RenderOptions};
+use niebla::progressive::{render_progressive, Budget, PassInfo};
 use niebla::scene::{build_scene, load_scene, parse_scene_str, BuiltScene, DEFAULT_SCENE};
 use niebla::tracking::TransmittanceMethod;
 
@@ -23,8 +24,15 @@ pub struct RenderArgs {
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Samples per pixel (overrides the scene's `render.spp`).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "time")]
     pub spp: Option<u32>,
+    /// Render for about this many seconds instead of a sample count: passes
+    /// double the sample count while the next pass fits in the time left.
+    #[arg(long)]
+    pub time: Option<f64>,
+    /// Largest number of scattering events per path (volpath; default 1024).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
     /// Integrator (overrides the scene's `render.integrator.type`; its other
     /// parameters take defaults unless the scene names the same integrator).
     #[arg(long, value_enum)]
@@ -56,6 +64,8 @@ pub enum IntegratorName {
     Emission,
     /// Single scattering with shadow rays.
     Single,
+    /// Volumetric path tracing (multiple scattering, unbiased).
+    Volpath,
 }
 
 /// Scattering-point sampling of `single`.
@@ -77,17 +87,12 @@ pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
                 return Err(format!("{}: scene file not found", path.display()));
             }
             let built = load_scene(path).map_err(|e| e.to_string())?;
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "niebla".into());
+            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
             Ok((built, stem))
         }
         None => {
-            let desc =
-                parse_scene_str(DEFAULT_SCENE, "<default scene>").map_err(|e| e.to_string())?;
-            let built =
-                build_scene(&desc, "<default scene>", Path::new(".")).map_err(|e| e.to_string())?;
+            let desc = parse_scene_str(DEFAULT_SCENE, "<default scene>").map_err(|e| e.to_string())?;
+            let built = build_scene(&desc, "<default scene>", Path::new(".")).map_err(|e| e.to_string())?;
             Ok((built, "niebla".into()))
         }
     }
@@ -98,20 +103,24 @@ pub fn override_integrator(
     settings: IntegratorSettings,
     name: Option<IntegratorName>,
     sampling: Option<SamplingName>,
+    max_depth: Option<u32>,
 ) -> Result<IntegratorSettings, String> {
     let mut s = match (name, settings) {
         (None, s) => s,
         (Some(IntegratorName::Single), s @ IntegratorSettings::Single { .. }) => s,
         (Some(IntegratorName::Emission), s @ IntegratorSettings::Emission { .. }) => s,
+        (Some(IntegratorName::Volpath), s @ IntegratorSettings::VolPath { .. }) => s,
+        (Some(IntegratorName::Volpath), _) => {
+            IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH }
+        }
         (Some(IntegratorName::Single), _) => IntegratorSettings::Single {
             step: None,
             sampling: SingleSampling::March,
             transmittance: TransmittanceMethod::Analytic,
         },
-        (Some(IntegratorName::Emission), _) => IntegratorSettings::Emission {
-            step: None,
-            transmittance: TransmittanceMethod::Analytic,
-        },
+        (Some(IntegratorName::Emission), _) => {
+            IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic }
+        }
     };
     if let Some(choice) = sampling {
         match &mut s {
@@ -122,12 +131,13 @@ pub fn override_integrator(
                     SamplingName::Mis => SingleSampling::Mis,
                 }
             }
-            other => {
-                return Err(format!(
-                    "--sampling applies to the single integrator, not to {}",
-                    other.name()
-                ))
-            }
+            other => return Err(format!("--sampling applies to the single integrator, not to {}", other.name())),
+        }
+    }
+    if let Some(depth) = max_depth {
+        match &mut s {
+            IntegratorSettings::VolPath { max_depth } => *max_depth = depth,
+            other => return Err(format!("--max-depth applies to the volpath integrator, not to {}", other.name())),
         }
     }
     Ok(s)
@@ -136,12 +146,18 @@ pub fn override_integrator(
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), String> {
     let (built, stem) = load(args.scene.as_deref())?;
-    let integrator =
-        override_integrator(built.settings.integrator, args.integrator, args.sampling)?;
+    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
         return Err("--spp: must be at least 1".into());
     }
+    let budget = match args.time {
+        Some(t) if !(t.is_finite() && t > 0.0 && t < 1e7) => {
+            return Err(format!("--time: expected a positive number of seconds, got {t}"));
+        }
+        Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+        None => Budget::Samples(spp),
+    };
     if args.threads == Some(0) {
         return Err("--threads: must be at least 1".into());
     }
@@ -151,69 +167,75 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     }
     let outputs: Vec<PathBuf> = match &args.output {
         Some(p) => {
-            let ext = p
-                .extension()
-                .and_then(|e| e.to_str())
-                .map(|e| e.to_ascii_lowercase());
+            let ext = p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
             if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
                 return Err(format!("{}: output must end in .exr or .png", p.display()));
             }
             vec![p.clone()]
         }
-        None => vec![
-            PathBuf::from(format!("{stem}.exr")),
-            PathBuf::from(format!("{stem}.png")),
-        ],
+        None => vec![PathBuf::from(format!("{stem}.exr")), PathBuf::from(format!("{stem}.png"))],
     };
     for out in &outputs {
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             if !dir.is_dir() {
-                return Err(format!(
-                    "{}: output folder {} does not exist",
-                    out.display(),
-                    dir.display()
-                ));
+                return Err(format!("{}: output folder {} does not exist", out.display(), dir.display()));
             }
         }
     }
 
     let scene = &built.scene;
-    let options = RenderOptions {
-        spp,
-        seed: args.seed.unwrap_or(built.settings.seed),
-        first_sample: 0,
-        threads: args.threads,
+    let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+    let seed = args.seed.unwrap_or(built.settings.seed);
+    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
+    let template = match budget {
+        Budget::Samples(_) => {
+            bar.set_length(pixels * spp as u64);
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {human_pos}/{human_len} samples, {per_sec}, ETA {eta} {msg}"
+        }
+        Budget::Time(t) => {
+            bar.set_length((t.as_secs_f64() * 1000.0) as u64);
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% of the time budget {msg}"
+        }
     };
-    let total = scene.camera.width as u64 * scene.camera.height as u64 * spp as u64;
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(total)
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {human_pos}/{human_len} samples, {per_sec}, ETA {eta}",
-        )
-        .map_err(|e| e.to_string())?,
-    );
+    bar.set_style(ProgressStyle::with_template(template).map_err(|e| e.to_string())?);
     let start = Instant::now();
-    let progress = |done: u64, _total: u64| bar.set_position(done);
-    let image = render(scene, &integrator, &options, &progress, None).map_err(|e| e.to_string())?;
+    let samples_before_pass = AtomicU64::new(0);
+    let progress = |done: u64, _total: u64| match budget {
+        Budget::Samples(_) => bar.set_position(samples_before_pass.load(Ordering::Relaxed) + done),
+        Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
+    };
+    // After every pass, checkpoint the outputs (each written to a temporary
+    // file and renamed), so a long render stopped at any time leaves a usable image.
+    let mut write_error: Option<String> = None;
+    let mut spp_done = 0u64;
+    let on_pass = |image: &niebla::film::Image, info: PassInfo| {
+        samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
+        spp_done = info.spp;
+        bar.set_message(format!("({} spp)", info.spp));
+        for out in &outputs {
+            if let Err(e) = write_image(image, out, exposure) {
+                write_error = Some(e.to_string());
+                return false;
+            }
+        }
+        true
+    };
+    render_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, on_pass)
+        .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
-    let seconds = start.elapsed().as_secs_f64();
-
-    for out in &outputs {
-        write_image(&image, out, exposure).map_err(|e| e.to_string())?;
+    if let Some(e) = write_error {
+        return Err(e);
     }
+    let seconds = start.elapsed().as_secs_f64();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
     println!(
         "rendered {}x{} at {} spp with {} in {:.2} s ({:.2} M samples/s) -> {}",
         scene.camera.width,
         scene.camera.height,
-        spp,
+        spp_done,
         integrator.name(),
         seconds,
-        total as f64 / seconds / 1e6,
+        (pixels * spp_done) as f64 / seconds / 1e6,
         names.join(", ")
     );
     Ok(())
@@ -224,10 +246,7 @@ pub fn info(scene: Option<&Path>) -> Result<(), String> {
     let (built, _) = load(scene)?;
     let s = &built.scene;
     let c = &s.camera;
-    println!(
-        "scene: {}",
-        scene.map_or("<default scene>".into(), |p| p.display().to_string())
-    );
+    println!("scene: {}", scene.map_or("<default scene>".into(), |p| p.display().to_string()));
     println!(
         "camera: perspective at {:?} looking {:?}, {}x{} pixels, fov_y {:.1} deg",
         c.position.to_array(),
@@ -255,9 +274,7 @@ pub fn info(scene: Option<&Path>) -> Result<(), String> {
         }
     }
     let name_of = |id: Option<niebla::medium::MediumId>| {
-        id.map_or("vacuum".to_string(), |i| {
-            s.medium_names[i.0 as usize].clone()
-        })
+        id.map_or("vacuum".to_string(), |i| s.medium_names[i.0 as usize].clone())
     };
     println!("shapes ({}):", s.objects.len());
     for (i, o) in s.objects.iter().enumerate() {
@@ -268,20 +285,11 @@ pub fn info(scene: Option<&Path>) -> Result<(), String> {
             niebla::geometry::Shape::Rectangle(_) => "rectangle",
         };
         let media = if o.bounds_medium {
-            format!(
-                ", interior {}, exterior {}",
-                name_of(o.interior),
-                name_of(o.exterior)
-            )
+            format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))
         } else {
             String::new()
         };
-        println!(
-            "  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}",
-            lo.to_array(),
-            hi.to_array(),
-            o.bsdf
-        );
+        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}", lo.to_array(), hi.to_array(), o.bsdf);
     }
     println!("lights ({}):", s.lights.len());
     for (i, l) in s.lights.iter().enumerate() {

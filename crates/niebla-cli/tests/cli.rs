@@ -24,10 +24,8 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn files_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     v.sort();
     v
 }
@@ -37,26 +35,13 @@ fn render_writes_exr_and_png_that_decode_to_the_scene_size() {
     let dir = temp_dir("cli_render");
     let scene = dir.join("tiny.json");
     std::fs::write(&scene, TINY_SCENE).unwrap();
-    let out = niebla()
-        .current_dir(&dir)
-        .args(["render", "tiny.json", "--quiet"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = niebla().current_dir(&dir).args(["render", "tiny.json", "--quiet"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout.contains("rendered 24x16 at 2 spp with single"),
-        "{stdout}"
-    );
+    assert!(stdout.contains("rendered 24x16 at 2 spp with single"), "{stdout}");
     assert_eq!(files_in(&dir), ["tiny.exr", "tiny.json", "tiny.png"]);
 
-    let png = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(dir.join("tiny.png")).unwrap(),
-    ));
+    let png = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.join("tiny.png")).unwrap()));
     let reader = png.read_info().unwrap();
     assert_eq!((reader.info().width, reader.info().height), (24, 16));
 
@@ -64,50 +49,29 @@ fn render_writes_exr_and_png_that_decode_to_the_scene_size() {
     let image = read_first_rgba_layer_from_file(
         dir.join("tiny.exr"),
         |resolution, _| vec![[0f32; 3]; resolution.width() * resolution.height()],
-        |pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            pixels[pos.y() * 24 + pos.x()] = [r, g, b]
-        },
+        |pixels, pos, (r, g, b, _a): (f32, f32, f32, f32)| pixels[pos.y() * 24 + pos.x()] = [r, g, b],
     )
     .unwrap();
     let pixels = &image.layer_data.channel_data.pixels;
     assert_eq!(pixels.len(), 24 * 16);
-    assert!(pixels
-        .iter()
-        .all(|p| p.iter().all(|v| v.is_finite() && *v >= 0.0)));
+    assert!(pixels.iter().all(|p| p.iter().all(|v| v.is_finite() && *v >= 0.0)));
     assert!(pixels.iter().any(|p| p[1] > 0.0));
 
     // Asking for one format writes only that one.
-    let out = niebla()
-        .current_dir(&dir)
-        .args(["render", "tiny.json", "--quiet", "-o", "only.png"])
-        .output()
-        .unwrap();
+    let out = niebla().current_dir(&dir).args(["render", "tiny.json", "--quiet", "-o", "only.png"]).output().unwrap();
     assert!(out.status.success());
-    assert_eq!(
-        files_in(&dir),
-        ["only.png", "tiny.exr", "tiny.json", "tiny.png"]
-    );
+    assert_eq!(files_in(&dir), ["only.png", "tiny.exr", "tiny.json", "tiny.png"]);
 }
 
 #[test]
 fn bad_inputs_fail_with_a_message_naming_file_and_field_and_leave_no_output() {
     let dir = temp_dir("cli_errors");
-    std::fs::write(
-        dir.join("bad.json"),
-        TINY_SCENE.replace("\"sigma_s\": 0.3", "\"sigma_s\": [0.3, 0.3, -1]"),
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("typo.json"),
-        TINY_SCENE.replace("\"radius\"", "\"raduis\""),
-    )
-    .unwrap();
+    std::fs::write(dir.join("bad.json"), TINY_SCENE.replace("\"sigma_s\": 0.3", "\"sigma_s\": [0.3, 0.3, -1]"))
+        .unwrap();
+    std::fs::write(dir.join("typo.json"), TINY_SCENE.replace("\"radius\"", "\"raduis\"")).unwrap();
     std::fs::write(dir.join("broken.json"), "{\"version\": 1, \"camera\": ").unwrap();
     let cases: [(&[&str], &str); 7] = [
-        (
-            &["render", "missing.json"],
-            "missing.json: scene file not found",
-        ),
+        (&["render", "missing.json"], "missing.json: scene file not found"),
         (&["render", "bad.json"], "bad.json: media.fog.sigma_s[2]"),
         (&["render", "typo.json"], "typo.json: shapes[0].raduis"),
         (&["render", "broken.json"], "broken.json"),
@@ -116,40 +80,20 @@ fn bad_inputs_fail_with_a_message_naming_file_and_field_and_leave_no_output() {
         (&["render", "-o", "no/such/folder/x.png"], "does not exist"),
     ];
     for (args, expected) in cases {
-        let out = niebla()
-            .current_dir(&dir)
-            .args(args)
-            .arg("--quiet")
-            .output()
-            .unwrap();
+        let out = niebla().current_dir(&dir).args(args).arg("--quiet").output().unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: expected {expected:?} in {stderr:?}"
-        );
+        assert!(stderr.contains(expected), "{args:?}: expected {expected:?} in {stderr:?}");
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
-    assert_eq!(
-        files_in(&dir),
-        ["bad.json", "broken.json", "typo.json"],
-        "no image may be left behind"
-    );
+    assert_eq!(files_in(&dir), ["bad.json", "broken.json", "typo.json"], "no image may be left behind");
 }
 
 #[test]
 fn help_explains_every_render_option() {
     let out = niebla().args(["render", "--help"]).output().unwrap();
     let help = String::from_utf8_lossy(&out.stdout);
-    for option in [
-        "--output",
-        "--spp",
-        "--integrator",
-        "--sampling",
-        "--threads",
-        "--seed",
-        "--exposure",
-    ] {
+    for option in ["--output", "--spp", "--integrator", "--sampling", "--threads", "--seed", "--exposure"] {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
     let out = niebla().arg("--help").output().unwrap();

@@ -20,6 +20,7 @@ pub mod light;
 pub mod math;
 pub mod medium;
 pub mod phase;
+pub mod progressive;
 pub mod render;
 pub mod sampling;
 pub mod scene;

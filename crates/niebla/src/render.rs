@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::color::Rgb;
 use crate::film::Image;
-use crate::integrator::{EmissionIntegrator, Integrator, IntegratorSettings, SingleIntegrator};
+use crate::integrator::{EmissionIntegrator, Integrator, IntegratorSettings, SingleIntegrator, VolPathIntegrator};
 use crate::sampling::PixelSampler;
 use crate::scene::Scene;
 
@@ -83,6 +83,9 @@ pub fn render(
             progress,
             cancel,
         ),
+        IntegratorSettings::VolPath { max_depth } => {
+            render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
+        }
     }
 }
 

@@ -56,6 +56,11 @@ pub enum IntegratorSettings {
         /// Transmittance estimator.
         transmittance: TransmittanceMethod,
     },
+    /// Unbiased volumetric path tracing (multiple scattering).
+    VolPath {
+        /// Largest number of scattering events on a path.
+        max_depth: u32,
+    },
 }
 
 impl IntegratorSettings {
@@ -64,11 +69,15 @@ impl IntegratorSettings {
         match self {
             IntegratorSettings::Emission { .. } => "emission",
             IntegratorSettings::Single { .. } => "single",
+            IntegratorSettings::VolPath { .. } => "volpath",
         }
     }
 
     /// Names of all integrators that can be selected.
-    pub const NAMES: &'static [&'static str] = &["emission", "single"];
+    pub const NAMES: &'static [&'static str] = &["emission", "single", "volpath"];
+
+    /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
+    pub const DEFAULT_MAX_DEPTH: u32 = 1024;
 }
 
 /// Ray-march step used when a scene gives none: a quarter of the mean free
