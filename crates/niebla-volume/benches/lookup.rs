@@ -1,5 +1,6 @@
 //! Density lookups per second for dense f32, dense f16 and sparse grids at
-//! random points inside their bounds, plus DDA segments per second.
+//! random points inside their bounds, DDA segments per second, and the time
+//! to build majorant and minorant grids and to bake procedural densities.
 //!
 //! Run: `cargo bench -p niebla-volume --bench lookup`
 //! (set `NIEBLA_BENCH_VDB=file.vdb` to also time the `density` grid of a file).
@@ -8,16 +9,16 @@ use std::hint::black_box;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
-use niebla_volume::{Affine, DenseGrid, MajorantGrid, SparseGrid, SparseGridBuilder, VdbFile};
+use niebla_volume::{
+    procedural_density, Affine, DenseGrid, MajorantGrid, ProceduralParams, ProceduralShape, SparseGrid,
+    SparseGridBuilder, VdbFile,
+};
 
 struct Rng(u64);
 
 impl Rng {
     fn uniform(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 40) as f32 / (1u64 << 24) as f32
     }
     fn point(&mut self, lo: [f32; 3], hi: [f32; 3]) -> [f32; 3] {
@@ -40,10 +41,7 @@ fn field(p: [f32; 3]) -> f32 {
 fn ray_march_points(rng: &mut Rng, count: usize, step: f32) -> Vec<[f32; 3]> {
     let mut out = Vec::with_capacity(count);
     while out.len() < count {
-        let (o, q) = (
-            rng.point([-1.0; 3], [1.0; 3]),
-            rng.point([-1.0; 3], [1.0; 3]),
-        );
+        let (o, q) = (rng.point([-1.0; 3], [1.0; 3]), rng.point([-1.0; 3], [1.0; 3]));
         let d = [q[0] - o[0], q[1] - o[1], q[2] - o[2]];
         let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-6);
         let steps = (len / step) as usize;
@@ -71,11 +69,7 @@ fn rate(points: &[[f32; 3]], budget: Duration, f: impl Fn([f32; 3]) -> f32) -> f
 }
 
 fn report(name: &str, per_second: f64) {
-    println!(
-        "{name:<44} {:>8.1} M lookups/s  ({:.2} ns each)",
-        per_second / 1e6,
-        1e9 / per_second
-    );
+    println!("{name:<44} {:>8.1} M lookups/s  ({:.2} ns each)", per_second / 1e6, 1e9 / per_second);
 }
 
 fn main() {
@@ -95,32 +89,15 @@ fn main() {
     }
     let dense = DenseGrid::new([n; 3], data, [-1.0; 3], [1.0; 3]).unwrap();
     let dense_f16 = dense.to_f16();
-    let points: Vec<[f32; 3]> = (0..1 << 20)
-        .map(|_| rng.point([-1.0; 3], [1.0; 3]))
-        .collect();
+    let points: Vec<[f32; 3]> = (0..1 << 20).map(|_| rng.point([-1.0; 3], [1.0; 3])).collect();
     let coherent = ray_march_points(&mut rng, 1 << 20, 0.5 / n as f32 * 2.0);
     let small_data: Vec<f32> = (0..32 * 32 * 32).map(|i| (i % 97) as f32 / 97.0).collect();
     let small = DenseGrid::new([32; 3], small_data, [-1.0; 3], [1.0; 3]).unwrap();
-    report(
-        "dense f32 32^3 lookup (in cache)",
-        rate(&points, budget, |p| small.lookup(p)),
-    );
-    report(
-        "dense f32 256^3 lookup, random points",
-        rate(&points, budget, |p| dense.lookup(p)),
-    );
-    report(
-        "dense f16 256^3 lookup, random points",
-        rate(&points, budget, |p| dense_f16.lookup(p)),
-    );
-    report(
-        "dense f32 256^3 lookup, along rays",
-        rate(&coherent, budget, |p| dense.lookup(p)),
-    );
-    report(
-        "dense f16 256^3 lookup, along rays",
-        rate(&coherent, budget, |p| dense_f16.lookup(p)),
-    );
+    report("dense f32 32^3 lookup (in cache)", rate(&points, budget, |p| small.lookup(p)));
+    report("dense f32 256^3 lookup, random points", rate(&points, budget, |p| dense.lookup(p)));
+    report("dense f16 256^3 lookup, random points", rate(&points, budget, |p| dense_f16.lookup(p)));
+    report("dense f32 256^3 lookup, along rays", rate(&coherent, budget, |p| dense.lookup(p)));
+    report("dense f16 256^3 lookup, along rays", rate(&coherent, budget, |p| dense_f16.lookup(p)));
 
     // Sparse: the same ball, voxels at index (i, j, k) = world * 128.
     let start = Instant::now();
@@ -144,46 +121,27 @@ fn main() {
     );
     let index_points: Vec<[f32; 3]> = points.iter().map(|p| p.map(|v| v * 128.0)).collect();
     let index_coherent: Vec<[f32; 3]> = coherent.iter().map(|p| p.map(|v| v * 128.0)).collect();
-    report(
-        "sparse ball lookup_index, random points",
-        rate(&index_points, budget, |p| sparse.lookup_index(p)),
-    );
-    report(
-        "sparse ball lookup_world, random points",
-        rate(&points, budget, |p| sparse.lookup_world(p)),
-    );
-    report(
-        "sparse ball lookup_index, along rays",
-        rate(&index_coherent, budget, |p| sparse.lookup_index(p)),
-    );
-    report(
-        "sparse ball lookup_world, along rays",
-        rate(&coherent, budget, |p| sparse.lookup_world(p)),
-    );
+    report("sparse ball lookup_index, random points", rate(&index_points, budget, |p| sparse.lookup_index(p)));
+    report("sparse ball lookup_world, random points", rate(&points, budget, |p| sparse.lookup_world(p)));
+    report("sparse ball lookup_index, along rays", rate(&index_coherent, budget, |p| sparse.lookup_index(p)));
+    report("sparse ball lookup_world, along rays", rate(&coherent, budget, |p| sparse.lookup_world(p)));
     bench_majorant(&dense, &sparse, &mut rng, budget);
+    bench_procedural();
 
     if let Ok(path) = std::env::var("NIEBLA_BENCH_VDB") {
         let start = Instant::now();
-        let grid: SparseGrid = match VdbFile::open(&path).and_then(|f| f.read_float_grid("density"))
-        {
+        let grid: SparseGrid = match VdbFile::open(&path).and_then(|f| f.read_float_grid("density")) {
             Ok(g) => g,
             Err(e) => {
                 eprintln!("NIEBLA_BENCH_VDB: {e}");
                 return;
             }
         };
-        println!(
-            "(read {path}: {} leaves in {:.2} s)",
-            grid.leaf_count(),
-            start.elapsed().as_secs_f64()
-        );
+        println!("(read {path}: {} leaves in {:.2} s)", grid.leaf_count(), start.elapsed().as_secs_f64());
         let (lo, hi) = grid.data_bounds_index().unwrap();
         let (lo, hi) = (lo.map(|v| v as f32), hi.map(|v| v as f32));
         let pts: Vec<[f32; 3]> = (0..1 << 20).map(|_| rng.point(lo, hi)).collect();
-        report(
-            "VDB file lookup_index",
-            rate(&pts, budget, |p| grid.lookup_index(p)),
-        );
+        report("VDB file lookup_index", rate(&pts, budget, |p| grid.lookup_index(p)));
     }
 }
 
@@ -200,10 +158,19 @@ fn bench_majorant(dense: &DenseGrid, sparse: &SparseGrid, rng: &mut Rng, budget:
         m_sparse.res(),
         t_sparse.as_secs_f64() * 1e3
     );
-    for (name, m) in [
-        ("DDA walk, dense 16^3 majorants", &m_dense),
-        ("DDA walk, sparse per-leaf majorants", &m_sparse),
-    ] {
+    let start = Instant::now();
+    black_box(MajorantGrid::minorant_from_dense(dense, MajorantGrid::DEFAULT_RESOLUTION));
+    let t_dense = start.elapsed();
+    let start = Instant::now();
+    black_box(MajorantGrid::minorant_from_sparse(sparse, MajorantGrid::DEFAULT_MAX_CELLS));
+    let t_sparse = start.elapsed();
+    println!(
+        "(minorant grids: dense 16^3 in {:.1} ms, sparse in {:.1} ms)",
+        t_dense.as_secs_f64() * 1e3,
+        t_sparse.as_secs_f64() * 1e3
+    );
+    for (name, m) in [("DDA walk, dense 16^3 majorants", &m_dense), ("DDA walk, sparse per-leaf majorants", &m_sparse)]
+    {
         let (lo, hi) = m.bounds();
         let rays: Vec<([f32; 3], [f32; 3])> = (0..1 << 14)
             .map(|_| {
@@ -230,5 +197,23 @@ fn bench_majorant(dense: &DenseGrid, sparse: &SparseGrid, rng: &mut Rng, budget:
             segments as f64 / walks as f64,
             walks as f64 / secs / 1e6
         );
+    }
+}
+
+/// Single-threaded bake time of the procedural densities at default
+/// parameters, best of three runs.
+fn bench_procedural() {
+    for n in [64, 128, 256] {
+        for shape in [ProceduralShape::Cloud, ProceduralShape::Plume] {
+            let params = ProceduralParams { shape, resolution: [n; 3], ..ProceduralParams::default() };
+            let mut best = f64::INFINITY;
+            for _ in 0..3 {
+                let start = Instant::now();
+                black_box(procedural_density(&params).unwrap());
+                best = best.min(start.elapsed().as_secs_f64());
+            }
+            let name = format!("procedural {shape:?} bake {n}^3");
+            println!("{name:<44} {:>8.1} ms  ({:.1} ns per voxel)", best * 1e3, best * 1e9 / (n * n * n) as f64);
+        }
     }
 }

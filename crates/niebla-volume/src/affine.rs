@@ -21,13 +21,7 @@ pub struct Affine {
 
 impl Affine {
     /// The identity map.
-    pub const IDENTITY: Affine = Affine {
-        rows: [
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 0.0],
-        ],
-    };
+    pub const IDENTITY: Affine = Affine { rows: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]] };
 
     /// `y = scale * x + translation`, per axis.
     pub fn scale_translate(scale: [f64; 3], translation: [f64; 3]) -> Affine {
@@ -96,8 +90,7 @@ impl Affine {
     /// Determinant of `A`.
     pub fn determinant(&self) -> f64 {
         let m = &self.rows;
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
             + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
     }
 
@@ -156,13 +149,8 @@ mod tests {
     #[test]
     fn inverse_composes_to_identity() {
         let (s, c) = (0.3f64.sin(), 0.3f64.cos());
-        let m = Affine {
-            rows: [
-                [0.05 * c, -0.05 * s, 0.0, 1.0],
-                [0.05 * s, 0.05 * c, 0.0, 2.0],
-                [0.1, 0.0, 0.2, 3.0],
-            ],
-        };
+        let m =
+            Affine { rows: [[0.05 * c, -0.05 * s, 0.0, 1.0], [0.05 * s, 0.05 * c, 0.0, 2.0], [0.1, 0.0, 0.2, 3.0]] };
         let id = m.inverse().unwrap().compose(&m);
         for r in 0..3 {
             for c in 0..4 {
@@ -185,8 +173,6 @@ mod tests {
 
     #[test]
     fn singular_maps_have_no_inverse() {
-        assert!(Affine::scale_translate([1.0, 0.0, 1.0], [0.0; 3])
-            .inverse()
-            .is_none());
+        assert!(Affine::scale_translate([1.0, 0.0, 1.0], [0.0; 3]).inverse().is_none());
     }
 }

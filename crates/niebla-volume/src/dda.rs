@@ -44,14 +44,7 @@ impl MajorantGrid {
     /// });
     /// assert_eq!(cells, [([0, 0, 0], 1.0, 2.0, 1.0), ([1, 0, 0], 2.0, 3.0, 3.0)]);
     /// ```
-    pub fn walk_cells<F>(
-        &self,
-        o: [f32; 3],
-        d: [f32; 3],
-        t_min: f32,
-        t_max: f32,
-        mut f: F,
-    ) -> ControlFlow<()>
+    pub fn walk_cells<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, mut f: F) -> ControlFlow<()>
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
     {
@@ -68,10 +61,7 @@ impl MajorantGrid {
                 continue;
             }
             let inv = 1.0 / d[a];
-            let (mut near, mut far) = (
-                (self.bounds_min[a] - o[a]) * inv,
-                (self.bounds_max[a] - o[a]) * inv,
-            );
+            let (mut near, mut far) = ((self.bounds_min[a] - o[a]) * inv, (self.bounds_max[a] - o[a]) * inv);
             if near > far {
                 std::mem::swap(&mut near, &mut far);
             }
@@ -112,16 +102,8 @@ impl MajorantGrid {
             };
             let t_end = next[axis].min(t1);
             if t_end > t {
-                let max_density =
-                    self.values[(cell[2] * self.res[1] + cell[1]) * self.res[0] + cell[0]];
-                f(
-                    cell,
-                    Segment {
-                        t0: t,
-                        t1: t_end,
-                        max_density,
-                    },
-                )?;
+                let max_density = self.values[(cell[2] * self.res[1] + cell[1]) * self.res[0] + cell[0]];
+                f(cell, Segment { t0: t, t1: t_end, max_density })?;
                 t = t_end;
             }
             if next[axis] >= t1 {
@@ -157,14 +139,7 @@ impl MajorantGrid {
 
     /// Like [`MajorantGrid::walk_cells`] without the cell indices: one
     /// [`Segment`] per cell crossed, zero majorants included.
-    pub fn walk<F>(
-        &self,
-        o: [f32; 3],
-        d: [f32; 3],
-        t_min: f32,
-        t_max: f32,
-        mut f: F,
-    ) -> ControlFlow<()>
+    pub fn walk<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, mut f: F) -> ControlFlow<()>
     where
         F: FnMut(Segment) -> ControlFlow<()>,
     {
@@ -174,14 +149,7 @@ impl MajorantGrid {
     /// Like [`MajorantGrid::walk`], but consecutive cells with the same
     /// majorant are reported as one segment (runs of empty cells become a
     /// single segment with `max_density == 0`).
-    pub fn walk_merged<F>(
-        &self,
-        o: [f32; 3],
-        d: [f32; 3],
-        t_min: f32,
-        t_max: f32,
-        mut f: F,
-    ) -> ControlFlow<()>
+    pub fn walk_merged<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, mut f: F) -> ControlFlow<()>
     where
         F: FnMut(Segment) -> ControlFlow<()>,
     {
@@ -209,13 +177,7 @@ impl MajorantGrid {
 mod tests {
     use super::*;
 
-    fn collect(
-        m: &MajorantGrid,
-        o: [f32; 3],
-        d: [f32; 3],
-        t0: f32,
-        t1: f32,
-    ) -> Vec<([usize; 3], Segment)> {
+    fn collect(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], t0: f32, t1: f32) -> Vec<([usize; 3], Segment)> {
         let mut out = Vec::new();
         let _ = m.walk_cells(o, d, t0, t1, |c, s| {
             out.push((c, s));
@@ -226,13 +188,7 @@ mod tests {
 
     #[test]
     fn diagonal_through_corners_skips_zero_length_pieces() {
-        let m = MajorantGrid::new(
-            [2, 2, 2],
-            [0.0; 3],
-            [2.0; 3],
-            (0..8).map(|v| v as f32).collect(),
-        )
-        .unwrap();
+        let m = MajorantGrid::new([2, 2, 2], [0.0; 3], [2.0; 3], (0..8).map(|v| v as f32).collect()).unwrap();
         let segs = collect(&m, [0.0; 3], [1.0; 3], 0.0, 10.0);
         assert_eq!(segs.len(), 2);
         assert_eq!(segs[0].0, [0, 0, 0]);
@@ -242,20 +198,11 @@ mod tests {
 
     #[test]
     fn ray_starting_inside_and_leaving_backwards() {
-        let m = MajorantGrid::new(
-            [4, 1, 1],
-            [0.0; 3],
-            [4.0, 1.0, 1.0],
-            vec![1.0, 2.0, 3.0, 4.0],
-        )
-        .unwrap();
+        let m = MajorantGrid::new([4, 1, 1], [0.0; 3], [4.0, 1.0, 1.0], vec![1.0, 2.0, 3.0, 4.0]).unwrap();
         let segs = collect(&m, [2.5, 0.5, 0.5], [-2.0, 0.0, 0.0], 0.0, 1.0);
         let cells: Vec<_> = segs.iter().map(|s| s.0[0]).collect();
         assert_eq!(cells, [2, 1, 0]);
-        assert_eq!(
-            (segs[0].1.t1, segs[1].1.t1, segs[2].1.t1),
-            (0.25, 0.75, 1.0)
-        );
+        assert_eq!((segs[0].1.t1, segs[1].1.t1, segs[2].1.t1), (0.25, 0.75, 1.0));
     }
 
     #[test]
@@ -268,13 +215,7 @@ mod tests {
 
     #[test]
     fn merged_walk_joins_equal_majorants_and_stops_on_break() {
-        let m = MajorantGrid::new(
-            [4, 1, 1],
-            [0.0; 3],
-            [4.0, 1.0, 1.0],
-            vec![0.0, 0.0, 2.0, 2.0],
-        )
-        .unwrap();
+        let m = MajorantGrid::new([4, 1, 1], [0.0; 3], [4.0, 1.0, 1.0], vec![0.0, 0.0, 2.0, 2.0]).unwrap();
         let mut segs = Vec::new();
         let _ = m.walk_merged([-1.0, 0.5, 0.5], [1.0, 0.0, 0.0], 0.0, 100.0, |s| {
             segs.push(s);
@@ -282,18 +223,7 @@ mod tests {
         });
         assert_eq!(
             segs,
-            [
-                Segment {
-                    t0: 1.0,
-                    t1: 3.0,
-                    max_density: 0.0
-                },
-                Segment {
-                    t0: 3.0,
-                    t1: 5.0,
-                    max_density: 2.0
-                }
-            ]
+            [Segment { t0: 1.0, t1: 3.0, max_density: 0.0 }, Segment { t0: 3.0, t1: 5.0, max_density: 2.0 }]
         );
         let mut calls = 0;
         let flow = m.walk([-1.0, 0.5, 0.5], [1.0, 0.0, 0.0], 0.0, 100.0, |_| {

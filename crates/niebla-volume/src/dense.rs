@@ -95,18 +95,14 @@ impl BoxMapping {
         values: usize,
     ) -> Result<Self, VolumeError> {
         if dims.contains(&0) {
-            return Err(VolumeError::invalid(format!(
-                "grid dimensions {dims:?} contain a zero"
-            )));
+            return Err(VolumeError::invalid(format!("grid dimensions {dims:?} contain a zero")));
         }
         let count = dims[0]
             .checked_mul(dims[1])
             .and_then(|n| n.checked_mul(dims[2]))
             .ok_or_else(|| VolumeError::invalid(format!("grid dimensions {dims:?} overflow")))?;
         if count != values {
-            return Err(VolumeError::invalid(format!(
-                "grid dimensions {dims:?} need {count} values, got {values}"
-            )));
+            return Err(VolumeError::invalid(format!("grid dimensions {dims:?} need {count} values, got {values}")));
         }
         for a in 0..3 {
             let (lo, hi) = (bounds_min[a], bounds_max[a]);
@@ -117,12 +113,7 @@ impl BoxMapping {
             }
         }
         let scale = std::array::from_fn(|a| dims[a] as f32 / (bounds_max[a] - bounds_min[a]));
-        Ok(Self {
-            dims,
-            bounds_min,
-            bounds_max,
-            scale,
-        })
+        Ok(Self { dims, bounds_min, bounds_max, scale })
     }
 
     /// The interpolation stencil at local point `p`, or `None` outside the
@@ -218,16 +209,9 @@ impl DenseGrid {
         let mapping = BoxMapping::new(dims, bounds_min, bounds_max, data.len())?;
         let max_value = match &data {
             GridStorage::F32(v) => v.iter().copied().fold(f32::NEG_INFINITY, f32::max),
-            GridStorage::F16(v) => v
-                .iter()
-                .map(|x| x.to_f32())
-                .fold(f32::NEG_INFINITY, f32::max),
+            GridStorage::F16(v) => v.iter().map(|x| x.to_f32()).fold(f32::NEG_INFINITY, f32::max),
         };
-        Ok(Self {
-            mapping,
-            data,
-            max_value,
-        })
+        Ok(Self { mapping, data, max_value })
     }
 
     /// The same grid stored as half floats (values rounded to nearest).
@@ -236,33 +220,19 @@ impl DenseGrid {
             GridStorage::F32(v) => v.iter().map(|&x| f16::from_f32(x)).collect(),
             GridStorage::F16(v) => v.clone(),
         };
-        Self::from_storage(
-            self.dims(),
-            GridStorage::F16(data),
-            self.mapping.bounds_min,
-            self.mapping.bounds_max,
-        )
-        .expect("same shape as a valid grid")
+        Self::from_storage(self.dims(), GridStorage::F16(data), self.mapping.bounds_min, self.mapping.bounds_max)
+            .expect("same shape as a valid grid")
     }
 
     /// The same grid stored as f32 (exact for half input).
     pub fn to_f32(&self) -> DenseGrid {
         let data = (0..self.data.len()).map(|i| self.data.get(i)).collect();
-        Self::new(
-            self.dims(),
-            data,
-            self.mapping.bounds_min,
-            self.mapping.bounds_max,
-        )
-        .expect("same shape as a valid grid")
+        Self::new(self.dims(), data, self.mapping.bounds_min, self.mapping.bounds_max)
+            .expect("same shape as a valid grid")
     }
 
     /// The same values mapped to another local-space box.
-    pub fn with_bounds(
-        self,
-        bounds_min: [f32; 3],
-        bounds_max: [f32; 3],
-    ) -> Result<Self, VolumeError> {
+    pub fn with_bounds(self, bounds_min: [f32; 3], bounds_max: [f32; 3]) -> Result<Self, VolumeError> {
         let mapping = BoxMapping::new(self.dims(), bounds_min, bounds_max, self.data.len())?;
         Ok(Self { mapping, ..self })
     }
@@ -296,11 +266,7 @@ impl DenseGrid {
     /// The value stored for cell `(x, y, z)`; panics out of range.
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {
         let [nx, ny, nz] = self.dims();
-        assert!(
-            x < nx && y < ny && z < nz,
-            "voxel ({x}, {y}, {z}) outside {:?}",
-            self.dims()
-        );
+        assert!(x < nx && y < ny && z < nz, "voxel ({x}, {y}, {z}) outside {:?}", self.dims());
         self.data.get(self.mapping.index(x, y, z))
     }
 
@@ -326,20 +292,14 @@ mod tests {
     fn ramp_grid() -> DenseGrid {
         // 4 x 3 x 2 cells over [-1,3] x [0,3] x [0,1]: cell size 1 x 1 x 0.5.
         let dims = [4, 3, 2];
-        let data = (0..24)
-            .map(|i| (i * i % 7) as f32 + 0.25 * i as f32)
-            .collect();
+        let data = (0..24).map(|i| (i * i % 7) as f32 + 0.25 * i as f32).collect();
         DenseGrid::new(dims, data, [-1.0, 0.0, 0.0], [3.0, 3.0, 1.0]).unwrap()
     }
 
     fn center(g: &DenseGrid, x: usize, y: usize, z: usize) -> [f32; 3] {
         let (lo, _) = g.bounds();
         let c = g.cell_size();
-        [
-            lo[0] + (x as f32 + 0.5) * c[0],
-            lo[1] + (y as f32 + 0.5) * c[1],
-            lo[2] + (z as f32 + 0.5) * c[2],
-        ]
+        [lo[0] + (x as f32 + 0.5) * c[0], lo[1] + (y as f32 + 0.5) * c[1], lo[2] + (z as f32 + 0.5) * c[2]]
     }
 
     #[test]
@@ -424,15 +384,9 @@ mod tests {
             }
             let (a, b) = (g.lookup(p), h.lookup(p));
             // Half has an 11-bit significand: relative rounding error <= 2^-11.
-            assert!(
-                (a - b).abs() <= a.abs() * 2f32.powi(-11) + 1e-6,
-                "{a} vs {b} at {p:?}"
-            );
+            assert!((a - b).abs() <= a.abs() * 2f32.powi(-11) + 1e-6, "{a} vs {b} at {p:?}");
         }
-        assert_eq!(
-            h.to_f32().max_value(),
-            f16::from_f32(g.max_value()).to_f32()
-        );
+        assert_eq!(h.to_f32().max_value(), f16::from_f32(g.max_value()).to_f32());
     }
 
     #[test]

@@ -69,9 +69,7 @@ pub enum VolumeError {
         available: Vec<String>,
     },
     /// The grid exists but does not hold scalar floating-point values.
-    #[error(
-        "{path}: grid {grid:?} has type {grid_type}, expected a scalar float, half or double grid"
-    )]
+    #[error("{path}: grid {grid:?} has type {grid_type}, expected a scalar float, half or double grid")]
     UnsupportedGridType {
         /// The file.
         path: PathBuf,
@@ -85,6 +83,16 @@ pub enum VolumeError {
     InvalidGrid {
         /// What is inconsistent.
         what: String,
+    },
+    /// A parameter of a procedural generator is out of its range.
+    #[error("invalid parameter {parameter} = {value}: expected {expected}")]
+    InvalidParameter {
+        /// The parameter's field name, e.g. `octaves`.
+        parameter: &'static str,
+        /// The value given.
+        value: String,
+        /// The accepted range, e.g. `an integer in 1..=12`.
+        expected: &'static str,
     },
 }
 

@@ -17,7 +17,7 @@
 //!   when that fits in `max_cells`, else the smallest power-of-two multiple
 //!   that does. Outside that box the field is exactly the background.
 
-use crate::{DenseGrid, SparseGrid, VolumeError};
+use crate::{DenseGrid, SparseGrid, VolumeError, LEAF_DIM};
 
 /// Margin, in voxels, by which each cell's interpolation support is grown.
 const SUPPORT_EPSILON: f64 = 1e-3;
@@ -47,12 +47,7 @@ impl MajorantGrid {
     ) -> Result<Self, VolumeError> {
         // Same shape rules as a dense grid.
         DenseGrid::new(res, values.clone(), bounds_min, bounds_max)?;
-        Ok(Self {
-            res,
-            bounds_min,
-            bounds_max,
-            values,
-        })
+        Ok(Self { res, bounds_min, bounds_max, values })
     }
 
     /// The majorants of a dense grid over its local-space box, with `res`
@@ -67,63 +62,10 @@ impl MajorantGrid {
     /// ```
     pub fn from_dense(grid: &DenseGrid, res: [usize; 3]) -> MajorantGrid {
         let res = res.map(|r| r.max(1));
-        let dims = grid.dims();
         let (bounds_min, bounds_max) = grid.bounds();
-        // Voxel range read by interpolation inside each majorant cell, per axis.
-        let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|a| {
-            let (n, r) = (dims[a], res[a]);
-            (0..r)
-                .map(|c| {
-                    let u_lo = c as f64 * n as f64 / r as f64 - 0.5 - SUPPORT_EPSILON;
-                    let u_hi = (c + 1) as f64 * n as f64 / r as f64 - 0.5 + SUPPORT_EPSILON;
-                    let lo = u_lo.floor().max(0.0) as usize;
-                    let hi = (u_hi.floor() + 1.0).max(0.0) as usize;
-                    (lo.min(n - 1), hi.min(n - 1))
-                })
-                .collect()
-        });
-        let storage = grid.storage();
-        let [nx, ny, nz] = dims;
-        let [rx, ry, rz] = res;
-        // Separable box maximum: along x, then y, then z.
-        let mut mx = vec![f32::NEG_INFINITY; rx * ny * nz];
-        for zy in 0..ny * nz {
-            for (cx, &(lo, hi)) in ranges[0].iter().enumerate() {
-                let mut m = f32::NEG_INFINITY;
-                for x in lo..=hi {
-                    m = m.max(storage.get(zy * nx + x));
-                }
-                mx[zy * rx + cx] = m;
-            }
-        }
-        let mut my = vec![f32::NEG_INFINITY; rx * ry * nz];
-        for z in 0..nz {
-            for (cy, &(lo, hi)) in ranges[1].iter().enumerate() {
-                for cx in 0..rx {
-                    let mut m = f32::NEG_INFINITY;
-                    for y in lo..=hi {
-                        m = m.max(mx[(z * ny + y) * rx + cx]);
-                    }
-                    my[(z * ry + cy) * rx + cx] = m;
-                }
-            }
-        }
-        let mut values = vec![0f32; rx * ry * rz];
-        for (cz, &(lo, hi)) in ranges[2].iter().enumerate() {
-            for cyx in 0..ry * rx {
-                let mut m = 0f32;
-                for z in lo..=hi {
-                    m = m.max(my[z * ry * rx + cyx]);
-                }
-                values[cz * ry * rx + cyx] = m;
-            }
-        }
-        MajorantGrid {
-            res,
-            bounds_min,
-            bounds_max,
-            values,
-        }
+        // Clamped below at zero (NaN voxels are ignored by `max`).
+        let values = reduce_dense(grid, res, f32::NEG_INFINITY, f32::max).into_iter().map(|v| v.max(0.0)).collect();
+        MajorantGrid { res, bounds_min, bounds_max, values }
     }
 
     /// The majorants of a sparse grid in its index space (see the module
@@ -132,92 +74,54 @@ impl MajorantGrid {
     /// takes two cells along that axis.
     pub fn from_sparse(grid: &SparseGrid, max_cells: usize) -> MajorantGrid {
         let floor = grid.background().max(0.0);
-        let Some((lo, hi)) = grid.data_bounds_index() else {
-            return MajorantGrid {
-                res: [1; 3],
-                bounds_min: [-1.0; 3],
-                bounds_max: [1.0; 3],
-                values: vec![floor],
-            };
+        let Some(layout) = SparseLayout::new(grid, max_cells) else {
+            return SparseLayout::empty_grid(floor);
         };
-        // Cell size 8 * 2^k voxels, aligned to multiples of itself.
-        let mut size: i64 = 8;
-        let (origin, res) = loop {
-            let origin: [i64; 3] =
-                std::array::from_fn(|a| (lo[a] as i64 - 1).div_euclid(size) * size);
-            let res: [i64; 3] =
-                std::array::from_fn(|a| (hi[a] as i64 + 1 - origin[a]).div_euclid(size) + 1);
-            let cells = res.iter().map(|&r| r as u128).product::<u128>();
-            if cells <= max_cells.max(1) as u128 || size >= 1 << 40 {
-                break (origin, res.map(|r| r as usize));
-            }
-            size *= 2;
-        };
-        let mut m = MajorantGrid {
-            res,
-            bounds_min: std::array::from_fn(|a| origin[a] as f32),
-            bounds_max: std::array::from_fn(|a| (origin[a] + res[a] as i64 * size) as f32),
-            values: vec![floor; res[0] * res[1] * res[2]],
-        };
-        // The cells whose (grown) support meets voxels lo..=hi along axis a.
-        let cells_touching = |a: usize, lo: i64, hi: i64| {
-            // ceil((lo - 1 - origin - size) / size) for integers.
-            let first = (lo - 2 - origin[a] - size).div_euclid(size) + 1;
-            let last = (hi + 1 - origin[a]).div_euclid(size);
-            (first.max(0), last.min(res[a] as i64 - 1))
-        };
-        let support = |a: usize, c: i64| {
-            let start = origin[a] + c * size;
-            (start - 1, start + size + 1)
-        };
+        let mut m = layout.filled(floor);
         for leaf in grid.leaves() {
             let o = leaf.origin.map(|v| v as i64);
-            let ranges: [(i64, i64); 3] =
-                std::array::from_fn(|a| cells_touching(a, o[a], o[a] + 7));
-            for cz in ranges[2].0..=ranges[2].1 {
-                for cy in ranges[1].0..=ranges[1].1 {
-                    for cx in ranges[0].0..=ranges[0].1 {
-                        let c = [cx, cy, cz];
-                        // Leaf voxels inside this cell's support.
-                        let sub: [(usize, usize); 3] = std::array::from_fn(|a| {
-                            let (s0, s1) = support(a, c[a]);
-                            (
-                                (s0.max(o[a]) - o[a]) as usize,
-                                (s1.min(o[a] + 7) - o[a]) as usize,
-                            )
-                        });
-                        let mut v = f32::NEG_INFINITY;
-                        for i in sub[0].0..=sub[0].1 {
-                            for j in sub[1].0..=sub[1].1 {
-                                for k in sub[2].0..=sub[2].1 {
-                                    v = v.max(leaf.values[(i << 6) | (j << 3) | k]);
-                                }
-                            }
+            layout.for_each_cell_touching(o, LEAF_DIM as i64, |c, sub| {
+                let mut v = f32::NEG_INFINITY;
+                for i in sub[0].0..=sub[0].1 {
+                    for j in sub[1].0..=sub[1].1 {
+                        for k in sub[2].0..=sub[2].1 {
+                            v = v.max(leaf.values[(i << 6) | (j << 3) | k]);
                         }
-                        m.raise(c, v);
                     }
                 }
-            }
+                let i = m.cell_index(c);
+                m.values[i] = m.values[i].max(v);
+            });
         }
         for tile in grid.tiles() {
             let o = tile.origin.map(|v| v as i64);
-            let n = tile.size() as i64;
-            let ranges: [(i64, i64); 3] =
-                std::array::from_fn(|a| cells_touching(a, o[a], o[a] + n - 1));
-            for cz in ranges[2].0..=ranges[2].1 {
-                for cy in ranges[1].0..=ranges[1].1 {
-                    for cx in ranges[0].0..=ranges[0].1 {
-                        m.raise([cx, cy, cz], tile.value);
-                    }
-                }
-            }
+            layout.for_each_cell_touching(o, tile.size() as i64, |c, _| {
+                let i = m.cell_index(c);
+                m.values[i] = m.values[i].max(tile.value);
+            });
         }
         m
     }
 
-    fn raise(&mut self, c: [i64; 3], v: f32) {
-        let i = (c[2] as usize * self.res[1] + c[1] as usize) * self.res[0] + c[0] as usize;
-        self.values[i] = self.values[i].max(v);
+    /// Linear index of cell `c` (in range).
+    #[inline(always)]
+    pub(crate) fn cell_index(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.res[1] + c[1]) * self.res[0] + c[0]
+    }
+
+    /// Whether `other` has the same cells (resolution and box) as `self`,
+    /// as a majorant grid and its minorant grid built with the same
+    /// parameters do.
+    ///
+    /// ```
+    /// use niebla_volume::{DenseGrid, MajorantGrid};
+    /// let g = DenseGrid::new([4, 4, 4], vec![1.0; 64], [0.0; 3], [1.0; 3]).unwrap();
+    /// let majorant = MajorantGrid::from_dense(&g, [2, 2, 2]);
+    /// let minorant = MajorantGrid::minorant_from_dense(&g, [2, 2, 2]);
+    /// assert!(majorant.same_layout(&minorant));
+    /// ```
+    pub fn same_layout(&self, other: &MajorantGrid) -> bool {
+        self.res == other.res && self.bounds_min == other.bounds_min && self.bounds_max == other.bounds_max
     }
 
     /// Cells per axis.
@@ -264,5 +168,155 @@ impl MajorantGrid {
         }
         let f = k as f32 / self.res[a] as f32;
         self.bounds_min[a] + (self.bounds_max[a] - self.bounds_min[a]) * f
+    }
+}
+
+/// Per-cell reduction (`op` is `f32::max` for majorants, `f32::min` for
+/// minorants) of the voxels whose interpolation support touches each of
+/// `res` cells spanning a dense grid's box. Separable: along x, then y,
+/// then z; `identity` is the value of an empty reduction.
+pub(crate) fn reduce_dense<Op: Fn(f32, f32) -> f32>(
+    grid: &DenseGrid,
+    res: [usize; 3],
+    identity: f32,
+    op: Op,
+) -> Vec<f32> {
+    let dims = grid.dims();
+    // Voxel range read by interpolation inside each cell, per axis.
+    let ranges: [Vec<(usize, usize)>; 3] = std::array::from_fn(|a| {
+        let (n, r) = (dims[a], res[a]);
+        (0..r)
+            .map(|c| {
+                let u_lo = c as f64 * n as f64 / r as f64 - 0.5 - SUPPORT_EPSILON;
+                let u_hi = (c + 1) as f64 * n as f64 / r as f64 - 0.5 + SUPPORT_EPSILON;
+                let lo = u_lo.floor().max(0.0) as usize;
+                let hi = (u_hi.floor() + 1.0).max(0.0) as usize;
+                (lo.min(n - 1), hi.min(n - 1))
+            })
+            .collect()
+    });
+    let storage = grid.storage();
+    let [nx, ny, nz] = dims;
+    let [rx, ry, rz] = res;
+    let mut along_x = vec![identity; rx * ny * nz];
+    for zy in 0..ny * nz {
+        for (cx, &(lo, hi)) in ranges[0].iter().enumerate() {
+            let mut m = identity;
+            for x in lo..=hi {
+                m = op(m, storage.get(zy * nx + x));
+            }
+            along_x[zy * rx + cx] = m;
+        }
+    }
+    let mut along_y = vec![identity; rx * ry * nz];
+    for z in 0..nz {
+        for (cy, &(lo, hi)) in ranges[1].iter().enumerate() {
+            for cx in 0..rx {
+                let mut m = identity;
+                for y in lo..=hi {
+                    m = op(m, along_x[(z * ny + y) * rx + cx]);
+                }
+                along_y[(z * ry + cy) * rx + cx] = m;
+            }
+        }
+    }
+    let mut values = vec![identity; rx * ry * rz];
+    for (cz, &(lo, hi)) in ranges[2].iter().enumerate() {
+        for cyx in 0..ry * rx {
+            let mut m = identity;
+            for z in lo..=hi {
+                m = op(m, along_y[z * ry * rx + cyx]);
+            }
+            values[cz * ry * rx + cyx] = m;
+        }
+    }
+    values
+}
+
+/// The cells of a sparse grid's majorant (and minorant) grid: cubes of
+/// `size = 8 * 2^k` voxels from `origin`, `res` per axis, covering the
+/// data bounds grown by one voxel.
+pub(crate) struct SparseLayout {
+    pub origin: [i64; 3],
+    pub size: i64,
+    pub res: [usize; 3],
+}
+
+impl SparseLayout {
+    /// The layout for at most `max(max_cells, 1)` cells (8 when data
+    /// straddles cell boundaries along every axis), or `None` for a grid
+    /// that stores nothing.
+    pub(crate) fn new(grid: &SparseGrid, max_cells: usize) -> Option<SparseLayout> {
+        let (lo, hi) = grid.data_bounds_index()?;
+        // Cell size 8 * 2^k voxels, aligned to multiples of itself.
+        let mut size: i64 = 8;
+        loop {
+            let origin: [i64; 3] = std::array::from_fn(|a| (lo[a] as i64 - 1).div_euclid(size) * size);
+            let res: [i64; 3] = std::array::from_fn(|a| (hi[a] as i64 + 1 - origin[a]).div_euclid(size) + 1);
+            let cells = res.iter().map(|&r| r as u128).product::<u128>();
+            if cells <= max_cells.max(1) as u128 || size >= 1 << 40 {
+                return Some(SparseLayout { origin, size, res: res.map(|r| r as usize) });
+            }
+            size *= 2;
+        }
+    }
+
+    /// The one-cell grid of a grid that stores nothing.
+    pub(crate) fn empty_grid(value: f32) -> MajorantGrid {
+        MajorantGrid { res: [1; 3], bounds_min: [-1.0; 3], bounds_max: [1.0; 3], values: vec![value] }
+    }
+
+    /// A grid with this layout and every cell `value`.
+    pub(crate) fn filled(&self, value: f32) -> MajorantGrid {
+        let (origin, size, res) = (self.origin, self.size, self.res);
+        MajorantGrid {
+            res,
+            bounds_min: std::array::from_fn(|a| origin[a] as f32),
+            bounds_max: std::array::from_fn(|a| (origin[a] + res[a] as i64 * size) as f32),
+            values: vec![value; res[0] * res[1] * res[2]],
+        }
+    }
+
+    /// Inclusive voxel range `(first, last)` along axis `a` read by
+    /// interpolation inside cell `c` (grown by one voxel below for points
+    /// an ulp outside the cell).
+    pub(crate) fn support(&self, a: usize, c: i64) -> (i64, i64) {
+        let start = self.origin[a] + c * self.size;
+        (start - 1, start + self.size + 1)
+    }
+
+    /// Number of voxels in each cell's support.
+    pub(crate) fn support_volume(&self) -> u128 {
+        ((self.size + 3) as u128).pow(3)
+    }
+
+    /// Calls `f(cell, sub)` for every cell whose support meets the cube of
+    /// `n` voxels from `origin`, with `sub` the inclusive range of the
+    /// cube's voxels (relative to `origin`) inside that support, per axis.
+    pub(crate) fn for_each_cell_touching(
+        &self,
+        origin: [i64; 3],
+        n: i64,
+        mut f: impl FnMut([usize; 3], [(usize, usize); 3]),
+    ) {
+        let ranges: [(i64, i64); 3] = std::array::from_fn(|a| {
+            let (lo, hi) = (origin[a], origin[a] + n - 1);
+            // ceil((lo - 1 - origin - size) / size) for integers.
+            let first = (lo - 2 - self.origin[a] - self.size).div_euclid(self.size) + 1;
+            let last = (hi + 1 - self.origin[a]).div_euclid(self.size);
+            (first.max(0), last.min(self.res[a] as i64 - 1))
+        });
+        for cz in ranges[2].0..=ranges[2].1 {
+            for cy in ranges[1].0..=ranges[1].1 {
+                for cx in ranges[0].0..=ranges[0].1 {
+                    let c = [cx, cy, cz];
+                    let sub = std::array::from_fn(|a| {
+                        let (s0, s1) = self.support(a, c[a]);
+                        ((s0.max(origin[a]) - origin[a]) as usize, (s1.min(origin[a] + n - 1) - origin[a]) as usize)
+                    });
+                    f(c.map(|v| v as usize), sub);
+                }
+            }
+        }
     }
 }

@@ -40,19 +40,11 @@ impl DenseRgbGrid {
                 max_value[c] = max_value[c].max(v[c]);
             }
         }
-        Ok(Self {
-            mapping,
-            data,
-            max_value,
-        })
+        Ok(Self { mapping, data, max_value })
     }
 
     /// The same values mapped to another local-space box.
-    pub fn with_bounds(
-        self,
-        bounds_min: [f32; 3],
-        bounds_max: [f32; 3],
-    ) -> Result<Self, VolumeError> {
+    pub fn with_bounds(self, bounds_min: [f32; 3], bounds_max: [f32; 3]) -> Result<Self, VolumeError> {
         let mapping = BoxMapping::new(self.dims(), bounds_min, bounds_max, self.data.len())?;
         Ok(Self { mapping, ..self })
     }
@@ -80,11 +72,7 @@ impl DenseRgbGrid {
     /// The value stored for cell `(x, y, z)`; panics out of range.
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> [f32; 3] {
         let [nx, ny, nz] = self.dims();
-        assert!(
-            x < nx && y < ny && z < nz,
-            "voxel ({x}, {y}, {z}) outside {:?}",
-            self.dims()
-        );
+        assert!(x < nx && y < ny && z < nz, "voxel ({x}, {y}, {z}) outside {:?}", self.dims());
         self.data[self.mapping.index(x, y, z)]
     }
 
@@ -134,11 +122,7 @@ fn trilinear_channel(data: &[[f32; 3]], s: &Stencil, c: usize) -> f32 {
         d[b + sz + sy][c],
         d[b + sz + sy + sx][c],
     ];
-    let local = Stencil {
-        base: 0,
-        step: [1, 2, 4],
-        frac: s.frac,
-    };
+    let local = Stencil { base: 0, step: [1, 2, 4], frac: s.frac };
     trilinear(&corners, &local)
 }
 
@@ -177,11 +161,7 @@ impl DenseVolume {
     }
 
     /// The same values mapped to another local-space box.
-    pub fn with_bounds(
-        self,
-        bounds_min: [f32; 3],
-        bounds_max: [f32; 3],
-    ) -> Result<Self, VolumeError> {
+    pub fn with_bounds(self, bounds_min: [f32; 3], bounds_max: [f32; 3]) -> Result<Self, VolumeError> {
         Ok(match self {
             DenseVolume::Scalar(g) => DenseVolume::Scalar(g.with_bounds(bounds_min, bounds_max)?),
             DenseVolume::Rgb(g) => DenseVolume::Rgb(g.with_bounds(bounds_min, bounds_max)?),
@@ -212,16 +192,9 @@ mod tests {
 
     #[test]
     fn rgb_lookup_matches_per_channel_scalar_lookup() {
-        let data: Vec<[f32; 3]> = (0..27)
-            .map(|i| [i as f32, (i * 7 % 5) as f32, 1.0 / (1.0 + i as f32)])
-            .collect();
+        let data: Vec<[f32; 3]> = (0..27).map(|i| [i as f32, (i * 7 % 5) as f32, 1.0 / (1.0 + i as f32)]).collect();
         let g = DenseRgbGrid::new([3, 3, 3], data, [0.0; 3], [1.0, 2.0, 3.0]).unwrap();
-        for p in [
-            [0.1, 0.2, 0.3],
-            [0.5, 1.0, 1.5],
-            [0.9, 1.9, 2.9],
-            [0.33, 0.77, 2.2],
-        ] {
+        for p in [[0.1, 0.2, 0.3], [0.5, 1.0, 1.5], [0.9, 1.9, 2.9], [0.33, 0.77, 2.2]] {
             let rgb = g.lookup(p);
             for (c, &value) in rgb.iter().enumerate() {
                 assert!((value - g.channel(c).lookup(p)).abs() < 1e-6);

@@ -82,11 +82,7 @@ pub struct Leaf {
 
 impl Leaf {
     pub(crate) fn new(origin: [i32; 3], fill: f32, active: bool) -> Self {
-        Leaf {
-            origin,
-            values: [fill; LEAF_SIZE],
-            active: [if active { u64::MAX } else { 0 }; 8],
-        }
+        Leaf { origin, values: [fill; LEAF_SIZE], active: [if active { u64::MAX } else { 0 }; 8] }
     }
 
     /// Offset of voxel `ijk` (any coordinates; only the low 3 bits count).
@@ -262,27 +258,15 @@ impl SparseGrid {
             return Slot::Background;
         };
         if e & TILE_BIT != 0 {
-            return if e == EMPTY {
-                Slot::Background
-            } else {
-                Slot::Tile(e & !TILE_BIT)
-            };
+            return if e == EMPTY { Slot::Background } else { Slot::Tile(e & !TILE_BIT) };
         }
         let e = self.uppers[e as usize * UPPER_SIZE + upper_offset(ijk)];
         if e & TILE_BIT != 0 {
-            return if e == EMPTY {
-                Slot::Background
-            } else {
-                Slot::Tile(e & !TILE_BIT)
-            };
+            return if e == EMPTY { Slot::Background } else { Slot::Tile(e & !TILE_BIT) };
         }
         let e = self.lowers[e as usize * LOWER_SIZE + lower_offset(ijk)];
         if e & TILE_BIT != 0 {
-            return if e == EMPTY {
-                Slot::Background
-            } else {
-                Slot::Tile(e & !TILE_BIT)
-            };
+            return if e == EMPTY { Slot::Background } else { Slot::Tile(e & !TILE_BIT) };
         }
         Slot::Leaf(e)
     }
@@ -373,17 +357,8 @@ impl SparseGrid {
 
     /// Number of active voxels (leaf voxels plus the volume of active tiles).
     pub fn active_voxel_count(&self) -> u64 {
-        let leaf: u64 = self
-            .leaves
-            .iter()
-            .map(|l| l.active.iter().map(|w| w.count_ones() as u64).sum::<u64>())
-            .sum();
-        let tiles: u64 = self
-            .tiles
-            .iter()
-            .filter(|t| t.active)
-            .map(|t| (t.size() as u64).pow(3))
-            .sum();
+        let leaf: u64 = self.leaves.iter().map(|l| l.active.iter().map(|w| w.count_ones() as u64).sum::<u64>()).sum();
+        let tiles: u64 = self.tiles.iter().filter(|t| t.active).map(|t| (t.size() as u64).pow(3)).sum();
         leaf + tiles
     }
 
@@ -476,16 +451,8 @@ impl SparseGrid {
     /// Largest value the grid holds anywhere (stored voxels, tiles and the
     /// background), an upper bound of every interpolated value.
     pub fn max_value(&self) -> f32 {
-        let leaf_max = self
-            .leaves
-            .iter()
-            .flat_map(|l| l.values.iter().copied())
-            .fold(f32::NEG_INFINITY, f32::max);
-        let tile_max = self
-            .tiles
-            .iter()
-            .map(|t| t.value)
-            .fold(f32::NEG_INFINITY, f32::max);
+        let leaf_max = self.leaves.iter().flat_map(|l| l.values.iter().copied()).fold(f32::NEG_INFINITY, f32::max);
+        let tile_max = self.tiles.iter().map(|t| t.value).fold(f32::NEG_INFINITY, f32::max);
         self.background.max(leaf_max).max(tile_max)
     }
 }
@@ -498,10 +465,7 @@ struct Bounds {
 
 impl Bounds {
     fn new() -> Self {
-        Bounds {
-            lo: [i32::MAX; 3],
-            hi: [i32::MIN; 3],
-        }
+        Bounds { lo: [i32::MAX; 3], hi: [i32::MIN; 3] }
     }
     fn add(&mut self, p: [i32; 3]) {
         self.lo = std::array::from_fn(|a| self.lo[a].min(p[a]));

@@ -2,8 +2,8 @@
 //! [`SparseGridBuilder`] for grids made in code (tests, procedural data).
 
 use crate::sparse::{
-    lower_offset, upper_offset, Leaf, Tile, EMPTY, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, TILE_BIT,
-    UPPER_SIZE, UPPER_TOTAL,
+    lower_offset, upper_offset, Leaf, Tile, EMPTY, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, TILE_BIT, UPPER_SIZE,
+    UPPER_TOTAL,
 };
 use crate::{Affine, SparseGrid};
 
@@ -65,12 +65,7 @@ impl SparseGrid {
         }
         let (value, active) = self.entry_fill(e);
         let (log2_dim, child_log2, size, origin) = if depth == 1 {
-            (
-                5,
-                LOWER_TOTAL,
-                UPPER_SIZE,
-                self.upper_origins[node as usize],
-            )
+            (5, LOWER_TOTAL, UPPER_SIZE, self.upper_origins[node as usize])
         } else {
             (4, LEAF_TOTAL, LOWER_SIZE, self.lower_origins[node as usize])
         };
@@ -78,14 +73,7 @@ impl SparseGrid {
         for n in 0..size {
             let d = [n >> (2 * log2_dim), (n >> log2_dim) & mask, n & mask];
             let origin = std::array::from_fn(|a| origin[a] + ((d[a] as i32) << child_log2));
-            let entry = self
-                .tile_entry(Tile {
-                    origin,
-                    depth,
-                    value,
-                    active,
-                })
-                .expect("too many tiles");
+            let entry = self.tile_entry(Tile { origin, depth, value, active }).expect("too many tiles");
             if depth == 1 {
                 self.uppers[node as usize * UPPER_SIZE + n] = entry;
             } else {
@@ -118,9 +106,7 @@ impl SparseGrid {
                 return EMPTY;
             }
             let tile = self.tiles[(e & !TILE_BIT) as usize];
-            return out
-                .tile_entry(tile)
-                .expect("fewer tiles than the source grid");
+            return out.tile_entry(tile).expect("fewer tiles than the source grid");
         }
         match depth {
             0 => {
@@ -166,9 +152,7 @@ pub struct SparseGridBuilder {
 impl SparseGridBuilder {
     /// An empty grid with the given background and index-to-world map.
     pub fn new(background: f32, index_to_world: Affine) -> Self {
-        SparseGridBuilder {
-            grid: SparseGrid::empty(background, index_to_world),
-        }
+        SparseGridBuilder { grid: SparseGrid::empty(background, index_to_world) }
     }
 
     /// Sets voxel `ijk` (index space) to `value` with the given active state,
@@ -191,12 +175,7 @@ impl SparseGridBuilder {
         let depth = depth.min(2);
         let log2 = crate::sparse::tile_log2(depth);
         let origin = ijk.map(|v| v >> log2 << log2);
-        let tile = Tile {
-            origin,
-            depth,
-            value,
-            active,
-        };
+        let tile = Tile { origin, depth, value, active };
         let e = self.grid.tile_entry(tile).expect("too many tiles");
         match depth {
             0 => {
@@ -249,11 +228,7 @@ impl SparseGridBuilder {
             return e;
         }
         let (fill, active) = g.entry_fill(e);
-        let leaf = g.push_leaf(Leaf::new(
-            ijk.map(|v| v >> LEAF_TOTAL << LEAF_TOTAL),
-            fill,
-            active,
-        ));
+        let leaf = g.push_leaf(Leaf::new(ijk.map(|v| v >> LEAF_TOTAL << LEAF_TOTAL), fill, active));
         g.lowers[slot] = leaf;
         leaf
     }
@@ -288,10 +263,7 @@ mod tests {
         assert_eq!(g.leaf_count(), 3);
         assert_eq!(g.active_tile_counts(), [1, 0, 1]);
         assert_eq!(g.active_voxel_count(), 2 + 512 + 4096u64.pow(3));
-        assert_eq!(
-            g.active_bounds_index(),
-            Some(([-1, -1, -1], [12287, 4095, 4095]))
-        );
+        assert_eq!(g.active_bounds_index(), Some(([-1, -1, -1], [12287, 4095, 4095])));
     }
 
     #[test]

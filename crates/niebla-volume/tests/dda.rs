@@ -12,28 +12,14 @@ use niebla_volume::{MajorantGrid, Segment};
 
 /// The exact (f64) parameter interval of the ray inside a closed box,
 /// clipped to `[t_min, t_max]`; `None` if empty or a single point.
-fn slab(
-    o: [f32; 3],
-    d: [f32; 3],
-    lo: [f32; 3],
-    hi: [f32; 3],
-    t_min: f32,
-    t_max: f32,
-) -> Option<(f64, f64)> {
+fn slab(o: [f32; 3], d: [f32; 3], lo: [f32; 3], hi: [f32; 3], t_min: f32, t_max: f32) -> Option<(f64, f64)> {
     slab_with(o, d, lo, hi, t_min, t_max, false)
 }
 
 /// Like [`slab`], but a ray lying in a face of the box (parallel to an axis
 /// and exactly on its boundary plane) misses it: such a ray runs between two
 /// cells and either one may report it.
-fn slab_interior(
-    o: [f32; 3],
-    d: [f32; 3],
-    lo: [f32; 3],
-    hi: [f32; 3],
-    t_min: f32,
-    t_max: f32,
-) -> Option<(f64, f64)> {
+fn slab_interior(o: [f32; 3], d: [f32; 3], lo: [f32; 3], hi: [f32; 3], t_min: f32, t_max: f32) -> Option<(f64, f64)> {
     slab_with(o, d, lo, hi, t_min, t_max, true)
 }
 
@@ -65,13 +51,7 @@ fn slab_with(
     (t0 < t1).then_some((t0, t1))
 }
 
-fn walk(
-    m: &MajorantGrid,
-    o: [f32; 3],
-    d: [f32; 3],
-    t_min: f32,
-    t_max: f32,
-) -> Vec<([usize; 3], Segment)> {
+fn walk(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32) -> Vec<([usize; 3], Segment)> {
     let mut out = Vec::new();
     let _ = m.walk_cells(o, d, t_min, t_max, |c, s| {
         out.push((c, s));
@@ -87,11 +67,7 @@ fn check_ray(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32)
     let [rx, ry, rz] = m.res();
     let dlen = (d[0] as f64).hypot(d[1] as f64).hypot(d[2] as f64);
     // Parameter tolerance: a few ulps of the coordinates, divided by speed.
-    let coord = o
-        .iter()
-        .chain(&m.bounds().0)
-        .chain(&m.bounds().1)
-        .fold(1.0f64, |a, &v| a.max(v.abs() as f64));
+    let coord = o.iter().chain(&m.bounds().0).chain(&m.bounds().1).fold(1.0f64, |a, &v| a.max(v.abs() as f64));
     let tol = 1e-5 * coord / dlen.max(1e-30) + 1e-6 * (t_max as f64).abs().min(1e6);
     let context = format!("o {o:?} d {d:?} t [{t_min}, {t_max}]");
 
@@ -111,10 +87,7 @@ fn check_ray(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32)
                 s.t0,
                 s.t1
             ),
-            None => assert!(
-                ((s.t1 - s.t0) as f64) <= tol,
-                "cell {c:?} not on the ray: {s:?}, {context}"
-            ),
+            None => assert!(((s.t1 - s.t0) as f64) <= tol, "cell {c:?} not on the ray: {s:?}, {context}"),
         }
     }
     // Coverage: [t_min, t_max] intersected with the grid.
@@ -122,18 +95,11 @@ fn check_ray(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32)
     match slab(o, d, glo, ghi, t_min, t_max) {
         Some((a, b)) if b - a > tol => {
             assert!(!segs.is_empty(), "no segments for [{a}, {b}]: {context}");
-            assert!(
-                (segs[0].1.t0 as f64 - a).abs() <= tol,
-                "starts at {} not {a}: {context}",
-                segs[0].1.t0
-            );
+            assert!((segs[0].1.t0 as f64 - a).abs() <= tol, "starts at {} not {a}: {context}", segs[0].1.t0);
             let end = segs.last().unwrap().1.t1 as f64;
             assert!((end - b).abs() <= tol, "ends at {end} not {b}: {context}");
         }
-        _ => assert!(
-            segs.iter().all(|(_, s)| ((s.t1 - s.t0) as f64) <= tol),
-            "{context}"
-        ),
+        _ => assert!(segs.iter().all(|(_, s)| ((s.t1 - s.t0) as f64) <= tol), "{context}"),
     }
     // Brute force: every cell crossed over more than the tolerance is visited.
     for z in 0..rz {
@@ -165,11 +131,7 @@ fn grid(res: [usize; 3], lo: [f32; 3], hi: [f32; 3]) -> MajorantGrid {
 
 fn random_dir(rng: &mut Rng) -> [f32; 3] {
     loop {
-        let d = [
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        ];
+        let d = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
         let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
         if l > 0.1 && l <= 1.0 {
             return d.map(|v| v / l);
@@ -182,29 +144,14 @@ fn random_rays_visit_exactly_the_brute_force_cells() {
     let mut rng = Rng::new(1);
     for case in 0..400 {
         let res = [1 + rng.below(9), 1 + rng.below(9), 1 + rng.below(9)];
-        let lo = [
-            rng.range(-3.0, 1.0),
-            rng.range(-3.0, 1.0),
-            rng.range(-3.0, 1.0),
-        ];
-        let hi = [
-            lo[0] + rng.range(0.5, 4.0),
-            lo[1] + rng.range(0.5, 4.0),
-            lo[2] + rng.range(0.5, 4.0),
-        ];
+        let lo = [rng.range(-3.0, 1.0), rng.range(-3.0, 1.0), rng.range(-3.0, 1.0)];
+        let hi = [lo[0] + rng.range(0.5, 4.0), lo[1] + rng.range(0.5, 4.0), lo[2] + rng.range(0.5, 4.0)];
         let m = grid(res, lo, hi);
         // Origins outside and inside the box, random speeds (d unnormalized).
-        let o = [
-            rng.range(-6.0, 6.0),
-            rng.range(-6.0, 6.0),
-            rng.range(-6.0, 6.0),
-        ];
+        let o = [rng.range(-6.0, 6.0), rng.range(-6.0, 6.0), rng.range(-6.0, 6.0)];
         let d = random_dir(&mut rng).map(|v| v * rng.range(0.2, 3.0));
-        let (t_min, t_max) = if case % 3 == 0 {
-            (0.0, f32::INFINITY)
-        } else {
-            (rng.range(-2.0, 2.0), rng.range(2.0, 20.0))
-        };
+        let (t_min, t_max) =
+            if case % 3 == 0 { (0.0, f32::INFINITY) } else { (rng.range(-2.0, 2.0), rng.range(2.0, 20.0)) };
         check_ray(&m, o, d, t_min, t_max);
     }
 }
@@ -214,11 +161,7 @@ fn rays_starting_inside_cover_from_t_min() {
     let mut rng = Rng::new(2);
     let m = grid([5, 4, 3], [0.0; 3], [5.0, 4.0, 3.0]);
     for _ in 0..300 {
-        let o = [
-            rng.range(0.0, 5.0),
-            rng.range(0.0, 4.0),
-            rng.range(0.0, 3.0),
-        ];
+        let o = [rng.range(0.0, 5.0), rng.range(0.0, 4.0), rng.range(0.0, 3.0)];
         let d = random_dir(&mut rng);
         check_ray(&m, o, d, 0.0, rng.range(0.0, 10.0));
         let segs = walk(&m, o, d, 0.0, 1e9);
@@ -255,11 +198,7 @@ fn rays_through_cell_edges_and_corners() {
     let m = grid([8, 8, 8], [0.0; 3], [8.0; 3]);
     for _ in 0..300 {
         // Start on a lattice point, move along a lattice diagonal.
-        let o = [
-            rng.below(9) as f32,
-            rng.below(9) as f32,
-            rng.below(9) as f32,
-        ];
+        let o = [rng.below(9) as f32, rng.below(9) as f32, rng.below(9) as f32];
         let mut d = [0f32; 3];
         for v in d.iter_mut() {
             *v = rng.below(3) as f32 - 1.0;
@@ -268,13 +207,7 @@ fn rays_through_cell_edges_and_corners() {
             d[rng.below(3)] = 1.0;
         }
         let back = rng.range(0.0, 3.0);
-        check_ray(
-            &m,
-            [o[0] - back * d[0], o[1] - back * d[1], o[2] - back * d[2]],
-            d,
-            0.0,
-            30.0,
-        );
+        check_ray(&m, [o[0] - back * d[0], o[1] - back * d[1], o[2] - back * d[2]], d, 0.0, 30.0);
     }
 }
 
@@ -287,10 +220,7 @@ fn majorants_of_segments_are_the_cells_values_and_walk_matches_walk_cells() {
         a.push(s);
         ControlFlow::Continue(())
     });
-    let b: Vec<Segment> = walk(&m, o, d, 0.0, 100.0)
-        .into_iter()
-        .map(|(_, s)| s)
-        .collect();
+    let b: Vec<Segment> = walk(&m, o, d, 0.0, 100.0).into_iter().map(|(_, s)| s).collect();
     assert_eq!(a, b);
     // Merged segments cover the same range with no equal neighbours.
     let mut merged = Vec::new();
@@ -300,7 +230,5 @@ fn majorants_of_segments_are_the_cells_values_and_walk_matches_walk_cells() {
     });
     assert_eq!(merged.first().unwrap().t0, a.first().unwrap().t0);
     assert_eq!(merged.last().unwrap().t1, a.last().unwrap().t1);
-    assert!(merged
-        .windows(2)
-        .all(|w| w[0].t1 == w[1].t0 && w[0].max_density != w[1].max_density));
+    assert!(merged.windows(2).all(|w| w[0].t1 == w[1].t0 && w[0].max_density != w[1].max_density));
 }

@@ -21,11 +21,8 @@ fn cells_containing(m: &MajorantGrid, p: [f32; 3]) -> Vec<[usize; 3]> {
     let axis = |a: usize, n: usize| -> Vec<usize> {
         (0..n)
             .filter(|&c| {
-                let (lo, hi) = m.cell_bounds(
-                    if a == 0 { c } else { 0 },
-                    if a == 1 { c } else { 0 },
-                    if a == 2 { c } else { 0 },
-                );
+                let (lo, hi) =
+                    m.cell_bounds(if a == 0 { c } else { 0 }, if a == 1 { c } else { 0 }, if a == 2 { c } else { 0 });
                 lo[a] <= p[a] && p[a] <= hi[a]
             })
             .collect()
@@ -44,35 +41,15 @@ fn random_dense(rng: &mut Rng) -> DenseGrid {
     let dims = [1 + rng.below(12), 1 + rng.below(12), 1 + rng.below(12)];
     let n = dims[0] * dims[1] * dims[2];
     // Mostly empty with spikes, so that a loose or shifted majorant shows.
-    let data = (0..n)
-        .map(|_| {
-            if rng.below(4) == 0 {
-                rng.range(0.0, 10.0)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let lo = [
-        rng.range(-2.0, 2.0),
-        rng.range(-2.0, 2.0),
-        rng.range(-2.0, 2.0),
-    ];
-    let hi = [
-        lo[0] + rng.range(0.1, 5.0),
-        lo[1] + rng.range(0.1, 5.0),
-        lo[2] + rng.range(0.1, 5.0),
-    ];
+    let data = (0..n).map(|_| if rng.below(4) == 0 { rng.range(0.0, 10.0) } else { 0.0 }).collect();
+    let lo = [rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), rng.range(-2.0, 2.0)];
+    let hi = [lo[0] + rng.range(0.1, 5.0), lo[1] + rng.range(0.1, 5.0), lo[2] + rng.range(0.1, 5.0)];
     DenseGrid::new(dims, data, lo, hi).unwrap()
 }
 
 fn random_sparse(rng: &mut Rng) -> SparseGrid {
     let mut b = SparseGridBuilder::new(0.0, Affine::IDENTITY);
-    let c = [
-        rng.below(64) as i32 - 32,
-        rng.below(64) as i32 - 32,
-        rng.below(64) as i32 - 32,
-    ];
+    let c = [rng.below(64) as i32 - 32, rng.below(64) as i32 - 32, rng.below(64) as i32 - 32];
     for _ in 0..rng.below(300) {
         let ijk = [0, 1, 2].map(|a| c[a] + rng.below(40) as i32 - 20);
         b.set_voxel(ijk, rng.range(0.0, 5.0), true);
@@ -94,18 +71,10 @@ fn check_segments(rng: &mut Rng, m: &MajorantGrid, density: &dyn Fn([f32; 3]) ->
         let d = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
         let _ = m.walk(o, d, 0.0, 2.0, |s| {
             for k in 0..=8 {
-                let t = if k == 8 {
-                    s.t1
-                } else {
-                    s.t0 + (s.t1 - s.t0) * rng.uniform() * (k as f32 / 8.0).max(0.0)
-                };
+                let t = if k == 8 { s.t1 } else { s.t0 + (s.t1 - s.t0) * rng.uniform() * (k as f32 / 8.0).max(0.0) };
                 let p = [o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]];
                 let v = density(p);
-                assert!(
-                    bounded(v, s.max_density),
-                    "density {v} > majorant {} at t {t} in {s:?}",
-                    s.max_density
-                );
+                assert!(bounded(v, s.max_density), "density {v} > majorant {} at t {t} in {s:?}", s.max_density);
             }
             ControlFlow::Continue(())
         });
@@ -171,18 +140,10 @@ fn sparse_majorant_bounds_trilinear_density_everywhere() {
     let mut rng = Rng::new(12);
     for case in 0..120 {
         let g = random_sparse(&mut rng);
-        let max_cells = if case % 2 == 0 {
-            MajorantGrid::DEFAULT_MAX_CELLS
-        } else {
-            1 + rng.below(20)
-        };
+        let max_cells = if case % 2 == 0 { MajorantGrid::DEFAULT_MAX_CELLS } else { 1 + rng.below(20) };
         let m = MajorantGrid::from_sparse(&g, max_cells);
         // Aligned cells: a region straddling a cell boundary needs 2 per axis.
-        assert!(
-            m.values().len() <= max_cells.max(8),
-            "{:?} for {max_cells}",
-            m.res()
-        );
+        assert!(m.values().len() <= max_cells.max(8), "{:?} for {max_cells}", m.res());
         let (lo, hi) = m.bounds();
         for _ in 0..2000 {
             let p = [0, 1, 2].map(|a| rng.range(lo[a] - 3.0, hi[a] + 3.0));
@@ -211,9 +172,7 @@ fn sparse_majorant_uses_one_cell_per_leaf_when_it_fits() {
     let g = b.build();
     let m = MajorantGrid::from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
     let (lo, hi) = m.bounds();
-    let size: Vec<f32> = (0..3)
-        .map(|a| (hi[a] - lo[a]) / m.res()[a] as f32)
-        .collect();
+    let size: Vec<f32> = (0..3).map(|a| (hi[a] - lo[a]) / m.res()[a] as f32).collect();
     assert_eq!(size, [8.0, 8.0, 8.0]);
     assert_eq!(m.max_value(), 4.0);
     // Far from both voxels the majorant is zero.
@@ -222,39 +181,24 @@ fn sparse_majorant_uses_one_cell_per_leaf_when_it_fits() {
     // A tiny budget doubles the cell size until it fits.
     let coarse = MajorantGrid::from_sparse(&g, 8);
     assert!(coarse.values().len() <= 8, "{:?}", coarse.res());
-    assert!(bounded(
-        g.lookup_index([100.0, 3.0, 3.0]),
-        coarse.max_value()
-    ));
+    assert!(bounded(g.lookup_index([100.0, 3.0, 3.0]), coarse.max_value()));
 }
 
 #[test]
 fn majorants_bound_grids_read_from_vdb_files() {
     let mut rng = Rng::new(13);
-    for name in [
-        "big_shell.vdb",
-        "tiles_internal.vdb",
-        "inactive_values.vdb",
-        "density_half_zip.vdb",
-    ] {
+    for name in ["big_shell.vdb", "tiles_internal.vdb", "inactive_values.vdb", "density_half_zip.vdb"] {
         let file = niebla_volume::VdbFile::open(common::vdb_dir().join(name)).unwrap();
         let g = file.read_float_grid("density").unwrap();
         let m = MajorantGrid::from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
-        assert!(
-            m.values().len() <= MajorantGrid::DEFAULT_MAX_CELLS,
-            "{name}: {:?}",
-            m.res()
-        );
+        assert!(m.values().len() <= MajorantGrid::DEFAULT_MAX_CELLS, "{name}: {:?}", m.res());
         check_segments(&mut rng, &m, &|p| g.lookup_index(p));
         // Points near stored leaves, where the density is non-zero.
         for leaf in g.leaves().iter().take(500) {
             let p = [0, 1, 2].map(|a| leaf.origin[a] as f32 + rng.range(-1.5, 9.5));
             let v = g.lookup_index(p);
             for c in cells_containing(&m, p) {
-                assert!(
-                    bounded(v, m.value(c[0], c[1], c[2])),
-                    "{name}: {v} at {p:?}"
-                );
+                assert!(bounded(v, m.value(c[0], c[1], c[2])), "{name}: {v} at {p:?}");
             }
         }
     }

@@ -34,28 +34,16 @@ fn missing_grid_name_lists_the_available_grids() {
     let err = file.read_float_grid("flame").unwrap_err();
     let message = err.to_string();
     match err {
-        VolumeError::GridNotFound {
-            name,
-            available,
-            path: p,
-        } => {
+        VolumeError::GridNotFound { name, available, path: p } => {
             assert_eq!(name, "flame");
             assert_eq!(available, ["density", "temperature"]);
             assert_eq!(p, path);
         }
         e => panic!("expected GridNotFound, got {e:?}"),
     }
-    assert!(
-        message.contains("flame") && message.contains("temperature"),
-        "{message}"
-    );
+    assert!(message.contains("flame") && message.contains("temperature"), "{message}");
     // Both real grids read.
-    assert_eq!(
-        file.read_float_grid("temperature")
-            .unwrap()
-            .active_voxel_count(),
-        4
-    );
+    assert_eq!(file.read_float_grid("temperature").unwrap().active_voxel_count(), 4);
 }
 
 #[test]
@@ -69,14 +57,8 @@ fn vector_and_bool_grids_are_type_errors_naming_grid_and_type() {
         let f = VdbFile::open(common::vdb_dir().join(file)).unwrap();
         let err = f.read_float_grid(grid).unwrap_err();
         let message = err.to_string();
-        assert!(
-            matches!(err, VolumeError::UnsupportedGridType { .. }),
-            "{file}: {err:?}"
-        );
-        assert!(
-            message.contains(grid) && message.contains(ty) && message.contains(file),
-            "{message}"
-        );
+        assert!(matches!(err, VolumeError::UnsupportedGridType { .. }), "{file}: {err:?}");
+        assert!(message.contains(grid) && message.contains(ty) && message.contains(file), "{message}");
     }
 }
 
@@ -85,14 +67,8 @@ fn non_vdb_and_missing_files_are_errors() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"));
     let text = dir.join("not_a_vdb.vdb");
     std::fs::write(&text, "this is a text file, not a volume\n").unwrap();
-    assert!(matches!(
-        VdbFile::open(&text),
-        Err(VolumeError::WrongFormat { .. })
-    ));
-    assert!(matches!(
-        VdbFile::from_bytes(Vec::new(), "empty.vdb"),
-        Err(VolumeError::WrongFormat { .. })
-    ));
+    assert!(matches!(VdbFile::open(&text), Err(VolumeError::WrongFormat { .. })));
+    assert!(matches!(VdbFile::from_bytes(Vec::new(), "empty.vdb"), Err(VolumeError::WrongFormat { .. })));
     let err = VdbFile::open(dir.join("no_such_file.vdb")).unwrap_err();
     assert!(matches!(err, VolumeError::Io { .. }));
     assert!(err.to_string().contains("no_such_file.vdb"));
@@ -100,23 +76,14 @@ fn non_vdb_and_missing_files_are_errors() {
 
 #[test]
 fn truncated_files_are_errors_at_every_offset() {
-    for name in [
-        "density_blosc.vdb",
-        "multi_density_temperature.vdb",
-        "density_half_zip.vdb",
-        "tiles_root.vdb",
-    ] {
+    for name in ["density_blosc.vdb", "multi_density_temperature.vdb", "density_half_zip.vdb", "tiles_root.vdb"] {
         let data = bytes(name);
         let mut offsets: Vec<usize> = (0..data.len().min(1500)).collect();
         offsets.extend((1500..data.len()).step_by(97));
         offsets.extend(data.len().saturating_sub(64)..data.len());
         for n in offsets {
             let result = read_all(data[..n].to_vec());
-            assert!(
-                result.is_err(),
-                "{name} cut at {n} of {} read fine",
-                data.len()
-            );
+            assert!(result.is_err(), "{name} cut at {n} of {} read fine", data.len());
         }
     }
 }
@@ -126,10 +93,7 @@ fn truncated_files_are_errors_at_every_offset() {
 /// than at the descriptor check.
 fn cut_inside_last_grid(data: &[u8], n: usize) -> Vec<u8> {
     let needle = (data.len() as i64).to_le_bytes();
-    let at = data
-        .windows(8)
-        .rposition(|w| w == needle)
-        .expect("end offset in the header");
+    let at = data.windows(8).rposition(|w| w == needle).expect("end offset in the header");
     let mut out = data[..n].to_vec();
     if at + 8 <= n {
         out[at..at + 8].copy_from_slice(&(n as i64).to_le_bytes());
@@ -152,16 +116,10 @@ fn grids_cut_short_are_errors_inside_the_tree_reader() {
         let data = bytes(name);
         let step = (data.len() / 3000).max(1);
         let mut tested = 0;
-        for n in (200..data.len())
-            .step_by(step)
-            .chain(data.len() - 40..data.len())
-        {
+        for n in (200..data.len()).step_by(step).chain(data.len() - 40..data.len()) {
             let cut = cut_inside_last_grid(&data, n);
             if let Ok(leaves) = read_all(cut) {
-                panic!(
-                    "{name} cut at {n} of {} read {leaves} leaves without error",
-                    data.len()
-                );
+                panic!("{name} cut at {n} of {} read {leaves} leaves without error", data.len());
             }
             tested += 1;
         }
@@ -172,12 +130,7 @@ fn grids_cut_short_are_errors_inside_the_tree_reader() {
 #[test]
 fn corrupted_bytes_never_panic() {
     let mut rng = Rng::new(7);
-    for name in [
-        "density_blosc.vdb",
-        "density_zip.vdb",
-        "density_half_none.vdb",
-        "tiles_internal.vdb",
-    ] {
+    for name in ["density_blosc.vdb", "density_zip.vdb", "density_half_none.vdb", "tiles_internal.vdb"] {
         let data = bytes(name);
         let (mut ok, mut err) = (0, 0);
         for _ in 0..600 {

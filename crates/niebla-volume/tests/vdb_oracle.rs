@@ -13,20 +13,11 @@ use serde_json::Value;
 const EXPECTED_FILES: usize = 29;
 
 fn f64s(v: &Value) -> Vec<f64> {
-    v.as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_f64().expect("number"))
-        .collect()
+    v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
 }
 
 fn i32x3(v: &Value) -> [i32; 3] {
-    let a: Vec<i32> = v
-        .as_array()
-        .expect("array")
-        .iter()
-        .map(|x| x.as_i64().unwrap() as i32)
-        .collect();
+    let a: Vec<i32> = v.as_array().expect("array").iter().map(|x| x.as_i64().unwrap() as i32).collect();
     [a[0], a[1], a[2]]
 }
 
@@ -39,38 +30,20 @@ fn check_scalar_grid(file: &str, grid: &SparseGrid, exp: &Value) -> Vec<String> 
         }
     };
     let bg = exp["background"].as_f64().unwrap();
-    check(
-        grid.background() as f64 == bg,
-        format!("background {} vs {bg}", grid.background()),
-    );
+    check(grid.background() as f64 == bg, format!("background {} vs {bg}", grid.background()));
 
     let count = exp["active_voxel_count"].as_u64().unwrap();
-    check(
-        grid.active_voxel_count() == count,
-        format!("active count {} vs {count}", grid.active_voxel_count()),
-    );
+    check(grid.active_voxel_count() == count, format!("active count {} vs {count}", grid.active_voxel_count()));
     let sum = exp["active_value_sum"].as_f64().unwrap();
     let got = grid.active_value_sum();
-    check(
-        (got - sum).abs() <= 1e-9 * sum.abs().max(1.0),
-        format!("active sum {got} vs {sum}"),
-    );
+    check((got - sum).abs() <= 1e-9 * sum.abs().max(1.0), format!("active sum {got} vs {sum}"));
     let leaves = exp["leaf_count"].as_u64().unwrap() as usize;
-    check(
-        grid.leaf_count() == leaves,
-        format!("leaf count {} vs {leaves}", grid.leaf_count()),
-    );
+    check(grid.leaf_count() == leaves, format!("leaf count {} vs {leaves}", grid.leaf_count()));
 
     let tiles = grid.active_tile_counts();
     for (depth, &count) in tiles.iter().enumerate() {
-        let want = exp["active_tiles"]
-            .get(format!("depth{depth}"))
-            .and_then(Value::as_u64)
-            .unwrap_or(0);
-        check(
-            count as u64 == want,
-            format!("active tiles at depth {depth}: {count} vs {want}"),
-        );
+        let want = exp["active_tiles"].get(format!("depth{depth}")).and_then(Value::as_u64).unwrap_or(0);
+        check(count as u64 == want, format!("active tiles at depth {depth}: {count} vs {want}"));
     }
 
     let bbox = grid.active_bounds_index();
@@ -78,19 +51,13 @@ fn check_scalar_grid(file: &str, grid: &SparseGrid, exp: &Value) -> Vec<String> 
         Value::Null => check(bbox.is_none(), format!("active bbox {bbox:?} vs none")),
         b => {
             let want = (i32x3(&b[0]), i32x3(&b[1]));
-            check(
-                bbox == Some(want),
-                format!("active bbox {bbox:?} vs {want:?}"),
-            );
+            check(bbox == Some(want), format!("active bbox {bbox:?} vs {want:?}"));
         }
     }
 
     // Transform: map type, origin and the images of the index axes.
     let t = &exp["transform"];
-    check(
-        grid.map_type() == t["map"].as_str().unwrap(),
-        format!("map {} vs {}", grid.map_type(), t["map"]),
-    );
+    check(grid.map_type() == t["map"].as_str().unwrap(), format!("map {} vs {}", grid.map_type(), t["map"]));
     let m = grid.transform();
     let origin = f64s(&t["translation"]);
     for a in 0..3 {
@@ -100,10 +67,7 @@ fn check_scalar_grid(file: &str, grid: &SparseGrid, exp: &Value) -> Vec<String> 
         );
         let axis = f64s(&t["index_axes_in_world"][a]);
         for c in 0..3 {
-            check(
-                (m.axis(a)[c] - axis[c]).abs() < 1e-12,
-                format!("axis {a}: {:?} vs {axis:?}", m.axis(a)),
-            );
+            check((m.axis(a)[c] - axis[c]).abs() < 1e-12, format!("axis {a}: {:?} vs {axis:?}", m.axis(a)));
         }
     }
 
@@ -114,37 +78,20 @@ fn check_scalar_grid(file: &str, grid: &SparseGrid, exp: &Value) -> Vec<String> 
         let want = p["value"].as_f64().unwrap() as f32;
         let active = p["active"].as_bool().unwrap();
         let (value, on) = grid.probe(ijk);
-        check(
-            value == want && on == active,
-            format!("probe {ijk:?}: ({value}, {on}) vs ({want}, {active})"),
-        );
-        check(
-            grid.value(ijk) == want,
-            format!("value {ijk:?}: {} vs {want}", grid.value(ijk)),
-        );
+        check(value == want && on == active, format!("probe {ijk:?}: ({value}, {on}) vs ({want}, {active})"));
+        check(grid.value(ijk) == want, format!("value {ijk:?}: {} vs {want}", grid.value(ijk)));
 
         let world: Vec<f64> = f64s(&p["world"]);
-        let index = grid
-            .inverse_transform()
-            .transform_point([world[0], world[1], world[2]]);
+        let index = grid.inverse_transform().transform_point([world[0], world[1], world[2]]);
         let back = index.map(|v| v.round());
         let exact = (0..3).all(|a| (index[a] - back[a]).abs() < 1e-6 && back[a] as i32 == ijk[a]);
-        check(
-            exact,
-            format!("world {world:?} maps to index {index:?}, not {ijk:?}"),
-        );
+        check(exact, format!("world {world:?} maps to index {index:?}, not {ijk:?}"));
         let at_center = grid.lookup_index(back.map(|v| v as f32));
-        check(
-            at_center == want,
-            format!("lookup_index at {ijk:?}: {at_center} vs {want}"),
-        );
+        check(at_center == want, format!("lookup_index at {ijk:?}: {at_center} vs {want}"));
         // From f32 world coordinates the index lands within ~1e-3 voxel.
         let w32 = [world[0] as f32, world[1] as f32, world[2] as f32];
         let looked = grid.lookup_world(w32);
-        check(
-            (looked - want).abs() <= 1e-2,
-            format!("lookup_world {w32:?}: {looked} vs {want}"),
-        );
+        check((looked - want).abs() <= 1e-2, format!("lookup_world {w32:?}: {looked} vs {want}"));
     }
     errors
 }
@@ -178,10 +125,7 @@ fn every_generated_vdb_matches_the_reference_library() {
         let exp_grids = fexp["grids"].as_array().unwrap();
         // expected.json lists grids sorted by name; the file keeps its order.
         let mut names: Vec<String> = file.grids().iter().map(|g| g.unique_name.clone()).collect();
-        let mut want: Vec<String> = exp_grids
-            .iter()
-            .map(|g| g["name_in_file"].as_str().unwrap().to_string())
-            .collect();
+        let mut want: Vec<String> = exp_grids.iter().map(|g| g["name_in_file"].as_str().unwrap().to_string()).collect();
         names.sort();
         want.sort();
         if names != want {
@@ -192,10 +136,7 @@ fn every_generated_vdb_matches_the_reference_library() {
             let info = file.grid(unique).expect("grid listed");
             let type_name = g["file_type_name"].as_str().unwrap();
             if info.file_type_name() != type_name || info.half != g["half"].as_bool().unwrap() {
-                errors.push(format!(
-                    "{name}/{unique}: type {} vs {type_name}",
-                    info.file_type_name()
-                ));
+                errors.push(format!("{name}/{unique}: type {} vs {type_name}", info.file_type_name()));
             }
             match g["value_type"].as_str().unwrap() {
                 "float" | "double" => match file.read_float_grid(unique) {
@@ -206,20 +147,13 @@ fn every_generated_vdb_matches_the_reference_library() {
                     Err(e) => errors.push(format!("{name}/{unique}: {e}")),
                 },
                 other => match file.read_float_grid(unique) {
-                    Err(VolumeError::UnsupportedGridType {
-                        grid, grid_type, ..
-                    }) => {
+                    Err(VolumeError::UnsupportedGridType { grid, grid_type, .. }) => {
                         let message = file.read_float_grid(unique).unwrap_err().to_string();
-                        if grid != unique || grid_type != type_name || !message.contains(type_name)
-                        {
-                            errors.push(format!(
-                                "{name}/{unique}: error names {grid:?} {grid_type:?}"
-                            ));
+                        if grid != unique || grid_type != type_name || !message.contains(type_name) {
+                            errors.push(format!("{name}/{unique}: error names {grid:?} {grid_type:?}"));
                         }
                     }
-                    r => errors.push(format!(
-                        "{name}/{unique} ({other}): expected a type error, got {r:?}"
-                    )),
+                    r => errors.push(format!("{name}/{unique} ({other}): expected a type error, got {r:?}")),
                 },
             }
         }
@@ -227,45 +161,21 @@ fn every_generated_vdb_matches_the_reference_library() {
             files_ok += 1;
         }
     }
-    println!(
-        "{files_ok} of {} files and {grids_read} scalar grids match the reference",
-        files.len()
-    );
-    assert!(
-        errors.is_empty(),
-        "{} mismatches:\n{}",
-        errors.len(),
-        errors.join("\n")
-    );
+    println!("{files_ok} of {} files and {grids_read} scalar grids match the reference", files.len());
+    assert!(errors.is_empty(), "{} mismatches:\n{}", errors.len(), errors.join("\n"));
     assert_eq!(files_ok, EXPECTED_FILES);
 }
 
 #[test]
 fn half_float_grids_hold_the_rounded_values() {
     let dir = common::vdb_dir();
-    let full = VdbFile::open(dir.join("density_blosc.vdb"))
-        .unwrap()
-        .read_float_grid("density")
-        .unwrap();
-    let half = VdbFile::open(dir.join("density_half_blosc.vdb"))
-        .unwrap()
-        .read_float_grid("density")
-        .unwrap();
-    for ijk in [
-        [0, 0, 0],
-        [1000, 2000, 3000],
-        [-300, 200, -4100],
-        [40, 40, 40],
-        [45, 38, 40],
-    ] {
+    let full = VdbFile::open(dir.join("density_blosc.vdb")).unwrap().read_float_grid("density").unwrap();
+    let half = VdbFile::open(dir.join("density_half_blosc.vdb")).unwrap().read_float_grid("density").unwrap();
+    for ijk in [[0, 0, 0], [1000, 2000, 3000], [-300, 200, -4100], [40, 40, 40], [45, 38, 40]] {
         let rounded = half::f16::from_f32(full.value(ijk)).to_f32();
         assert_eq!(half.value(ijk), rounded, "at {ijk:?}");
     }
-    assert_ne!(
-        half.value([1000, 2000, 3000]),
-        0.3f32,
-        "0.3 is not a half float"
-    );
+    assert_ne!(half.value([1000, 2000, 3000]), 0.3f32, "0.3 is not a half float");
 }
 
 #[test]
@@ -281,25 +191,10 @@ fn duplicate_names_pick_the_first_grid_unless_the_unique_name_is_given() {
 #[test]
 fn codec_variants_decode_to_identical_grids() {
     let dir = common::vdb_dir();
-    let read = |f: &str| {
-        VdbFile::open(dir.join(f))
-            .unwrap()
-            .read_float_grid("density")
-            .unwrap()
-    };
+    let read = |f: &str| VdbFile::open(dir.join(f)).unwrap().read_float_grid("density").unwrap();
     for family in [
-        [
-            "density_blosc.vdb",
-            "density_zip.vdb",
-            "density_none.vdb",
-            "density_active.vdb",
-        ],
-        [
-            "big_ball_blosc.vdb",
-            "big_ball_zip.vdb",
-            "big_ball_none.vdb",
-            "big_ball_blosc.vdb",
-        ],
+        ["density_blosc.vdb", "density_zip.vdb", "density_none.vdb", "density_active.vdb"],
+        ["big_ball_blosc.vdb", "big_ball_zip.vdb", "big_ball_none.vdb", "big_ball_blosc.vdb"],
     ] {
         let reference = read(family[0]);
         for other in &family[1..] {
@@ -312,12 +207,7 @@ fn codec_variants_decode_to_identical_grids() {
                 // ones must agree bit for bit.
                 for n in 0..512 {
                     if a.is_active(n) {
-                        assert_eq!(
-                            a.values[n].to_bits(),
-                            b.values[n].to_bits(),
-                            "{other} {:?} {n}",
-                            a.origin
-                        );
+                        assert_eq!(a.values[n].to_bits(), b.values[n].to_bits(), "{other} {:?} {n}", a.origin);
                     }
                 }
             }

@@ -32,10 +32,7 @@ fn u32_at(b: &[u8], at: usize) -> Result<u32, String> {
 /// wrap with the file and offset.
 pub(crate) fn decompress(src: &[u8], dest: &mut [u8]) -> Result<(), String> {
     if src.len() < HEADER_SIZE {
-        return Err(format!(
-            "blosc frame of {} bytes is shorter than its header",
-            src.len()
-        ));
+        return Err(format!("blosc frame of {} bytes is shorter than its header", src.len()));
     }
     let (version, flags, typesize) = (src[0], src[2], src[3] as usize);
     let nbytes = u32_at(src, 4)? as usize;
@@ -45,16 +42,10 @@ pub(crate) fn decompress(src: &[u8], dest: &mut [u8]) -> Result<(), String> {
         return Err(format!("blosc format version {version} (expected 1 to 3)"));
     }
     if nbytes != dest.len() {
-        return Err(format!(
-            "blosc frame holds {nbytes} bytes, expected {}",
-            dest.len()
-        ));
+        return Err(format!("blosc frame holds {nbytes} bytes, expected {}", dest.len()));
     }
     if cbytes > src.len() || cbytes < HEADER_SIZE {
-        return Err(format!(
-            "blosc frame claims {cbytes} bytes, {} available",
-            src.len()
-        ));
+        return Err(format!("blosc frame claims {cbytes} bytes, {} available", src.len()));
     }
     let src = &src[..cbytes];
     if nbytes == 0 {
@@ -71,9 +62,7 @@ pub(crate) fn decompress(src: &[u8], dest: &mut [u8]) -> Result<(), String> {
         return Err("blosc bit shuffle is not supported".to_string());
     }
     if blocksize == 0 || typesize == 0 {
-        return Err(format!(
-            "blosc block size {blocksize}, type size {typesize}"
-        ));
+        return Err(format!("blosc block size {blocksize}, type size {typesize}"));
     }
     let nblocks = nbytes.div_ceil(blocksize);
     if HEADER_SIZE + 4 * nblocks > src.len() {
@@ -81,11 +70,7 @@ pub(crate) fn decompress(src: &[u8], dest: &mut [u8]) -> Result<(), String> {
     }
     let codec = flags >> 5;
     let shuffle = flags & FLAG_SHUFFLE != 0 && typesize > 1;
-    let mut tmp = if shuffle {
-        vec![0u8; blocksize]
-    } else {
-        Vec::new()
-    };
+    let mut tmp = if shuffle { vec![0u8; blocksize] } else { Vec::new() };
     for j in 0..nblocks {
         let start = u32_at(src, HEADER_SIZE + 4 * j)? as usize;
         let block_start = j * blocksize;
@@ -104,30 +89,17 @@ pub(crate) fn decompress(src: &[u8], dest: &mut [u8]) -> Result<(), String> {
         };
         decode_block(src, start, target, splits, codec)?;
         if shuffle {
-            unshuffle(
-                typesize,
-                &tmp[..bsize],
-                &mut dest[block_start..block_start + bsize],
-            );
+            unshuffle(typesize, &tmp[..bsize], &mut dest[block_start..block_start + bsize]);
         }
     }
     Ok(())
 }
 
 /// Decodes the `splits` codec streams of one block starting at `start`.
-fn decode_block(
-    src: &[u8],
-    start: usize,
-    out: &mut [u8],
-    splits: usize,
-    codec: u8,
-) -> Result<(), String> {
+fn decode_block(src: &[u8], start: usize, out: &mut [u8], splits: usize, codec: u8) -> Result<(), String> {
     let neblock = out.len() / splits;
     if neblock * splits != out.len() {
-        return Err(format!(
-            "blosc block of {} bytes cannot split in {splits}",
-            out.len()
-        ));
+        return Err(format!("blosc block of {} bytes cannot split in {splits}", out.len()));
     }
     let mut pos = start;
     for part in out.chunks_mut(neblock) {
@@ -137,9 +109,8 @@ fn decode_block(
             return Err(format!("negative blosc split size {csize}"));
         }
         let csize = csize as usize;
-        let input = src
-            .get(pos..pos + csize)
-            .ok_or_else(|| format!("blosc split of {csize} bytes runs past the frame"))?;
+        let input =
+            src.get(pos..pos + csize).ok_or_else(|| format!("blosc split of {csize} bytes runs past the frame"))?;
         pos += csize;
         if csize == neblock {
             part.copy_from_slice(input);
@@ -160,9 +131,7 @@ fn decode_block(
             c => return Err(format!("unknown blosc codec {c}")),
         };
         if written != neblock {
-            return Err(format!(
-                "blosc split decoded to {written} bytes, expected {neblock}"
-            ));
+            return Err(format!("blosc split decoded to {written} bytes, expected {neblock}"));
         }
     }
     Ok(())
@@ -213,10 +182,7 @@ mod tests {
         let f = frame(&values);
         let mut out = vec![0u8; 2048];
         decompress(&f, &mut out).unwrap();
-        let back: Vec<f32> = out
-            .chunks(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect();
+        let back: Vec<f32> = out.chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         assert_eq!(back, values);
     }
 
@@ -224,9 +190,7 @@ mod tests {
     /// plane, compressed with zlib: the paths OpenVDB 10 does not use.
     #[test]
     fn split_zlib_frames_with_leftover_blocks_decode() {
-        let raw: Vec<u8> = (0..3000u32)
-            .flat_map(|i| ((i % 50) as f32).to_le_bytes())
-            .collect();
+        let raw: Vec<u8> = (0..3000u32).flat_map(|i| ((i % 50) as f32).to_le_bytes()).collect();
         let (typesize, blocksize) = (4usize, 8192usize);
         let mut blocks = Vec::new();
         for (j, block) in raw.chunks(blocksize).enumerate() {

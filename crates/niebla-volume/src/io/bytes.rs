@@ -34,28 +34,17 @@ impl<'a> ByteReader<'a> {
 
     /// A [`VolumeError::Truncated`] at the current offset.
     pub(crate) fn truncated(&self, what: &str) -> VolumeError {
-        VolumeError::Truncated {
-            path: self.path.to_path_buf(),
-            offset: self.pos as u64,
-            what: what.to_string(),
-        }
+        VolumeError::Truncated { path: self.path.to_path_buf(), offset: self.pos as u64, what: what.to_string() }
     }
 
     /// A [`VolumeError::Corrupt`] at byte `offset`.
     pub(crate) fn corrupt_at(&self, offset: usize, what: impl Into<String>) -> VolumeError {
-        VolumeError::Corrupt {
-            path: self.path.to_path_buf(),
-            offset: offset as u64,
-            what: what.into(),
-        }
+        VolumeError::Corrupt { path: self.path.to_path_buf(), offset: offset as u64, what: what.into() }
     }
 
     /// A [`VolumeError::Unsupported`] for this file.
     pub(crate) fn unsupported(&self, what: impl Into<String>) -> VolumeError {
-        VolumeError::Unsupported {
-            path: self.path.to_path_buf(),
-            what: what.into(),
-        }
+        VolumeError::Unsupported { path: self.path.to_path_buf(), what: what.into() }
     }
 
     /// The next `n` bytes.
@@ -129,10 +118,7 @@ impl<'a> ByteReader<'a> {
 
 /// Reads a whole file, mapping the I/O error to [`VolumeError::Io`].
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, VolumeError> {
-    std::fs::read(path).map_err(|source| VolumeError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    std::fs::read(path).map_err(|source| VolumeError::Io { path: path.to_path_buf(), source })
 }
 
 #[cfg(test)]
@@ -144,10 +130,7 @@ mod tests {
         let data = [1u8, 0, 0, 0, 5, 0];
         let mut r = ByteReader::new(&data, 0, Path::new("x"));
         assert_eq!(r.u32("a").unwrap(), 1);
-        assert!(matches!(
-            r.u32("b"),
-            Err(VolumeError::Truncated { offset: 4, .. })
-        ));
+        assert!(matches!(r.u32("b"), Err(VolumeError::Truncated { offset: 4, .. })));
         assert_eq!(r.u16("c").unwrap(), 5);
         assert_eq!(r.remaining(), 0);
     }
@@ -156,9 +139,6 @@ mod tests {
     fn string_length_is_checked_before_allocating() {
         let data = [0xff, 0xff, 0xff, 0x7f, b'a'];
         let mut r = ByteReader::new(&data, 0, Path::new("x"));
-        assert!(matches!(
-            r.string("name"),
-            Err(VolumeError::Truncated { offset: 0, .. })
-        ));
+        assert!(matches!(r.string("name"), Err(VolumeError::Truncated { offset: 0, .. })));
     }
 }

@@ -48,55 +48,41 @@ pub(crate) fn parse_npy(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
     let header_pos = r.pos();
     let header = r.bytes(header_len, "array header")?;
     let header = String::from_utf8_lossy(header);
-    let corrupt = |what: String| VolumeError::Corrupt {
-        path: path.to_path_buf(),
-        offset: header_pos as u64,
-        what,
-    };
+    let corrupt = |what: String| VolumeError::Corrupt { path: path.to_path_buf(), offset: header_pos as u64, what };
 
-    let descr =
-        dict_value(&header, "descr").ok_or_else(|| corrupt(format!("no 'descr' in {header:?}")))?;
+    let descr = dict_value(&header, "descr").ok_or_else(|| corrupt(format!("no 'descr' in {header:?}")))?;
     let descr = descr.trim_matches(|c| c == '\'' || c == '"');
     let elem = match descr {
         "<f4" => 4,
         "<f8" => 8,
         other => {
-            return Err(r.unsupported(format!(
-                "dtype {other:?} (expected little-endian float32 '<f4' or float64 '<f8')"
-            )))
+            return Err(
+                r.unsupported(format!("dtype {other:?} (expected little-endian float32 '<f4' or float64 '<f8')"))
+            )
         }
     };
-    let fortran = dict_value(&header, "fortran_order")
-        .ok_or_else(|| corrupt(format!("no 'fortran_order' in {header:?}")))?;
+    let fortran =
+        dict_value(&header, "fortran_order").ok_or_else(|| corrupt(format!("no 'fortran_order' in {header:?}")))?;
     if fortran.trim() != "False" {
         return Err(r.unsupported("Fortran-order arrays (save with C order)"));
     }
-    let shape =
-        parse_shape(&header).ok_or_else(|| corrupt(format!("unreadable 'shape' in {header:?}")))?;
+    let shape = parse_shape(&header).ok_or_else(|| corrupt(format!("unreadable 'shape' in {header:?}")))?;
     let rgb = match shape.len() {
         3 => false,
         4 if shape[3] == 3 => true,
-        _ => {
-            return Err(r.unsupported(format!(
-                "array shape {shape:?} (expected (nz, ny, nx) or (nz, ny, nx, 3))"
-            )))
-        }
+        _ => return Err(r.unsupported(format!("array shape {shape:?} (expected (nz, ny, nx) or (nz, ny, nx, 3))"))),
     };
     if shape[..3].contains(&0) {
         return Err(corrupt(format!("empty array shape {shape:?}")));
     }
-    let count = shape
-        .iter()
-        .try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
+    let count = shape.iter().try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
     let bytes = count.and_then(|c| c.checked_mul(elem as u64));
     let Some(bytes) = bytes.filter(|&b| b <= r.remaining() as u64) else {
         return Err(r.truncated(&format!("array data of shape {shape:?}")));
     };
     let raw = r.bytes(bytes as usize, "array data")?;
     let values: Vec<f32> = if elem == 4 {
-        raw.chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()
+        raw.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()
     } else {
         raw.chunks_exact(8)
             .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) as f32)
@@ -114,9 +100,7 @@ pub(crate) fn parse_npy(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
 
 /// The text after `'key':` up to the next top-level comma or closing brace.
 fn dict_value<'a>(header: &'a str, key: &str) -> Option<&'a str> {
-    let start = header
-        .find(&format!("'{key}'"))
-        .or_else(|| header.find(&format!("\"{key}\"")))?;
+    let start = header.find(&format!("'{key}'")).or_else(|| header.find(&format!("\"{key}\"")))?;
     let rest = &header[start + key.len() + 2..];
     let rest = rest.trim_start().strip_prefix(':')?.trim_start();
     let mut depth = 0;
@@ -135,12 +119,7 @@ fn dict_value<'a>(header: &'a str, key: &str) -> Option<&'a str> {
 fn parse_shape(header: &str) -> Option<Vec<usize>> {
     let v = dict_value(header, "shape")?;
     let inner = v.strip_prefix('(')?.strip_suffix(')')?;
-    inner
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| s.trim_end_matches('L').parse().ok())
-        .collect()
+    inner.split(',').map(str::trim).filter(|s| !s.is_empty()).map(|s| s.trim_end_matches('L').parse().ok()).collect()
 }
 
 #[cfg(test)]

@@ -41,16 +41,10 @@ pub(crate) fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
     }
     let encoding = r.i32("encoding")?;
     if encoding != 1 {
-        return Err(r.unsupported(format!(
-            "VOL encoding {encoding} (only 1, float32, is read)"
-        )));
+        return Err(r.unsupported(format!("VOL encoding {encoding} (only 1, float32, is read)")));
     }
     let dims_pos = r.pos();
-    let dims = [
-        r.i32("x resolution")?,
-        r.i32("y resolution")?,
-        r.i32("z resolution")?,
-    ];
+    let dims = [r.i32("x resolution")?, r.i32("y resolution")?, r.i32("z resolution")?];
     let channels = r.i32("channel count")?;
     if dims.iter().any(|&n| n <= 0) {
         return Err(r.corrupt_at(dims_pos, format!("resolution {dims:?} is not positive")));
@@ -66,10 +60,7 @@ pub(crate) fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
     let count = (dims[0] as u64) * (dims[1] as u64) * (dims[2] as u64) * channels as u64;
     let expected = count * 4;
     if expected > r.remaining() as u64 {
-        return Err(r.truncated(&format!(
-            "{count} float32 values ({}x{}x{}x{channels})",
-            dims[0], dims[1], dims[2]
-        )));
+        return Err(r.truncated(&format!("{count} float32 values ({}x{}x{}x{channels})", dims[0], dims[1], dims[2])));
     }
     let values: Vec<f32> = r
         .bytes(expected as usize, "values")?
@@ -77,11 +68,7 @@ pub(crate) fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
         .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
         .collect();
     let (lo, hi) = ([bbox[0], bbox[1], bbox[2]], [bbox[3], bbox[4], bbox[5]]);
-    let wrap = |e: VolumeError| VolumeError::Corrupt {
-        path: path.to_path_buf(),
-        offset: 24,
-        what: e.to_string(),
-    };
+    let wrap = |e: VolumeError| VolumeError::Corrupt { path: path.to_path_buf(), offset: 24, what: e.to_string() };
     Ok(if channels == 1 {
         DenseVolume::Scalar(DenseGrid::new(dims, values, lo, hi).map_err(wrap)?)
     } else {

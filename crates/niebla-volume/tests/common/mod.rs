@@ -53,11 +53,7 @@ fn script_path() -> PathBuf {
 fn python_with_openvdb() -> Option<PathBuf> {
     let candidates = ["/usr/bin/python3", "python3"];
     candidates.iter().map(PathBuf::from).find(|py| {
-        Command::new(py)
-            .args(["-c", "import pyopenvdb, numpy"])
-            .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false)
+        Command::new(py).args(["-c", "import pyopenvdb, numpy"]).output().map(|o| o.status.success()).unwrap_or(false)
     })
 }
 
@@ -73,11 +69,7 @@ pub fn vdb_dir() -> &'static Path {
             return dir;
         }
         let script = script_path();
-        assert!(
-            script.exists(),
-            "VDB generator not found at {} (set NIEBLA_VDB_SCRIPT)",
-            script.display()
-        );
+        assert!(script.exists(), "VDB generator not found at {} (set NIEBLA_VDB_SCRIPT)", script.display());
         let python = python_with_openvdb().unwrap_or_else(|| {
             panic!(
                 "no Python with the OpenVDB bindings: install them with \
@@ -95,11 +87,7 @@ pub fn vdb_dir() -> &'static Path {
             .env("OPENVDB_DISABLE_DELAYED_LOAD", "1")
             .output()
             .expect("run make_test_vdbs.py");
-        assert!(
-            out.status.success(),
-            "make_test_vdbs.py failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.status.success(), "make_test_vdbs.py failed:\n{}", String::from_utf8_lossy(&out.stderr));
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
             !stderr.contains("vdb_tool not found"),
@@ -108,11 +96,7 @@ pub fn vdb_dir() -> &'static Path {
         );
         if std::fs::rename(&scratch, &dir).is_err() {
             // Another test process finished first: use its (complete) set.
-            assert!(
-                dir.join("expected.json").exists(),
-                "cannot move VDB files to {}",
-                dir.display()
-            );
+            assert!(dir.join("expected.json").exists(), "cannot move VDB files to {}", dir.display());
             let _ = std::fs::remove_dir_all(&scratch);
         }
         dir
@@ -121,7 +105,6 @@ pub fn vdb_dir() -> &'static Path {
 
 /// Reads `expected.json`.
 pub fn expected() -> serde_json::Value {
-    let text =
-        std::fs::read_to_string(vdb_dir().join("expected.json")).expect("read expected.json");
+    let text = std::fs::read_to_string(vdb_dir().join("expected.json")).expect("read expected.json");
     serde_json::from_str(&text).expect("parse expected.json")
 }

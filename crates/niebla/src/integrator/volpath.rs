@@ -4,7 +4,8 @@
 //! events; medium emission at every tentative collision; next-event
 //! estimation at every scattering vertex with shadow transmittance by ratio
 //! tracking; MIS between phase or BSDF sampling and light sampling; spectral
-//! MIS over the RGB channels with a hero channel chosen per path; Russian
+//! MIS over the RGB channels with a hero channel chosen per path (stratified
+//! over the pixel's samples); Russian
 //! roulette on throughput.
 //!
 //! Path state (pbrt-v4's notation): `beta` is the throughput divided by the
@@ -70,24 +71,17 @@ impl Scatter<'_> {
 }
 
 impl Integrator for VolPathIntegrator {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        mut ray: Ray,
-        mut medium: Option<MediumId>,
-        sampler: &mut PixelSampler,
-    ) -> Rgb {
-        let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
+    fn radiance(&self, scene: &Scene, mut ray: Ray, mut medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        // The hero channel cycles over the pixel's samples (stratified), so the
+        // discrete choice adds no variance over each group of three samples.
+        let hero = sampler.stratified_choice(3) as usize;
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut r_u = Rgb::ONE;
         let mut r_l = Rgb::ONE;
         let mut depth = 0u32;
         let mut specular_bounce = false;
-        let mut previous = PreviousVertex {
-            p: ray.o,
-            normal: None,
-        };
+        let mut previous = PreviousVertex { p: ray.o, normal: None };
         let mut t_min = 0.0f32;
         let mut crossings = 0u32;
 
@@ -136,27 +130,14 @@ impl Integrator for VolPathIntegrator {
                             return false;
                         }
                         let phase = m.phase();
-                        l += sample_ld(
-                            scene,
-                            c.p,
-                            wo,
-                            Scatter::Phase(phase),
-                            Some(id),
-                            hero,
-                            beta,
-                            r_u,
-                            sampler,
-                        );
+                        l += sample_ld(scene, c.p, wo, Scatter::Phase(phase), Some(id), hero, beta, r_u, sampler);
                         let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
                             terminated = true;
                             return false;
                         };
                         beta *= ps.value / ps.pdf;
                         r_l = r_u / ps.pdf;
-                        previous = PreviousVertex {
-                            p: c.p,
-                            normal: None,
-                        };
+                        previous = PreviousVertex { p: c.p, normal: None };
                         specular_bounce = false;
                         scattered = Some(Ray::new(c.p, ps.wi));
                         return false;
@@ -189,7 +170,14 @@ impl Integrator for VolPathIntegrator {
                 }
                 beta *= t_maj / h;
                 r_u *= t_maj / h;
-                r_l *= t_maj / h;
+                // Light sampling crosses homogeneous segments with exact
+                // transmittance (no sampling pdf), so there its path pdf gains
+                // no transmittance factor; elsewhere ratio tracking's does.
+                if m.as_homogeneous().is_some() {
+                    r_l /= h;
+                } else {
+                    r_l *= t_maj / h;
+                }
             }
 
             // Escaped: environment lights, MIS against light sampling.
@@ -203,8 +191,7 @@ impl Integrator for VolPathIntegrator {
                         l += beta * le / r_u.average();
                     } else {
                         let pmf = 1.0 / scene.lights.len() as f32;
-                        let r_l_env =
-                            r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
                         l += beta * le / (r_u + r_l_env).average();
                     }
                 }
@@ -230,23 +217,9 @@ impl Integrator for VolPathIntegrator {
             }
             depth += 1;
             let wo = -ray.d;
-            let n = if hit.surface.n.dot(wo) < 0.0 {
-                -hit.surface.n
-            } else {
-                hit.surface.n
-            };
+            let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
-            l += sample_ld(
-                scene,
-                p,
-                wo,
-                Scatter::Surface(&object.bsdf, n),
-                medium,
-                hero,
-                beta,
-                r_u,
-                sampler,
-            );
+            l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, sampler);
             match object.bsdf {
                 Bsdf::Diffuse { reflectance } => {
                     let local = sample_cosine_hemisphere(sampler.next_2d());
@@ -363,15 +336,16 @@ fn shadow_transmittance(
         }
         let t_end = hit.map_or(remaining, |h| h.surface.t);
         if let Some(id) = medium {
-            let t_maj = sample_t_maj(
-                scene.medium(id),
-                &ray,
-                t_end,
-                hero,
-                sampler,
-                |c, sampler| {
-                    let sigma_n =
-                        (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).map(|x| x.max(0.0));
+            let m = scene.medium(id);
+            if let Some(homogeneous) = m.as_homogeneous() {
+                // Exact transmittance: the light-sampling path pdf is unchanged,
+                // the unidirectional one (free flight passing) gains T per channel.
+                let tr = (homogeneous.sigma_t() * t_end).map(|x| if x.is_nan() { 0.0 } else { x }).exp_neg();
+                t_ray *= tr;
+                r_u *= tr;
+            } else {
+                let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
+                    let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).map(|x| x.max(0.0));
                     let pdf = c.t_maj[hero] * c.sigma_maj[hero];
                     t_ray *= c.t_maj * sigma_n / pdf;
                     r_l *= c.t_maj * c.sigma_maj / pdf;
@@ -386,16 +360,16 @@ fn shadow_transmittance(
                         }
                     }
                     !t_ray.is_black()
-                },
-            );
-            let h = t_maj[hero];
-            if h > 0.0 {
-                t_ray *= t_maj / h;
-                r_l *= t_maj / h;
-                r_u *= t_maj / h;
-            } else if !t_maj.is_black() {
-                // The hero channel cannot pass but others can: the hero-based pdfs are 0.
-                return None;
+                });
+                let h = t_maj[hero];
+                if h > 0.0 {
+                    t_ray *= t_maj / h;
+                    r_l *= t_maj / h;
+                    r_u *= t_maj / h;
+                } else if !t_maj.is_black() {
+                    // The hero channel cannot pass but others can: the hero-based pdfs are 0.
+                    return None;
+                }
             }
         }
         if t_ray.is_black() || !t_ray.is_finite() {

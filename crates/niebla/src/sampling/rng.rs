@@ -23,6 +23,8 @@ pub fn hash_u64(mut z: u64) -> u64 {
 pub struct PixelSampler {
     key: u64,
     dimension: u64,
+    /// Sample index and pixel hash, for choices stratified across samples.
+    stratum: u64,
 }
 
 impl PixelSampler {
@@ -32,15 +34,21 @@ impl PixelSampler {
         let key = hash_u64(
             hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03),
         );
-        PixelSampler { key, dimension: 0 }
+        let stratum = sample_index.wrapping_add(hash_u64(hash_u64(seed) ^ pixel) % 1_000_003);
+        PixelSampler { key, dimension: 0, stratum }
     }
 
     /// A stream keyed by an arbitrary 64-bit value (photon index, test seed, ...).
     pub fn from_key(key: u64) -> PixelSampler {
-        PixelSampler {
-            key: hash_u64(key),
-            dimension: 0,
-        }
+        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key }
+    }
+
+    /// Stratified choice of one of `n` options: consecutive sample indices of a
+    /// pixel cycle through all options (starting at a pixel-dependent offset),
+    /// so that every `n` samples use each option once.
+    #[inline]
+    pub fn stratified_choice(&self, n: u64) -> u64 {
+        self.stratum % n.max(1)
     }
 
     /// Next uniform number in [0, 1).

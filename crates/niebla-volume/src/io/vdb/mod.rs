@@ -99,13 +99,7 @@ impl VdbFile {
     pub fn from_bytes(data: Vec<u8>, path: impl Into<PathBuf>) -> Result<VdbFile, VolumeError> {
         let path = path.into();
         let (version, library_version, grids) = parse_header(&data, &path)?;
-        Ok(VdbFile {
-            path,
-            data,
-            version,
-            library_version,
-            grids,
-        })
+        Ok(VdbFile { path, data, version, library_version, grids })
     }
 
     /// The file's path.
@@ -173,10 +167,7 @@ impl VdbFile {
                 .ok_or_else(|| VolumeError::Corrupt {
                     path: self.path.clone(),
                     offset: info.grid_pos,
-                    what: format!(
-                        "instance parent {parent:?} of grid {:?} is missing",
-                        info.unique_name
-                    ),
+                    what: format!("instance parent {parent:?} of grid {:?} is missing", info.unique_name),
                 })?,
         };
         let (_, _, map_type, affine) = self.grid_reader(info)?;
@@ -185,22 +176,14 @@ impl VdbFile {
         grid.map_type = map_type;
 
         let (mut r, compression, _, _) = self.grid_reader(tree_source)?;
-        let mut codec = ValueCodec {
-            kind,
-            half: info.half,
-            compression,
-            background: 0.0,
-        };
+        let mut codec = ValueCodec { kind, half: info.half, compression, background: 0.0 };
         tree::read_tree(&mut r, &mut codec, &mut grid)?;
         Ok(grid)
     }
 
     /// A reader positioned at the grid's tree, with its compression and
     /// transform.
-    fn grid_reader(
-        &self,
-        info: &VdbGridInfo,
-    ) -> Result<(ByteReader<'_>, u32, String, crate::Affine), VolumeError> {
+    fn grid_reader(&self, info: &VdbGridInfo) -> Result<(ByteReader<'_>, u32, String, crate::Affine), VolumeError> {
         // Descriptor offsets were checked against the file size.
         let data = &self.data[..info.end_pos as usize];
         let mut r = ByteReader::new(data, info.grid_pos as usize, &self.path);
@@ -245,9 +228,9 @@ fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
     r.skip(8, "magic number")?;
     let version = r.u32("file format version")?;
     if !(MIN_VERSION..=MAX_VERSION).contains(&version) {
-        return Err(r.unsupported(format!(
-            "file format version {version} (versions {MIN_VERSION} to {MAX_VERSION} are read)"
-        )));
+        return Err(
+            r.unsupported(format!("file format version {version} (versions {MIN_VERSION} to {MAX_VERSION} are read)"))
+        );
     }
     let library_version = (r.u32("library version")?, r.u32("library version")?);
     let has_offsets = r.u8("grid offsets flag")?;
@@ -284,11 +267,7 @@ fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
         if half {
             grid_type.truncate(grid_type.len() - HALF_SUFFIX.len());
         }
-        let name = unique_name
-            .split(UNIQUE_SEPARATOR)
-            .next()
-            .unwrap_or_default()
-            .to_string();
+        let name = unique_name.split(UNIQUE_SEPARATOR).next().unwrap_or_default().to_string();
         grids.push(VdbGridInfo {
             name,
             unique_name,

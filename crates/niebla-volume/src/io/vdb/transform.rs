@@ -51,10 +51,7 @@ pub(crate) fn read_transform(r: &mut ByteReader) -> Result<(String, Affine), Vol
         }
     };
     if affine.inverse().is_none() {
-        return Err(r.corrupt_at(
-            start,
-            format!("{map} is singular or not finite: {affine:?}"),
-        ));
+        return Err(r.corrupt_at(start, format!("{map} is singular or not finite: {affine:?}")));
     }
     Ok((map, affine))
 }

@@ -8,29 +8,18 @@
 //! present in the file.
 
 use crate::io::bytes::ByteReader;
-use crate::io::vdb::values::{
-    bit, ones, read_compressed_values, read_mask, read_value, ValueCodec,
-};
-use crate::sparse::{
-    Leaf, Tile, EMPTY, LEAF_SIZE, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, UPPER_SIZE, UPPER_TOTAL,
-};
+use crate::io::vdb::values::{bit, ones, read_compressed_values, read_mask, read_value, ValueCodec};
+use crate::sparse::{Leaf, Tile, EMPTY, LEAF_SIZE, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, UPPER_SIZE, UPPER_TOTAL};
 use crate::{SparseGrid, VolumeError};
 
 /// Reads the tree at the reader's position into `grid` (whose transform,
 /// name and background are set by the caller; the background is read
 /// here). `codec.background` is updated with it.
-pub(crate) fn read_tree(
-    r: &mut ByteReader,
-    codec: &mut ValueCodec,
-    grid: &mut SparseGrid,
-) -> Result<(), VolumeError> {
+pub(crate) fn read_tree(r: &mut ByteReader, codec: &mut ValueCodec, grid: &mut SparseGrid) -> Result<(), VolumeError> {
     let pos = r.pos();
     let buffer_count = r.i32("tree buffer count")?;
     if buffer_count != 1 {
-        return Err(r.corrupt_at(
-            pos,
-            format!("tree buffer count {buffer_count} (expected 1)"),
-        ));
+        return Err(r.corrupt_at(pos, format!("tree buffer count {buffer_count} (expected 1)")));
     }
     codec.background = read_value(r, codec.kind, "background value")?;
     grid.background = codec.background;
@@ -46,12 +35,7 @@ pub(crate) fn read_tree(
         check_aligned(r, pos, origin, UPPER_TOTAL)?;
         let key = origin.map(|v| v >> UPPER_TOTAL);
         let entry = grid
-            .tile_entry(Tile {
-                origin,
-                depth: 0,
-                value,
-                active,
-            })
+            .tile_entry(Tile { origin, depth: 0, value, active })
             .ok_or_else(|| r.corrupt_at(pos, "too many tiles"))?;
         if grid.root.insert(key, entry).is_some() {
             return Err(r.corrupt_at(pos, format!("two root entries at {origin:?}")));
@@ -90,17 +74,9 @@ fn read_origin(r: &mut ByteReader, what: &str) -> Result<[i32; 3], VolumeError> 
     Ok([r.i32(what)?, r.i32(what)?, r.i32(what)?])
 }
 
-fn check_aligned(
-    r: &ByteReader,
-    pos: usize,
-    origin: [i32; 3],
-    log2: u32,
-) -> Result<(), VolumeError> {
+fn check_aligned(r: &ByteReader, pos: usize, origin: [i32; 3], log2: u32) -> Result<(), VolumeError> {
     if origin.iter().any(|v| v & ((1 << log2) - 1) != 0) {
-        return Err(r.corrupt_at(
-            pos,
-            format!("node origin {origin:?} is not a multiple of {}", 1 << log2),
-        ));
+        return Err(r.corrupt_at(pos, format!("node origin {origin:?} is not a multiple of {}", 1 << log2)));
     }
     Ok(())
 }
@@ -138,11 +114,7 @@ impl Level {
     }
 }
 
-fn read_internal(
-    r: &mut ByteReader,
-    codec: &ValueCodec,
-    level: Level,
-) -> Result<InternalNode, VolumeError> {
+fn read_internal(r: &mut ByteReader, codec: &ValueCodec, level: Level) -> Result<InternalNode, VolumeError> {
     let (size, ..) = level.shape();
     let what = match level {
         Level::Upper => "upper node",
@@ -152,11 +124,7 @@ fn read_internal(
     let value_mask = read_mask(r, size, &format!("{what} value mask"))?;
     let mut values = vec![0f32; size];
     read_compressed_values(r, codec, &value_mask, &mut values)?;
-    Ok(InternalNode {
-        child_mask,
-        value_mask,
-        values,
-    })
+    Ok(InternalNode { child_mask, value_mask, values })
 }
 
 /// Allocates the node table for `node` and fills its non-child slots with
@@ -179,15 +147,8 @@ fn place_node(
         if bit(&node.child_mask, n) || (!active && value.to_bits() == codec.background.to_bits()) {
             continue;
         }
-        let tile = Tile {
-            origin: child_origin(origin, n, log2_dim, child_log2),
-            depth,
-            value,
-            active,
-        };
-        let entry = grid
-            .tile_entry(tile)
-            .ok_or_else(|| r.corrupt_at(r.pos(), "too many tiles"))?;
+        let tile = Tile { origin: child_origin(origin, n, log2_dim, child_log2), depth, value, active };
+        let entry = grid.tile_entry(tile).ok_or_else(|| r.corrupt_at(r.pos(), "too many tiles"))?;
         match level {
             Level::Upper => grid.uppers[index * size + n] = entry,
             Level::Lower => grid.lowers[index * size + n] = entry,

@@ -52,11 +52,7 @@ pub(crate) struct ValueCodec {
 }
 
 /// Reads one full-precision value.
-pub(crate) fn read_value(
-    r: &mut ByteReader,
-    kind: ScalarKind,
-    what: &str,
-) -> Result<f32, VolumeError> {
+pub(crate) fn read_value(r: &mut ByteReader, kind: ScalarKind, what: &str) -> Result<f32, VolumeError> {
     Ok(match kind {
         ScalarKind::Float => r.f32(what)?,
         ScalarKind::Double => r.f64(what)? as f32,
@@ -64,15 +60,9 @@ pub(crate) fn read_value(
 }
 
 /// Reads a node bit mask of `bits` bits as little-endian 64-bit words.
-pub(crate) fn read_mask(
-    r: &mut ByteReader,
-    bits: usize,
-    what: &str,
-) -> Result<Vec<u64>, VolumeError> {
+pub(crate) fn read_mask(r: &mut ByteReader, bits: usize, what: &str) -> Result<Vec<u64>, VolumeError> {
     let b = r.bytes(bits / 8, what)?;
-    Ok(b.chunks_exact(8)
-        .map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
-        .collect())
+    Ok(b.chunks_exact(8).map(|c| u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])).collect())
 }
 
 /// Whether bit `n` of `mask` is set.
@@ -107,35 +97,23 @@ pub(crate) fn read_compressed_values(
     let meta_pos = r.pos();
     let metadata = r.u8("node value metadata")?;
     if metadata > NO_MASK_AND_ALL_VALS {
-        return Err(r.corrupt_at(
-            meta_pos,
-            format!("node value metadata {metadata} (expected 0 to 6)"),
-        ));
+        return Err(r.corrupt_at(meta_pos, format!("node value metadata {metadata} (expected 0 to 6)")));
     }
     let bg = codec.background;
-    let mut inactive0 = if metadata == NO_MASK_OR_INACTIVE_VALS {
-        bg
-    } else {
-        -bg
-    };
+    let mut inactive0 = if metadata == NO_MASK_OR_INACTIVE_VALS { bg } else { -bg };
     let mut inactive1 = bg;
-    if matches!(
-        metadata,
-        NO_MASK_AND_ONE_INACTIVE_VAL | MASK_AND_ONE_INACTIVE_VAL | MASK_AND_TWO_INACTIVE_VALS
-    ) {
+    if matches!(metadata, NO_MASK_AND_ONE_INACTIVE_VAL | MASK_AND_ONE_INACTIVE_VAL | MASK_AND_TWO_INACTIVE_VALS) {
         inactive0 = read_value(r, codec.kind, "inactive value")?;
         if metadata == MASK_AND_TWO_INACTIVE_VALS {
             inactive1 = read_value(r, codec.kind, "second inactive value")?;
         }
     }
-    let selection = if matches!(
-        metadata,
-        MASK_AND_NO_INACTIVE_VALS | MASK_AND_ONE_INACTIVE_VAL | MASK_AND_TWO_INACTIVE_VALS
-    ) {
-        Some(read_mask(r, count, "inactive value selection mask")?)
-    } else {
-        None
-    };
+    let selection =
+        if matches!(metadata, MASK_AND_NO_INACTIVE_VALS | MASK_AND_ONE_INACTIVE_VAL | MASK_AND_TWO_INACTIVE_VALS) {
+            Some(read_mask(r, count, "inactive value selection mask")?)
+        } else {
+            None
+        };
 
     let mask_compressed = codec.compression & COMPRESS_ACTIVE_MASK != 0;
     let stored = if mask_compressed && metadata != NO_MASK_AND_ALL_VALS {
@@ -165,11 +143,7 @@ pub(crate) fn read_compressed_values(
 
 /// Reads `count` values stored with the grid's compression
 /// (`io::readData` / `HalfReader::read`).
-fn read_data(
-    r: &mut ByteReader,
-    codec: &ValueCodec,
-    count: usize,
-) -> Result<Vec<f32>, VolumeError> {
+fn read_data(r: &mut ByteReader, codec: &ValueCodec, count: usize) -> Result<Vec<f32>, VolumeError> {
     if codec.half && count == 0 {
         // HalfReader::read writes nothing at all for zero values.
         return Ok(Vec::new());
@@ -182,10 +156,7 @@ fn read_data(
         if size <= 0 {
             let raw = size.unsigned_abs() as usize;
             if raw != nbytes {
-                return Err(r.corrupt_at(
-                    size_pos,
-                    format!("uncompressed chunk of {raw} bytes, expected {nbytes}"),
-                ));
+                return Err(r.corrupt_at(size_pos, format!("uncompressed chunk of {raw} bytes, expected {nbytes}")));
             }
             r.bytes(nbytes, "uncompressed node values")?.to_vec()
         } else {
@@ -210,18 +181,10 @@ fn read_data(
 }
 
 fn inflate_zlib(input: &[u8], nbytes: usize) -> Result<Vec<u8>, String> {
-    let out =
-        miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(input, nbytes).map_err(|e| {
-            format!(
-                "zip data does not inflate to {nbytes} bytes: {:?}",
-                e.status
-            )
-        })?;
+    let out = miniz_oxide::inflate::decompress_to_vec_zlib_with_limit(input, nbytes)
+        .map_err(|e| format!("zip data does not inflate to {nbytes} bytes: {:?}", e.status))?;
     if out.len() != nbytes {
-        return Err(format!(
-            "zip data inflates to {} bytes, expected {nbytes}",
-            out.len()
-        ));
+        return Err(format!("zip data inflates to {} bytes, expected {nbytes}", out.len()));
     }
     Ok(out)
 }
@@ -229,19 +192,13 @@ fn inflate_zlib(input: &[u8], nbytes: usize) -> Result<Vec<u8>, String> {
 fn decode(bytes: &[u8], codec: &ValueCodec, elem: usize) -> Vec<f32> {
     let chunks = bytes.chunks_exact(elem);
     if codec.half {
-        chunks
-            .map(|c| f16::from_le_bytes([c[0], c[1]]).to_f32())
-            .collect()
+        chunks.map(|c| f16::from_le_bytes([c[0], c[1]]).to_f32()).collect()
     } else {
         match codec.kind {
-            ScalarKind::Float => chunks
-                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect(),
-            ScalarKind::Double => chunks
-                .map(|c| {
-                    f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) as f32
-                })
-                .collect(),
+            ScalarKind::Float => chunks.map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
+            ScalarKind::Double => {
+                chunks.map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) as f32).collect()
+            }
         }
     }
 }
@@ -252,12 +209,7 @@ mod tests {
     use std::path::Path;
 
     fn codec(compression: u32) -> ValueCodec {
-        ValueCodec {
-            kind: ScalarKind::Float,
-            half: false,
-            compression,
-            background: 1.5,
-        }
+        ValueCodec { kind: ScalarKind::Float, half: false, compression, background: 1.5 }
     }
 
     #[test]
