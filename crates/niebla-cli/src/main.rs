@@ -1,6 +1,7 @@
 //! The `niebla` command: render scenes, describe them, and measure the renderer.
 
 mod bench;
+mod bench_trackers;
 mod render_cmd;
 
 use std::path::PathBuf;
@@ -26,9 +27,19 @@ enum Command {
         /// Scene file (JSON, version 1). Without it, describes the built-in default scene.
         scene: Option<PathBuf>,
     },
-    /// Measure the renderer: samples per second and time to reach a relative MSE
-    /// of 1e-2 against a high-spp reference, on the default scene.
-    Bench(bench::BenchArgs),
+    /// Measure the renderer and print figures.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum BenchCommand {
+    /// Samples per second of `single` in each sampling mode and the time to
+    /// reach a relative MSE of 1e-2 against a high-spp reference.
+    Single(bench::BenchArgs),
+    /// Variance x time of the transmittance estimators on a grid medium, with
+    /// the majorant grid and with one global majorant.
+    Trackers(bench_trackers::TrackerBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,7 +47,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::Info { scene } => render_cmd::info(scene.as_deref()),
-        Command::Bench(args) => bench::run(&args),
+        Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
+        Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
