@@ -56,7 +56,11 @@ impl Accumulator {
         Image {
             width: self.width,
             height: self.height,
-            pixels: self.sum.iter().map(|s| Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)).collect(),
+            pixels: self
+                .sum
+                .iter()
+                .map(|s| Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32))
+                .collect(),
         }
     }
 }

@@ -55,34 +55,12 @@ pub fn render(
     cancel: Option<&AtomicBool>,
 ) -> Result<Image, RenderError> {
     match *settings {
-        IntegratorSettings::Emission {
-            step,
-            transmittance,
-        } => render_with(
-            scene,
-            &EmissionIntegrator {
-                step,
-                transmittance,
-            },
-            options,
-            progress,
-            cancel,
-        ),
-        IntegratorSettings::Single {
-            step,
-            sampling,
-            transmittance,
-        } => render_with(
-            scene,
-            &SingleIntegrator {
-                step,
-                sampling,
-                transmittance,
-            },
-            options,
-            progress,
-            cancel,
-        ),
+        IntegratorSettings::Emission { step, transmittance } => {
+            render_with(scene, &EmissionIntegrator { step, transmittance }, options, progress, cancel)
+        }
+        IntegratorSettings::Single { step, sampling, transmittance } => {
+            render_with(scene, &SingleIntegrator { step, sampling, transmittance }, options, progress, cancel)
+        }
         IntegratorSettings::VolPath { max_depth } => {
             render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
         }
@@ -102,10 +80,7 @@ pub fn render_with<I: Integrator>(
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
-                .map_err(|e| RenderError::ThreadPool {
-                    threads,
-                    message: e.to_string(),
-                })?;
+                .map_err(|e| RenderError::ThreadPool { threads, message: e.to_string() })?;
             pool.install(|| render_tiles(scene, integrator, options, progress, cancel))
         }
         None => render_tiles(scene, integrator, options, progress, cancel),
@@ -164,22 +139,13 @@ fn render_tiles<I: Integrator>(
 /// non-finite value are dropped (counted as zero) so that one numerical
 /// accident cannot poison a pixel; debug builds assert instead.
 #[inline]
-pub fn render_pixel<I: Integrator>(
-    scene: &Scene,
-    integrator: &I,
-    options: &RenderOptions,
-    x: u32,
-    y: u32,
-) -> Rgb {
+pub fn render_pixel<I: Integrator>(scene: &Scene, integrator: &I, options: &RenderOptions, x: u32, y: u32) -> Rgb {
     let mut sum = [0f64; 3];
     for s in options.first_sample..options.first_sample + options.spp as u64 {
         let mut sampler = PixelSampler::new(options.seed, x, y, s);
         let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
         let l = integrator.radiance(scene, ray, scene.camera_medium, &mut sampler);
-        debug_assert!(
-            l.is_finite(),
-            "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}"
-        );
+        debug_assert!(l.is_finite(), "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}");
         if l.is_finite() {
             for c in 0..3 {
                 sum[c] += l[c] as f64;
@@ -187,9 +153,5 @@ pub fn render_pixel<I: Integrator>(
         }
     }
     let n = options.spp.max(1) as f64;
-    Rgb::new(
-        (sum[0] / n) as f32,
-        (sum[1] / n) as f32,
-        (sum[2] / n) as f32,
-    )
+    Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
 }

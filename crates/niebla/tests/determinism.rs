@@ -19,19 +19,11 @@ fn image_is_bit_identical_for_any_thread_count() {
             sampling: SingleSampling::March,
             transmittance: TransmittanceMethod::Analytic,
         },
-        IntegratorSettings::Emission {
-            step: None,
-            transmittance: TransmittanceMethod::Analytic,
-        },
+        IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic },
     ] {
         let mut images = Vec::new();
         for threads in [1, 2, 3] {
-            let options = RenderOptions {
-                spp: 3,
-                seed: 42,
-                first_sample: 0,
-                threads: Some(threads),
-            };
+            let options = RenderOptions { spp: 3, seed: 42, first_sample: 0, threads: Some(threads) };
             images.push(render(&built.scene, &settings, &options, &|_, _| {}, None).unwrap());
         }
         assert!(images[0].mean().max_channel() > 0.0);
@@ -43,12 +35,7 @@ fn image_is_bit_identical_for_any_thread_count() {
                 .all(|(a, b)| a.0.map(f32::to_bits) == b.0.map(f32::to_bits)));
         }
         // A different seed changes the image (the seed is really used).
-        let options = RenderOptions {
-            spp: 3,
-            seed: 43,
-            first_sample: 0,
-            threads: Some(2),
-        };
+        let options = RenderOptions { spp: 3, seed: 43, first_sample: 0, threads: Some(2) };
         let reseeded = render(&built.scene, &settings, &options, &|_, _| {}, None).unwrap();
         assert_ne!(reseeded.pixels, images[0].pixels);
     }

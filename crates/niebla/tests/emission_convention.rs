@@ -20,20 +20,10 @@ use niebla::tracking::{MarchStep, TransmittanceMethod};
 
 fn settings() -> Vec<IntegratorSettings> {
     let mut v = Vec::new();
-    for transmittance in [
-        TransmittanceMethod::Analytic,
-        TransmittanceMethod::RayMarch(MarchStep::Length(0.01)),
-    ] {
-        v.push(IntegratorSettings::Emission {
-            step: Some(MarchStep::Length(0.01)),
-            transmittance,
-        });
+    for transmittance in [TransmittanceMethod::Analytic, TransmittanceMethod::RayMarch(MarchStep::Length(0.01))] {
+        v.push(IntegratorSettings::Emission { step: Some(MarchStep::Length(0.01)), transmittance });
         for sampling in [SingleSampling::March, SingleSampling::Mis] {
-            v.push(IntegratorSettings::Single {
-                step: Some(MarchStep::Length(0.01)),
-                sampling,
-                transmittance,
-            });
+            v.push(IntegratorSettings::Single { step: Some(MarchStep::Length(0.01)), sampling, transmittance });
         }
     }
     v
@@ -47,13 +37,8 @@ fn settings() -> Vec<IntegratorSettings> {
 fn tolerance(settings: &IntegratorSettings, sigma_t: f32) -> f32 {
     let marched = matches!(
         settings,
-        IntegratorSettings::Emission {
-            transmittance: TransmittanceMethod::RayMarch(_),
-            ..
-        } | IntegratorSettings::Single {
-            transmittance: TransmittanceMethod::RayMarch(_),
-            ..
-        }
+        IntegratorSettings::Emission { transmittance: TransmittanceMethod::RayMarch(_), .. }
+            | IntegratorSettings::Single { transmittance: TransmittanceMethod::RayMarch(_), .. }
     );
     if marched {
         0.5 * sigma_t * 0.01 + 1e-5
@@ -63,12 +48,7 @@ fn tolerance(settings: &IntegratorSettings, sigma_t: f32) -> f32 {
 }
 
 fn options() -> RenderOptions {
-    RenderOptions {
-        spp: 4,
-        seed: 3,
-        first_sample: 0,
-        threads: Some(1),
-    }
+    RenderOptions { spp: 4, seed: 3, first_sample: 0, threads: Some(1) }
 }
 
 #[test]
@@ -76,13 +56,7 @@ fn deep_absorbing_emitting_medium_shows_l_ve_over_sigma_a() {
     let l_ve = Rgb::new(0.3, 0.6, 1.2);
     let sigma_a = 1.5;
     let medium = homogeneous(sigma_a, 0.0, l_ve, PhaseFunction::isotropic());
-    let s = scene(
-        common::camera_along_x(4, 4, 20.0),
-        vec![],
-        vec![medium],
-        vec![],
-        Some(MediumId(0)),
-    );
+    let s = scene(common::camera_along_x(4, 4, 20.0), vec![], vec![medium], vec![], Some(MediumId(0)));
     for st in settings() {
         let image = render(&s, &st, &options(), &|_, _| {}, None).unwrap();
         for p in &image.pixels {

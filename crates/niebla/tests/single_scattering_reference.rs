@@ -17,11 +17,7 @@ use niebla::sampling::PixelSampler;
 use niebla::tracking::{MarchStep, TransmittanceMethod};
 
 /// Mean and standard error of the segment radiance over `n` independent samples.
-fn estimate(
-    row: &std::collections::HashMap<String, String>,
-    sampling: SingleSampling,
-    n: u32,
-) -> (f64, f64) {
+fn estimate(row: &std::collections::HashMap<String, String>, sampling: SingleSampling, n: u32) -> (f64, f64) {
     let sigma_t = field(row, "sigma_t") as f32;
     let sigma_s = field(row, "sigma_s") as f32;
     let phase = match row["phase"].as_str() {
@@ -29,33 +25,16 @@ fn estimate(
         "henyey_greenstein" => PhaseFunction::hg(field(row, "g") as f32),
         other => panic!("unknown phase {other}"),
     };
-    let (h, t0, length) = (
-        field(row, "h") as f32,
-        field(row, "t0") as f32,
-        field(row, "L") as f32,
-    );
+    let (h, t0, length) = (field(row, "h") as f32, field(row, "t0") as f32, field(row, "L") as f32);
     let intensity = field(row, "I") as f32;
     // Ray along +x from the origin; the light at perpendicular distance h from
     // the line, its foot at t0.
-    let light = Light::Point(PointLight {
-        position: Vec3::new(t0, h, 0.0),
-        intensity: Rgb::splat(intensity),
-    });
+    let light = Light::Point(PointLight { position: Vec3::new(t0, h, 0.0), intensity: Rgb::splat(intensity) });
     let medium = homogeneous(sigma_t - sigma_s, sigma_s, Rgb::ZERO, phase);
-    let s = scene(
-        common::camera_along_x(1, 1, 30.0),
-        vec![],
-        vec![medium],
-        vec![light],
-        Some(MediumId(0)),
-    );
+    let s = scene(common::camera_along_x(1, 1, 30.0), vec![], vec![medium], vec![light], Some(MediumId(0)));
     // March step well below h (the integrand's width) and below the mean free path.
     let step = MarchStep::Length((0.25 * h).min(0.1));
-    let integrator = SingleIntegrator {
-        step: Some(step),
-        sampling,
-        transmittance: TransmittanceMethod::Analytic,
-    };
+    let integrator = SingleIntegrator { step: Some(step), sampling, transmittance: TransmittanceMethod::Analytic };
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     let mut stats = Stats::default();
     for i in 0..n {
@@ -72,8 +51,7 @@ fn check_all_rows(sampling: SingleSampling, n: u32) {
     let mut checked = 0;
     let mut worst_z: f64 = 0.0;
     for row in &rows {
-        let unbounded_without_extinction =
-            field(row, "sigma_t") == 0.0 && field(row, "L").is_infinite();
+        let unbounded_without_extinction = field(row, "sigma_t") == 0.0 && field(row, "L").is_infinite();
         if sampling == SingleSampling::March && unbounded_without_extinction {
             // A ray march needs a finite segment; equiangular sampling covers it.
             continue;
@@ -91,11 +69,7 @@ fn check_all_rows(sampling: SingleSampling, n: u32) {
             row["case"]
         );
         // The estimate must also be useful: standard error below 2% of the value.
-        assert!(
-            se < 0.02 * reference,
-            "{sampling:?} case {}: se {se:.2e} too large",
-            row["case"]
-        );
+        assert!(se < 0.02 * reference, "{sampling:?} case {}: se {se:.2e} too large", row["case"]);
         checked += 1;
     }
     println!("{sampling:?}: {checked} rows, worst |z| = {worst_z:.2}");
@@ -128,9 +102,5 @@ fn equiangular_sampling_has_low_variance_near_a_point_light() {
     let reference = field(row, "radiance");
     // With only the exponentials left, the relative standard error of 2e4
     // equiangular samples is tiny.
-    assert!(
-        se_eq / reference < 2e-3,
-        "relative se {}",
-        se_eq / reference
-    );
+    assert!(se_eq / reference < 2e-3, "relative se {}", se_eq / reference);
 }

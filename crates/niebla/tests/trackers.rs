@@ -15,8 +15,8 @@ use niebla::medium::{DensityGrid, GridEmission, GridMedium, Medium};
 use niebla::phase::PhaseFunction;
 use niebla::sampling::PixelSampler;
 use niebla::tracking::{
-    delta_tracking, ratio_tracking, residual_ratio_tracking, segment_transmittance,
-    DensityAlongRay, DensitySegment, MarchStep, TransmittanceMethod,
+    delta_tracking, ratio_tracking, residual_ratio_tracking, segment_transmittance, DensityAlongRay, DensitySegment,
+    MarchStep, TransmittanceMethod,
 };
 use niebla_volume::{Affine, DenseGrid, MajorantGrid, SparseGridBuilder};
 
@@ -32,12 +32,7 @@ impl DensityAlongRay for Ramp {
         t
     }
     fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
-        f(DensitySegment {
-            t0: 0.0,
-            t1: 1.0,
-            d_min: self.d_min,
-            d_max: self.d_max,
-        })
+        f(DensitySegment { t0: 0.0, t1: 1.0, d_min: self.d_min, d_max: self.d_max })
     }
 }
 
@@ -66,51 +61,16 @@ fn trackers_match_beer_lambert_and_documented_variances_on_a_ramp() {
     let sigma_t = Rgb::splat(2.0); // sigma_t(t) = 2 * density(t) = 2t
     type Tracker = fn(&Ramp, Rgb, &mut PixelSampler) -> Rgb;
     let cases: [(&str, Ramp, Tracker, f64); 4] = [
-        (
-            "delta",
-            Ramp {
-                d_min: 0.0,
-                d_max: 1.0,
-            },
-            delta_tracking::<Ramp>,
-            exact * (1.0 - exact),
-        ),
-        (
-            "ratio, majorant 2",
-            Ramp {
-                d_min: 0.0,
-                d_max: 1.0,
-            },
-            ratio_tracking::<Ramp>,
-            0.128,
-        ),
-        (
-            "ratio, majorant 4",
-            Ramp {
-                d_min: 0.0,
-                d_max: 2.0,
-            },
-            ratio_tracking::<Ramp>,
-            0.053,
-        ),
+        ("delta", Ramp { d_min: 0.0, d_max: 1.0 }, delta_tracking::<Ramp>, exact * (1.0 - exact)),
+        ("ratio, majorant 2", Ramp { d_min: 0.0, d_max: 1.0 }, ratio_tracking::<Ramp>, 0.128),
+        ("ratio, majorant 4", Ramp { d_min: 0.0, d_max: 2.0 }, ratio_tracking::<Ramp>, 0.053),
         // control density (0 + 1)/2 = 0.5 -> sigma_c = 1, residual majorant 1.
-        (
-            "residual ratio",
-            Ramp {
-                d_min: 0.0,
-                d_max: 1.0,
-            },
-            residual_ratio_tracking::<Ramp>,
-            0.054,
-        ),
+        ("residual ratio", Ramp { d_min: 0.0, d_max: 1.0 }, residual_ratio_tracking::<Ramp>, 0.054),
     ];
     for (name, ramp, tracker, expected_variance) in cases {
         let (mean, var) = mean_and_variance(n, |s| tracker(&ramp, sigma_t, s).r());
         let se = (var / n as f64).sqrt();
-        assert!(
-            (mean - exact).abs() < 4.0 * se,
-            "{name}: mean {mean} +- {se} vs {exact}"
-        );
+        assert!((mean - exact).abs() < 4.0 * se, "{name}: mean {mean} +- {se} vs {exact}");
         println!("{name}: mean {mean:.5}, variance {var:.4} (documented {expected_variance:.4})");
         assert!(
             var > 0.97 * expected_variance && var < 1.15 * expected_variance,
@@ -172,24 +132,12 @@ fn check_unbiased(m: &Medium, label: &str) {
     let mut worst: f64 = 0.0;
     for r in 0..12 {
         // Rays from outside through the box in random directions, some axis-aligned.
-        let target = Vec3::new(
-            0.2 + 0.6 * s.next_1d(),
-            0.2 + 0.6 * s.next_1d(),
-            0.2 + 0.6 * s.next_1d(),
-        );
-        let dir = if r % 4 == 0 {
-            Vec3::X
-        } else {
-            niebla::sampling::sample_uniform_sphere(s.next_2d())
-        };
+        let target = Vec3::new(0.2 + 0.6 * s.next_1d(), 0.2 + 0.6 * s.next_1d(), 0.2 + 0.6 * s.next_1d());
+        let dir = if r % 4 == 0 { Vec3::X } else { niebla::sampling::sample_uniform_sphere(s.next_2d()) };
         let ray = Ray::new(target - dir * 2.0, dir);
         let (t0, t1) = (0.5, 3.5);
         let tau = quadrature_tau(m, &ray, t0, t1, 40_000);
-        for method in [
-            TransmittanceMethod::Delta,
-            TransmittanceMethod::Ratio,
-            TransmittanceMethod::ResidualRatio,
-        ] {
+        for method in [TransmittanceMethod::Delta, TransmittanceMethod::Ratio, TransmittanceMethod::ResidualRatio] {
             let n = 20_000;
             let mut sum = [0.0f64; 3];
             let mut sum2 = [0.0f64; 3];
@@ -208,10 +156,7 @@ fn check_unbiased(m: &Medium, label: &str) {
                 // Quadrature error of 4e4 midpoints on a trilinear field: < 1e-6.
                 let z = (mean - exact) / (se + 1e-6);
                 worst = worst.max(z.abs());
-                assert!(
-                    z.abs() < 4.0,
-                    "{label} ray {r} {method:?} channel {c}: {mean} +- {se} vs {exact}"
-                );
+                assert!(z.abs() < 4.0, "{label} ray {r} {method:?} channel {c}: {mean} +- {se} vs {exact}");
             }
         }
         // Ray marching converges to the same value as the step shrinks.
@@ -228,10 +173,7 @@ fn check_unbiased(m: &Medium, label: &str) {
                     TransmittanceMethod::RayMarch(MarchStep::Count(steps)),
                     &mut sampler,
                 );
-                err += (0..3)
-                    .map(|c| (tr[c] as f64 - (-tau[c]).exp()).abs())
-                    .sum::<f64>()
-                    / 64.0;
+                err += (0..3).map(|c| (tr[c] as f64 - (-tau[c]).exp()).abs()).sum::<f64>() / 64.0;
             }
             assert!(
                 err <= previous * 1.05 + 1e-5,
@@ -239,10 +181,7 @@ fn check_unbiased(m: &Medium, label: &str) {
             );
             previous = err;
         }
-        assert!(
-            previous < 2e-3,
-            "{label} ray {r}: ray marching with 2048 steps still off by {previous}"
-        );
+        assert!(previous < 2e-3, "{label} ray {r}: ray marching with 2048 steps still off by {previous}");
     }
     println!("{label}: worst |z| = {worst:.2}");
 }
@@ -251,11 +190,7 @@ fn check_unbiased(m: &Medium, label: &str) {
 fn trackers_are_unbiased_on_a_sharp_rgb_dense_grid() {
     let grid = sharp_grid();
     let majorant = MajorantGrid::from_dense(&grid, [4, 4, 4]);
-    let m = grid_medium(
-        DensityGrid::Dense(Arc::new(grid)),
-        Affine3A::IDENTITY,
-        majorant,
-    );
+    let m = grid_medium(DensityGrid::Dense(Arc::new(grid)), Affine3A::IDENTITY, majorant);
     check_unbiased(&m, "dense");
 }
 
@@ -277,13 +212,8 @@ fn trackers_are_unbiased_on_a_sparse_grid_with_a_rotated_transform() {
     let sparse = b.build();
     let majorant = MajorantGrid::from_sparse(&sparse, 64);
     // World = rotate(scale(index / 12)), so the grid fills a rotated unit-ish box.
-    let grid_to_world =
-        Affine3A::from_rotation_y(0.5) * Affine3A::from_scale(Vec3::splat(1.0 / 12.0));
-    let m = grid_medium(
-        DensityGrid::Sparse(Arc::new(sparse)),
-        grid_to_world.inverse(),
-        majorant,
-    );
+    let grid_to_world = Affine3A::from_rotation_y(0.5) * Affine3A::from_scale(Vec3::splat(1.0 / 12.0));
+    let m = grid_medium(DensityGrid::Sparse(Arc::new(sparse)), grid_to_world.inverse(), majorant);
     check_unbiased(&m, "sparse");
 }
 
@@ -293,11 +223,7 @@ fn trackers_are_unbiased_on_a_sparse_grid_with_a_rotated_transform() {
 fn majorant_is_never_below_the_extinction() {
     let grid = sharp_grid();
     let majorant = MajorantGrid::from_dense(&grid, [5, 3, 4]);
-    let m = grid_medium(
-        DensityGrid::Dense(Arc::new(grid)),
-        Affine3A::IDENTITY,
-        majorant,
-    );
+    let m = grid_medium(DensityGrid::Dense(Arc::new(grid)), Affine3A::IDENTITY, majorant);
     let Medium::Grid(g) = &m else { unreachable!() };
     let mut s = PixelSampler::from_key(1);
     let st_max = g.sigma_t().max_channel();
@@ -307,17 +233,13 @@ fn majorant_is_never_below_the_extinction() {
             (Vec3::X + 0.3 * (s.next_2d().extend(0.0) - 0.5)).normalize(),
         );
         let (o, d) = g.ray_to_grid(&ray);
-        let _ = g
-            .majorant
-            .walk(o.to_array(), d.to_array(), 0.0, 3.0, |seg| {
-                for k in 0..50 {
-                    let t = seg.t0 + (seg.t1 - seg.t0) * (k as f32 + 0.5) / 50.0;
-                    let sigma_t = m.at(ray.at(t)).sigma_t();
-                    assert!(
-                        sigma_t.max_channel() <= seg.max_density * st_max * (1.0 + 1e-5) + 1e-6
-                    );
-                }
-                ControlFlow::Continue(())
-            });
+        let _ = g.majorant.walk(o.to_array(), d.to_array(), 0.0, 3.0, |seg| {
+            for k in 0..50 {
+                let t = seg.t0 + (seg.t1 - seg.t0) * (k as f32 + 0.5) / 50.0;
+                let sigma_t = m.at(ray.at(t)).sigma_t();
+                assert!(sigma_t.max_channel() <= seg.max_density * st_max * (1.0 + 1e-5) + 1e-6);
+            }
+            ControlFlow::Continue(())
+        });
     }
 }

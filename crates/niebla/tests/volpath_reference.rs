@@ -21,27 +21,14 @@ use niebla::scene::{Scene, SceneObject};
 use niebla_volume::{DenseGrid, MajorantGrid};
 
 fn boundary(shape: Shape, interior: u32) -> SceneObject {
-    SceneObject {
-        shape,
-        bsdf: Bsdf::Null,
-        interior: Some(MediumId(interior)),
-        exterior: None,
-        bounds_medium: true,
-    }
+    SceneObject { shape, bsdf: Bsdf::Null, interior: Some(MediumId(interior)), exterior: None, bounds_medium: true }
 }
 
 fn black_plane(y: f32) -> SceneObject {
-    let t = Transform::from_components(
-        Vec3::splat(1e4),
-        Vec3::new(-90.0, 0.0, 0.0),
-        Vec3::new(0.0, y, 0.0),
-    )
-    .unwrap();
+    let t = Transform::from_components(Vec3::splat(1e4), Vec3::new(-90.0, 0.0, 0.0), Vec3::new(0.0, y, 0.0)).unwrap();
     SceneObject {
         shape: Shape::Rectangle(Rectangle::new(t)),
-        bsdf: Bsdf::Diffuse {
-            reflectance: Rgb::ZERO,
-        },
+        bsdf: Bsdf::Diffuse { reflectance: Rgb::ZERO },
         interior: None,
         exterior: None,
         bounds_medium: false,
@@ -73,25 +60,12 @@ fn slab_radiance(a: f32, b: f32, g: f32, reflect: bool, n: u32) -> (f64, f64) {
         phase: PhaseFunction::hg(g),
     });
     let slab = boundary(
-        Shape::Box(AxisAlignedBox {
-            min: Vec3::new(-1000.0, 0.0, -1000.0),
-            max: Vec3::new(1000.0, 1.0, 1000.0),
-        }),
+        Shape::Box(AxisAlignedBox { min: Vec3::new(-1000.0, 0.0, -1000.0), max: Vec3::new(1000.0, 1.0, 1000.0) }),
         0,
     );
-    let (camera_y, dir, plane_y) = if reflect {
-        (2.0, -Vec3::Y, -1.0)
-    } else {
-        (-1.0, Vec3::Y, -2.0)
-    };
+    let (camera_y, dir, plane_y) = if reflect { (2.0, -Vec3::Y, -1.0) } else { (-1.0, Vec3::Y, -2.0) };
     let env = Light::Constant(ConstantLight { radiance: Rgb::ONE });
-    let s = scene(
-        common::camera_along_x(1, 1, 30.0),
-        vec![slab, black_plane(plane_y)],
-        vec![medium],
-        vec![env],
-        None,
-    );
+    let s = scene(common::camera_along_x(1, 1, 30.0), vec![slab, black_plane(plane_y)], vec![medium], vec![env], None);
     let ray = Ray::new(Vec3::new(0.0, camera_y, 0.0), dir);
     let stats = estimate(&s, ray, None, n, 100_000);
     (stats[1].mean(), stats[1].standard_error())
@@ -102,14 +76,8 @@ fn volpath_matches_adding_doubling_slabs() {
     let rows = read_reference_csv("slab_adding_doubling.csv");
     // (albedo, optical thickness, g): thin and thick, forward and backward,
     // absorbing and conservative.
-    let cases = [
-        (0.9, 1.0, 0.0),
-        (1.0, 10.0, 0.8),
-        (0.99, 2.0, -0.3),
-        (0.8, 5.0, 0.5),
-        (0.5, 0.5, 0.0),
-        (1.0, 1.0, 0.5),
-    ];
+    let cases =
+        [(0.9, 1.0, 0.0), (1.0, 10.0, 0.8), (0.99, 2.0, -0.3), (0.8, 5.0, 0.5), (0.5, 0.5, 0.0), (1.0, 1.0, 0.5)];
     let mut worst: f64 = 0.0;
     for (a, b, g) in cases {
         let row = rows
@@ -126,10 +94,7 @@ fn volpath_matches_adding_doubling_slabs() {
             let (mean, se) = slab_radiance(a as f32, b as f32, g as f32, reflect, 20_000);
             let z = (mean - reference) / (se + 1e-6);
             worst = worst.max(z.abs());
-            assert!(
-                z.abs() < 4.0,
-                "a={a} b={b} g={g} {column}: {mean:.5} +- {se:.5} vs {reference:.5} (z {z:.2})"
-            );
+            assert!(z.abs() < 4.0, "a={a} b={b} g={g} {column}: {mean:.5} +- {se:.5} vs {reference:.5} (z {z:.2})");
         }
     }
     println!("slabs: worst |z| = {worst:.2}");
@@ -138,9 +103,7 @@ fn volpath_matches_adding_doubling_slabs() {
 fn sharp_grid_medium(albedo: f32) -> Medium {
     let n = 10;
     let mut s = PixelSampler::from_key(3);
-    let values: Vec<f32> = (0..n * n * n)
-        .map(|i| if i % 7 < 3 { 0.0 } else { 8.0 * s.next_1d() })
-        .collect();
+    let values: Vec<f32> = (0..n * n * n).map(|i| if i % 7 < 3 { 0.0 } else { 8.0 * s.next_1d() }).collect();
     let grid = DenseGrid::new([n, n, n], values, [-1.0; 3], [1.0; 3]).unwrap();
     let majorant = MajorantGrid::from_dense(&grid, [4, 4, 4]);
     let sigma_t = Rgb::new(2.0, 3.0, 5.0);
@@ -162,90 +125,35 @@ fn sharp_grid_medium(albedo: f32) -> Medium {
 /// environment times the ray's transmittance.
 #[test]
 fn volpath_white_furnace_returns_environment() {
-    let env = Light::Constant(ConstantLight {
-        radiance: Rgb::splat(0.7),
-    });
+    let env = Light::Constant(ConstantLight { radiance: Rgb::splat(0.7) });
     let dense_homogeneous = Medium::Homogeneous(HomogeneousMedium {
         sigma_a: Rgb::ZERO,
         sigma_s: Rgb::new(5.0, 20.0, 1.0),
         l_ve: Rgb::ZERO,
         phase: PhaseFunction::hg(-0.4),
     });
-    for (label, medium) in [
-        ("homogeneous chromatic", dense_homogeneous),
-        ("grid", sharp_grid_medium(1.0)),
-    ] {
-        let sphere = boundary(
-            Shape::Sphere(Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-            }),
-            0,
-        );
-        let s = scene(
-            common::camera_along_x(1, 1, 30.0),
-            vec![sphere],
-            vec![medium],
-            vec![env.clone()],
-            None,
-        );
-        for (k, target) in [
-            Vec3::ZERO,
-            Vec3::new(0.0, 0.5, 0.3),
-            Vec3::new(0.0, 0.95, 0.0),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+    for (label, medium) in [("homogeneous chromatic", dense_homogeneous), ("grid", sharp_grid_medium(1.0))] {
+        let sphere = boundary(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }), 0);
+        let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![medium], vec![env.clone()], None);
+        for (k, target) in [Vec3::ZERO, Vec3::new(0.0, 0.5, 0.3), Vec3::new(0.0, 0.95, 0.0)].into_iter().enumerate() {
             let ray = Ray::new(Vec3::new(-3.0, target.y, target.z), Vec3::X);
             let stats = estimate(&s, ray, None, 4_000, 100_000);
             for (c, st) in stats.iter().enumerate() {
                 let z = (st.mean() - 0.7) / (st.standard_error() + 1e-5);
-                assert!(
-                    z.abs() < 4.0,
-                    "{label} ray {k} channel {c}: {} +- {}",
-                    st.mean(),
-                    st.standard_error()
-                );
+                assert!(z.abs() < 4.0, "{label} ray {k} channel {c}: {} +- {}", st.mean(), st.standard_error());
             }
         }
     }
     // Albedo < 1: darker than the environment, brighter than its attenuated view.
-    let sphere = boundary(
-        Shape::Sphere(Sphere {
-            center: Vec3::ZERO,
-            radius: 1.0,
-        }),
-        0,
-    );
-    let s = scene(
-        common::camera_along_x(1, 1, 30.0),
-        vec![sphere],
-        vec![sharp_grid_medium(0.8)],
-        vec![env],
-        None,
-    );
+    let sphere = boundary(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }), 0);
+    let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![sharp_grid_medium(0.8)], vec![env], None);
     let ray = Ray::new(Vec3::new(-3.0, 0.0, 0.0), Vec3::X);
     let stats = estimate(&s, ray, None, 4_000, 100_000);
     let mut sampler = PixelSampler::from_key(1);
-    let tr = s.transmittance(
-        ray.o,
-        None,
-        ray.d,
-        10.0,
-        niebla::tracking::TransmittanceMethod::Ratio,
-        &mut sampler,
-    );
+    let tr = s.transmittance(ray.o, None, ray.d, 10.0, niebla::tracking::TransmittanceMethod::Ratio, &mut sampler);
     for c in 0..3 {
         let (m, se) = (stats[c].mean(), stats[c].standard_error());
-        assert!(
-            m + 4.0 * se < 0.7,
-            "channel {c}: {m} not darker than the environment"
-        );
-        assert!(
-            m > 0.7 * tr[c] as f64 * 0.9,
-            "channel {c}: {m} below the attenuated environment {}",
-            0.7 * tr[c]
-        );
+        assert!(m + 4.0 * se < 0.7, "channel {c}: {m} not darker than the environment");
+        assert!(m > 0.7 * tr[c] as f64 * 0.9, "channel {c}: {m} below the attenuated environment {}", 0.7 * tr[c]);
     }
 }

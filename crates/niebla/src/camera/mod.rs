@@ -67,15 +67,7 @@ mod tests {
 
     #[test]
     fn center_pixel_looks_forward_and_row_zero_is_top() {
-        let c = PerspectiveCamera::look_at(
-            Vec3::ZERO,
-            Vec3::new(0.0, 0.0, -1.0),
-            Vec3::Y,
-            90.0,
-            100,
-            50,
-        )
-        .unwrap();
+        let c = PerspectiveCamera::look_at(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), Vec3::Y, 90.0, 100, 50).unwrap();
         let center = c.generate_ray(50, 25, Vec2::ZERO);
         assert!((center.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
         let top_left = c.generate_ray(0, 0, Vec2::ZERO);

@@ -43,11 +43,7 @@ pub fn blackbody_xyz(kelvin: f64) -> [f64; 3] {
 fn blackbody_xyz_with(table: &[(f64, [f64; 3])], kelvin: f64) -> [f64; 3] {
     let mut xyz = [0.0f64; 3];
     for (i, (lambda, cmf)) in table.iter().enumerate() {
-        let weight = if i == 0 || i + 1 == table.len() {
-            0.5
-        } else {
-            1.0
-        };
+        let weight = if i == 0 || i + 1 == table.len() { 0.5 } else { 1.0 };
         let b = planck(*lambda, kelvin) * weight;
         for c in 0..3 {
             xyz[c] += b * cmf[c];
@@ -88,11 +84,7 @@ fn rgb_from_xyz(xyz: [f64; 3]) -> Rgb {
     let rgb = xyz_to_linear_srgb(xyz).map(|v| v.max(0.0));
     let lum = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
     if lum > 0.0 {
-        Rgb::new(
-            (rgb[0] / lum) as f32,
-            (rgb[1] / lum) as f32,
-            (rgb[2] / lum) as f32,
-        )
+        Rgb::new((rgb[0] / lum) as f32, (rgb[1] / lum) as f32, (rgb[2] / lum) as f32)
     } else {
         Rgb::ZERO
     }
@@ -132,8 +124,7 @@ impl BlackbodyTable {
         if !(kelvin >= BLACKBODY_MIN_KELVIN) {
             return Rgb::ZERO;
         }
-        let x =
-            ((kelvin - BLACKBODY_MIN_KELVIN) / TABLE_STEP_KELVIN).min((self.rgb.len() - 1) as f32);
+        let x = ((kelvin - BLACKBODY_MIN_KELVIN) / TABLE_STEP_KELVIN).min((self.rgb.len() - 1) as f32);
         let i = (x as usize).min(self.rgb.len() - 2);
         let f = x - i as f32;
         self.rgb[i] * (1.0 - f) + self.rgb[i + 1] * f
@@ -184,10 +175,7 @@ mod tests {
             assert!((c.luminance() - 1.0).abs() < 2e-3, "{k}: {c:?}");
             let exact = blackbody_rgb_exact(k as f64);
             for ch in 0..3 {
-                assert!(
-                    (c[ch] - exact[ch]).abs() < 1e-2 * exact.max_channel(),
-                    "{k}: table {c:?} vs {exact:?}"
-                );
+                assert!((c[ch] - exact[ch]).abs() < 1e-2 * exact.max_channel(), "{k}: table {c:?} vs {exact:?}");
             }
         }
         let (warm, white, cool) = (table.rgb(1000.0), table.rgb(6500.0), table.rgb(12000.0));

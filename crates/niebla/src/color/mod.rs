@@ -3,9 +3,7 @@
 mod blackbody;
 mod rgb;
 
-pub use blackbody::{
-    blackbody_rgb_exact, blackbody_xyz, cie_1931_table, planck, xyz_to_linear_srgb, BlackbodyTable,
-};
+pub use blackbody::{blackbody_rgb_exact, blackbody_xyz, cie_1931_table, planck, xyz_to_linear_srgb, BlackbodyTable};
 pub use rgb::Rgb;
 
 /// sRGB opto-electronic transfer function (IEC 61966-2-1) of a linear value in [0, 1].

@@ -79,13 +79,7 @@ impl Rgb {
     /// Channel-wise division that yields 0 where the divisor is 0.
     #[inline]
     pub fn safe_div(self, d: Rgb) -> Rgb {
-        Rgb(std::array::from_fn(|i| {
-            if d.0[i] != 0.0 {
-                self.0[i] / d.0[i]
-            } else {
-                0.0
-            }
-        }))
+        Rgb(std::array::from_fn(|i| if d.0[i] != 0.0 { self.0[i] / d.0[i] } else { 0.0 }))
     }
 }
 

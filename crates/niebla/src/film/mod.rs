@@ -23,11 +23,7 @@ pub struct Image {
 impl Image {
     /// A black image.
     pub fn new(width: u32, height: u32) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![Rgb::ZERO; width as usize * height as usize],
-        }
+        Image { width, height, pixels: vec![Rgb::ZERO; width as usize * height as usize] }
     }
 
     /// Pixel at column `x`, row `y`.
@@ -45,11 +41,7 @@ impl Image {
             }
         }
         let n = self.pixels.len().max(1) as f64;
-        Rgb::new(
-            (sum[0] / n) as f32,
-            (sum[1] / n) as f32,
-            (sum[2] / n) as f32,
-        )
+        Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
     }
 
     /// Relative mean squared error against `reference`: the mean over pixels

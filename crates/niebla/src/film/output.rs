@@ -35,18 +35,12 @@ pub enum OutputError {
 /// synced and renamed into place: readers see the old file or the new one,
 /// never a truncated one.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "image".into());
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "image".into());
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
@@ -69,21 +63,13 @@ pub fn write_exr(image: &Image, path: &Path) -> Result<(), OutputError> {
         let p = image.pixels[pos.y() * w + pos.x()];
         (p[0], p[1], p[2])
     });
-    let layer = Layer::new(
-        (w, h),
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        channels,
-    );
+    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
     let mut bytes = Vec::new();
     exr::image::Image::from_layer(layer)
         .write()
         .non_parallel()
         .to_buffered(std::io::Cursor::new(&mut bytes))
-        .map_err(|e| OutputError::Encode {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
+        .map_err(|e| OutputError::Encode { path: path.to_path_buf(), message: e.to_string() })?;
     write_atomically(path, &bytes)
 }
 
@@ -96,10 +82,7 @@ pub fn write_png(image: &Image, path: &Path, exposure: f32) -> Result<(), Output
     }
     let mut bytes = Vec::new();
     {
-        let encode = |e: png::EncodingError| OutputError::Encode {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
+        let encode = |e: png::EncodingError| OutputError::Encode { path: path.to_path_buf(), message: e.to_string() };
         let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
@@ -113,16 +96,9 @@ pub fn write_png(image: &Image, path: &Path, exposure: f32) -> Result<(), Output
 
 /// Write `image` to `path`, choosing the format by extension (`.exr` or `.png`).
 pub fn write_image(image: &Image, path: &Path, exposure: f32) -> Result<(), OutputError> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .as_deref()
-    {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
         Some("exr") => write_exr(image, path),
         Some("png") => write_png(image, path, exposure),
-        _ => Err(OutputError::UnsupportedExtension {
-            path: path.to_path_buf(),
-        }),
+        _ => Err(OutputError::UnsupportedExtension { path: path.to_path_buf() }),
     }
 }

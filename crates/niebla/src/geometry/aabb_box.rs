@@ -22,12 +22,9 @@ impl AxisAlignedBox {
         let near = t_lo.min(t_hi);
         let far = t_lo.max(t_hi);
         let pick = |v: f32, fallback: f32| if v.is_nan() { fallback } else { v };
-        let t_near = pick(near.x, f32::NEG_INFINITY)
-            .max(pick(near.y, f32::NEG_INFINITY))
-            .max(pick(near.z, f32::NEG_INFINITY));
-        let t_far = pick(far.x, f32::INFINITY)
-            .min(pick(far.y, f32::INFINITY))
-            .min(pick(far.z, f32::INFINITY));
+        let t_near =
+            pick(near.x, f32::NEG_INFINITY).max(pick(near.y, f32::NEG_INFINITY)).max(pick(near.z, f32::NEG_INFINITY));
+        let t_far = pick(far.x, f32::INFINITY).min(pick(far.y, f32::INFINITY)).min(pick(far.z, f32::INFINITY));
         (t_near, t_far)
     }
 
@@ -45,11 +42,7 @@ impl AxisAlignedBox {
             return None;
         };
         let p = ray.at(t);
-        Some(SurfaceHit {
-            t,
-            p,
-            n: self.face_normal(p),
-        })
+        Some(SurfaceHit { t, p, n: self.face_normal(p) })
     }
 
     /// Outward normal of the face nearest to `p`.
@@ -79,10 +72,7 @@ mod tests {
 
     #[test]
     fn box_entry_exit_and_normals() {
-        let b = AxisAlignedBox {
-            min: Vec3::splat(-1.0),
-            max: Vec3::splat(1.0),
-        };
+        let b = AxisAlignedBox { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
         let r = Ray::new(Vec3::new(0.2, 0.1, -5.0), Vec3::Z);
         let h = b.intersect(&r, 0.0, f32::INFINITY).unwrap();
         assert!((h.t - 4.0).abs() < 1e-5);

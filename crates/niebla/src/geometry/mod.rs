@@ -75,10 +75,7 @@ impl Shape {
     /// World-space bounding box `(min, max)`.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         match self {
-            Shape::Sphere(s) => (
-                s.center - Vec3::splat(s.radius),
-                s.center + Vec3::splat(s.radius),
-            ),
+            Shape::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
             Shape::Box(b) => (b.min, b.max),
             Shape::Rectangle(r) => r.bounds(),
         }

@@ -14,10 +14,7 @@ pub struct Rectangle {
 impl Rectangle {
     /// A rectangle placed by `transform`.
     pub fn new(transform: Transform) -> Rectangle {
-        Rectangle {
-            transform,
-            normal: transform.normal_to_world(Vec3::Z),
-        }
+        Rectangle { transform, normal: transform.normal_to_world(Vec3::Z) }
     }
 
     /// Nearest intersection in `(t_min, t_max)`; the normal is local +z in world space.
@@ -36,11 +33,7 @@ impl Rectangle {
         if q.x.abs() > 1.0 || q.y.abs() > 1.0 {
             return None;
         }
-        Some(SurfaceHit {
-            t,
-            p: ray.at(t),
-            n: self.normal,
-        })
+        Some(SurfaceHit { t, p: ray.at(t), n: self.normal })
     }
 
     /// World-space bounding box.
@@ -69,9 +62,7 @@ mod tests {
 
     #[test]
     fn rotated_floor_rectangle_faces_up() {
-        let t =
-            Transform::from_components(Vec3::splat(10.0), Vec3::new(-90.0, 0.0, 0.0), Vec3::ZERO)
-                .unwrap();
+        let t = Transform::from_components(Vec3::splat(10.0), Vec3::new(-90.0, 0.0, 0.0), Vec3::ZERO).unwrap();
         let r = Rectangle::new(t);
         assert!((r.normal - Vec3::Y).length() < 1e-5);
         let ray = Ray::new(Vec3::new(3.0, 2.0, 4.0), -Vec3::Y);

@@ -24,14 +24,7 @@ impl Sphere {
         }
         let root = disc.sqrt();
         let q = if b > 0.0 { -b - root } else { -b + root };
-        let (mut t0, mut t1) = (
-            q,
-            if q != 0.0 {
-                (oc.length_squared() - self.radius * self.radius) / q
-            } else {
-                q
-            },
-        );
+        let (mut t0, mut t1) = (q, if q != 0.0 { (oc.length_squared() - self.radius * self.radius) / q } else { q });
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
@@ -44,11 +37,7 @@ impl Sphere {
         };
         let p = ray.at(t);
         let n = (p - self.center) / self.radius;
-        Some(SurfaceHit {
-            t,
-            p,
-            n: n.normalize(),
-        })
+        Some(SurfaceHit { t, p, n: n.normalize() })
     }
 }
 
@@ -58,10 +47,7 @@ mod tests {
 
     #[test]
     fn sphere_hits_front_then_back() {
-        let s = Sphere {
-            center: Vec3::new(0.0, 0.0, 5.0),
-            radius: 1.0,
-        };
+        let s = Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0 };
         let r = Ray::new(Vec3::ZERO, Vec3::Z);
         let h = s.intersect(&r, 0.0, f32::INFINITY).unwrap();
         assert!((h.t - 4.0).abs() < 1e-5);

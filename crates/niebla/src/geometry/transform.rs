@@ -11,10 +11,7 @@ pub struct Transform {
 
 impl Transform {
     /// The identity.
-    pub const IDENTITY: Transform = Transform {
-        to_world: Affine3A::IDENTITY,
-        to_local: Affine3A::IDENTITY,
-    };
+    pub const IDENTITY: Transform = Transform { to_world: Affine3A::IDENTITY, to_local: Affine3A::IDENTITY };
 
     /// A transform from its local-to-world map; `None` when it is singular.
     pub fn new(to_world: Affine3A) -> Option<Transform> {
@@ -22,10 +19,7 @@ impl Transform {
         if !det.is_finite() || det.abs() < 1e-20 {
             return None;
         }
-        Some(Transform {
-            to_world,
-            to_local: to_world.inverse(),
-        })
+        Some(Transform { to_world, to_local: to_world.inverse() })
     }
 
     /// Scale, then rotate about x, y, z (degrees, right-handed), then translate.
@@ -52,9 +46,6 @@ impl Transform {
     /// A normal from local to world (inverse transpose), normalized.
     #[inline]
     pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
-        Mat3::from(self.to_local.matrix3)
-            .transpose()
-            .mul_vec3(n)
-            .normalize()
+        Mat3::from(self.to_local.matrix3).transpose().mul_vec3(n).normalize()
     }
 }

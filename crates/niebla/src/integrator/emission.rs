@@ -9,9 +9,7 @@ use crate::sampling::PixelSampler;
 use crate::scene::Scene;
 use crate::tracking::{medium_range, segment_transmittance, MarchStep, TransmittanceMethod};
 
-use super::{
-    default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance,
-};
+use super::{default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance};
 
 /// Emission and absorption only. With `TransmittanceMethod::Analytic` a
 /// homogeneous segment is integrated in closed form,
@@ -26,32 +24,11 @@ pub struct EmissionIntegrator {
 }
 
 impl Integrator for EmissionIntegrator {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        medium: Option<MediumId>,
-        sampler: &mut PixelSampler,
-    ) -> Rgb {
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(
-            scene,
-            ray,
-            medium,
-            self.transmittance,
-            sampler,
-            |m, _, ray, t_end, sampler| {
-                emission_segment(
-                    m,
-                    ray,
-                    t_end,
-                    self.step,
-                    self.transmittance,
-                    diagonal,
-                    sampler,
-                )
-            },
-        )
+        trace_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, _, ray, t_end, sampler| {
+            emission_segment(m, ray, t_end, self.step, self.transmittance, diagonal, sampler)
+        })
     }
 }
 
@@ -85,10 +62,7 @@ pub(crate) fn emission_segment(
                 l * t_end.min(cap)
             }
         }));
-        return SegmentRadiance {
-            radiance,
-            transmittance,
-        };
+        return SegmentRadiance { radiance, transmittance };
     }
     if !m.is_emissive() {
         return SegmentRadiance {
@@ -97,10 +71,7 @@ pub(crate) fn emission_segment(
         };
     }
     let Some((t_a, t_b)) = marched_range(m, ray, t_end, diagonal) else {
-        return SegmentRadiance {
-            radiance: Rgb::ZERO,
-            transmittance: Rgb::ONE,
-        };
+        return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
     };
     let step = step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
     let mut s = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, _, _| mp.l_ve);
@@ -113,23 +84,13 @@ pub(crate) fn emission_segment(
 /// The range `[t_a, t_b]` of `[0, t_end)` that is ray marched: the medium's
 /// extent (a grid's box), with unbounded homogeneous segments cut where their
 /// remaining contribution is negligible (see [`emission_segment`]).
-pub(crate) fn marched_range(
-    m: &Medium,
-    ray: &Ray,
-    t_end: f32,
-    diagonal: f32,
-) -> Option<(f32, f32)> {
+pub(crate) fn marched_range(m: &Medium, ray: &Ray, t_end: f32, diagonal: f32) -> Option<(f32, f32)> {
     let (t_a, t_b) = medium_range(m, ray, 0.0, t_end)?;
     if t_b.is_finite() {
         return Some((t_a, t_b));
     }
-    let sigma_t = m
-        .as_homogeneous()
-        .map_or(Rgb::splat(m.max_sigma_t()), |h| h.sigma_t());
-    Some((
-        t_a,
-        t_a + negligible_distance(sigma_t).unwrap_or(1000.0 * diagonal.max(1.0)),
-    ))
+    let sigma_t = m.as_homogeneous().map_or(Rgb::splat(m.max_sigma_t()), |h| h.sigma_t());
+    Some((t_a, t_a + negligible_distance(sigma_t).unwrap_or(1000.0 * diagonal.max(1.0))))
 }
 
 /// Jittered ray march of `integral T(t_a, t) S(t) dt` over `[t_a, t_b]` in
@@ -165,20 +126,14 @@ pub(crate) fn march_segment(
         sigma_t = mp.sigma_t();
         tr *= step_transmittance(m, ray, t_prev, t, sigma_t, method, sampler);
         if tr.max_channel() <= 0.0 {
-            return SegmentRadiance {
-                radiance: l,
-                transmittance: Rgb::ZERO,
-            };
+            return SegmentRadiance { radiance: l, transmittance: Rgb::ZERO };
         }
         let s = source(&mp, p, sampler);
         l += tr * s * dt;
         t_prev = t;
     }
     tr *= step_transmittance(m, ray, t_prev, t_b, sigma_t, method, sampler);
-    SegmentRadiance {
-        radiance: l,
-        transmittance: tr,
-    }
+    SegmentRadiance { radiance: l, transmittance: tr }
 }
 
 /// Transmittance between consecutive march points.

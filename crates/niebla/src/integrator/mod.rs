@@ -27,13 +27,7 @@ use crate::tracking::{MarchStep, TransmittanceMethod};
 pub trait Integrator: Sync {
     /// Radiance (W/(sr m^2)) arriving at `ray.o` from direction `-ray.d`, for a
     /// ray that starts inside `medium`.
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        medium: Option<MediumId>,
-        sampler: &mut PixelSampler,
-    ) -> Rgb;
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb;
 }
 
 /// Which integrator to run and its parameters (built from the scene file and
@@ -84,16 +78,8 @@ impl IntegratorSettings {
 /// path of the densest channel, but never coarser than 1/64 of the scene
 /// diagonal and at most 4096 steps over the diagonal.
 pub fn default_march_step(max_sigma_t: f32, scene_diagonal: f32) -> MarchStep {
-    let diag = if scene_diagonal.is_finite() && scene_diagonal > 0.0 {
-        scene_diagonal
-    } else {
-        10.0
-    };
-    let mfp_step = if max_sigma_t > 0.0 {
-        0.25 / max_sigma_t
-    } else {
-        f32::INFINITY
-    };
+    let diag = if scene_diagonal.is_finite() && scene_diagonal > 0.0 { scene_diagonal } else { 10.0 };
+    let mfp_step = if max_sigma_t > 0.0 { 0.25 / max_sigma_t } else { f32::INFINITY };
     MarchStep::Length(mfp_step.min(diag / 64.0).max(diag / 4096.0))
 }
 

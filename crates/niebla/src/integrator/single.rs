@@ -12,9 +12,7 @@ use crate::scene::Scene;
 use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
 
 use super::emission::{emission_segment, march_segment, marched_range};
-use super::{
-    default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance,
-};
+use super::{default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance};
 
 /// How the single-scattering integrator picks scattering points on a camera ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,24 +40,11 @@ pub struct SingleIntegrator {
 }
 
 impl Integrator for SingleIntegrator {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        medium: Option<MediumId>,
-        sampler: &mut PixelSampler,
-    ) -> Rgb {
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(
-            scene,
-            ray,
-            medium,
-            self.transmittance,
-            sampler,
-            |m, id, ray, t_end, sampler| {
-                self.segment_in(scene, m, id, ray, t_end, diagonal, sampler)
-            },
-        )
+        trace_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, id, ray, t_end, sampler| {
+            self.segment_in(scene, m, id, ray, t_end, diagonal, sampler)
+        })
     }
 }
 
@@ -76,15 +61,7 @@ impl SingleIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        self.segment_in(
-            scene,
-            scene.medium(id),
-            id,
-            ray,
-            t_end,
-            scene.diagonal(),
-            sampler,
-        )
+        self.segment_in(scene, scene.medium(id), id, ray, t_end, scene.diagonal(), sampler)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -122,46 +99,24 @@ impl SingleIntegrator {
         diagonal: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let emitted = emission_segment(
-            m,
-            ray,
-            t_end,
-            self.step,
-            self.transmittance,
-            diagonal,
-            sampler,
-        );
+        let emitted = emission_segment(m, ray, t_end, self.step, self.transmittance, diagonal, sampler);
         let Some((t_a, t_b)) = marched_range(m, ray, t_end, diagonal) else {
             return emitted;
         };
-        let step = self
-            .step
-            .unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
+        let step = self.step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
         let wo = -ray.d;
         let method = self.transmittance;
         let scattered = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, p, sampler| {
             let mut source = Rgb::ZERO;
             if !mp.sigma_s.is_black() {
                 for light in &scene.lights {
-                    source += light_in_scattered_radiance(
-                        scene,
-                        light,
-                        p,
-                        wo,
-                        m.phase(),
-                        Some(id),
-                        method,
-                        sampler,
-                    );
+                    source += light_in_scattered_radiance(scene, light, p, wo, m.phase(), Some(id), method, sampler);
                 }
                 source *= mp.sigma_s;
             }
             source
         });
-        SegmentRadiance {
-            radiance: emitted.radiance + scattered.radiance,
-            transmittance: emitted.transmittance,
-        }
+        SegmentRadiance { radiance: emitted.radiance + scattered.radiance, transmittance: emitted.transmittance }
     }
 
     /// Sampled segment: emission as in the emission integrator, in-scattering
@@ -178,15 +133,7 @@ impl SingleIntegrator {
         diagonal: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let mut seg = emission_segment(
-            m,
-            ray,
-            t_end,
-            self.step,
-            self.transmittance,
-            diagonal,
-            sampler,
-        );
+        let mut seg = emission_segment(m, ray, t_end, self.step, self.transmittance, diagonal, sampler);
         let wo = -ray.d;
         let mis = self.sampling == SingleSampling::Mis;
 
@@ -208,9 +155,7 @@ impl SingleIntegrator {
                     let mut li = Rgb::ZERO;
                     for light in &scene.lights {
                         let weight = match equiangular_target(light, ray, t_end) {
-                            PointLightTarget::Interval(e) if mis => {
-                                balance_heuristic(pdf, e.pdf(t))
-                            }
+                            PointLightTarget::Interval(e) if mis => balance_heuristic(pdf, e.pdf(t)),
                             // Equiangular sampling alone covers its interval.
                             PointLightTarget::Interval(e) if e.contains(t) => 0.0,
                             PointLightTarget::Missed => 0.0,
@@ -248,27 +193,14 @@ impl SingleIntegrator {
             if !(pdf > 0.0 && pdf.is_finite()) {
                 continue;
             }
-            let weight = if mis && can_distance_sample {
-                balance_heuristic(pdf, profile.pdf(t))
-            } else {
-                1.0
-            };
+            let weight = if mis && can_distance_sample { balance_heuristic(pdf, profile.pdf(t)) } else { 1.0 };
             let p = ray.at(t);
             let mp = m.at(p);
             if mp.sigma_s.is_black() {
                 continue;
             }
             let tr = segment_transmittance(m, ray, 0.0, t, self.transmittance, sampler);
-            let li = light_in_scattered_radiance(
-                scene,
-                light,
-                p,
-                wo,
-                m.phase(),
-                Some(id),
-                self.transmittance,
-                sampler,
-            );
+            let li = light_in_scattered_radiance(scene, light, p, wo, m.phase(), Some(id), self.transmittance, sampler);
             seg.radiance += tr * mp.sigma_s * li * (weight / pdf);
         }
         seg
@@ -330,13 +262,7 @@ fn equiangular_target(light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget 
         return PointLightTarget::Degenerate;
     };
     let (t_a, t_b) = match light {
-        Light::Spot(spot) => match cone_hull(
-            ray,
-            spot.position,
-            spot.frame.z,
-            spot.cutoff_angle.cos(),
-            t_end,
-        ) {
+        Light::Spot(spot) => match cone_hull(ray, spot.position, spot.frame.z, spot.cutoff_angle.cos(), t_end) {
             Some(range) => range,
             None => return PointLightTarget::Missed,
         },
@@ -382,11 +308,7 @@ fn cone_hull(ray: &Ray, apex: Vec3, axis: Vec3, cos_cutoff: f32, t_end: f32) -> 
         if hi <= lo {
             continue;
         }
-        let mid = if hi.is_finite() {
-            0.5 * (lo + hi)
-        } else {
-            lo + 1.0 + lo.abs()
-        };
+        let mid = if hi.is_finite() { 0.5 * (lo + hi) } else { lo + 1.0 + lo.abs() };
         if inside(mid) {
             hull = Some(match hull {
                 Some((a, _)) => (a, hi),
@@ -450,28 +372,15 @@ mod tests {
                     nonempty += 1;
                     let l = last.unwrap();
                     let tol = 2.0 * t_end / n as f32;
-                    assert!(
-                        a <= f + 1e-4 && b >= l - 1e-4,
-                        "hull {a}..{b} misses {f}..{l}"
-                    );
-                    assert!(
-                        a >= f - tol && b <= l + tol,
-                        "hull {a}..{b} too wide for {f}..{l}"
-                    );
+                    assert!(a <= f + 1e-4 && b >= l - 1e-4, "hull {a}..{b} misses {f}..{l}");
+                    assert!(a >= f - tol && b <= l + tol, "hull {a}..{b} too wide for {f}..{l}");
                 }
                 (Some(f), None) => {
                     // Only a sliver thinner than the walk could be missed by rounding.
-                    assert!(
-                        last.unwrap() - f < 1e-2,
-                        "missed inside range {f}..{:?}",
-                        last
-                    );
+                    assert!(last.unwrap() - f < 1e-2, "missed inside range {f}..{:?}", last);
                 }
                 (None, Some((a, b))) => {
-                    assert!(
-                        b - a < 2.0 * t_end / n as f32,
-                        "hull {a}..{b} where the walk finds nothing"
-                    );
+                    assert!(b - a < 2.0 * t_end / n as f32, "hull {a}..{b} where the walk finds nothing");
                 }
             }
         }

@@ -6,9 +6,7 @@
 
 use crate::color::Rgb;
 use crate::math::{Frame, Vec2, Vec3};
-use crate::sampling::{
-    cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf,
-};
+use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf};
 
 /// A closed set of lights.
 #[derive(Clone, Debug)]
@@ -112,13 +110,7 @@ impl Light {
                     return None;
                 }
                 let distance = d2.sqrt();
-                Some(LightSample {
-                    wi: to / distance,
-                    distance,
-                    li: l.intensity / d2,
-                    pdf: 1.0,
-                    is_delta: true,
-                })
+                Some(LightSample { wi: to / distance, distance, li: l.intensity / d2, pdf: 1.0, is_delta: true })
             }
             Light::Spot(l) => {
                 let to = l.position - p;
@@ -132,13 +124,7 @@ impl Light {
                 if f == 0.0 {
                     return None;
                 }
-                Some(LightSample {
-                    wi,
-                    distance,
-                    li: l.intensity * (f / d2),
-                    pdf: 1.0,
-                    is_delta: true,
-                })
+                Some(LightSample { wi, distance, li: l.intensity * (f / d2), pdf: 1.0, is_delta: true })
             }
             Light::Directional(l) => Some(LightSample {
                 wi: -l.direction,
@@ -151,23 +137,14 @@ impl Light {
                 let (wi, pdf) = match normal {
                     Some(n) => {
                         let local = sample_cosine_hemisphere(u);
-                        (
-                            Frame::from_z(n).to_world(local),
-                            cosine_hemisphere_pdf(local.z),
-                        )
+                        (Frame::from_z(n).to_world(local), cosine_hemisphere_pdf(local.z))
                     }
                     None => (sample_uniform_sphere(u), uniform_sphere_pdf()),
                 };
                 if pdf == 0.0 {
                     return None;
                 }
-                Some(LightSample {
-                    wi,
-                    distance: f32::INFINITY,
-                    li: l.radiance,
-                    pdf,
-                    is_delta: false,
-                })
+                Some(LightSample { wi, distance: f32::INFINITY, li: l.radiance, pdf, is_delta: false })
             }
         }
     }
@@ -232,13 +209,7 @@ mod tests {
             beam_width: 10f32.to_radians(),
         };
         assert_eq!(s.falloff(Vec3::Z), 1.0);
-        let at = |deg: f32| {
-            s.falloff(Vec3::new(
-                deg.to_radians().sin(),
-                0.0,
-                deg.to_radians().cos(),
-            ))
-        };
+        let at = |deg: f32| s.falloff(Vec3::new(deg.to_radians().sin(), 0.0, deg.to_radians().cos()));
         assert_eq!(at(9.0), 1.0);
         assert!((at(15.0) - 0.5).abs() < 1e-3);
         assert_eq!(at(21.0), 0.0);
@@ -246,10 +217,7 @@ mod tests {
 
     #[test]
     fn point_light_follows_inverse_square() {
-        let l = Light::Point(PointLight {
-            position: Vec3::new(0.0, 2.0, 0.0),
-            intensity: Rgb::splat(8.0),
-        });
+        let l = Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Rgb::splat(8.0) });
         let s = l.sample_li(Vec3::ZERO, None, Vec2::ZERO).unwrap();
         assert_eq!(s.li, Rgb::splat(2.0));
         assert!((s.wi - Vec3::Y).length() < 1e-6);

@@ -165,10 +165,7 @@ impl GridMedium {
     /// The ray in grid space (same parameter `t`; the direction is not unit).
     #[inline]
     pub fn ray_to_grid(&self, ray: &Ray) -> (Vec3, Vec3) {
-        (
-            self.world_to_grid.transform_point3(ray.o),
-            self.world_to_grid.transform_vector3(ray.d),
-        )
+        (self.world_to_grid.transform_point3(ray.o), self.world_to_grid.transform_vector3(ray.d))
     }
 
     /// Emitted radiance per unit length at world point `p` with density `density`.
@@ -178,11 +175,7 @@ impl GridMedium {
             GridEmission::None => Rgb::ZERO,
             GridEmission::ProportionalToDensity(l) => *l * density,
             GridEmission::Field { field, scale } => *scale * field.eval(p).max(0.0),
-            GridEmission::Temperature {
-                field,
-                scale,
-                table,
-            } => table.rgb(field.eval(p)) * *scale,
+            GridEmission::Temperature { field, scale, table } => table.rgb(field.eval(p)) * *scale,
         }
     }
 
@@ -190,11 +183,7 @@ impl GridMedium {
     #[inline]
     pub fn point(&self, p: Vec3) -> MediumPoint {
         let d = self.density_at(p);
-        MediumPoint {
-            sigma_a: self.sigma_a * d,
-            sigma_s: self.sigma_s * d,
-            l_ve: self.l_ve(p, d),
-        }
+        MediumPoint { sigma_a: self.sigma_a * d, sigma_s: self.sigma_s * d, l_ve: self.l_ve(p, d) }
     }
 
     /// Largest extinction anywhere (max over channels).
@@ -206,10 +195,7 @@ impl GridMedium {
     /// world bounds, if any.
     #[inline]
     pub fn clip(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(f32, f32)> {
-        let b = crate::geometry::AxisAlignedBox {
-            min: self.world_bounds.0,
-            max: self.world_bounds.1,
-        };
+        let b = crate::geometry::AxisAlignedBox { min: self.world_bounds.0, max: self.world_bounds.1 };
         let (near, far) = b.slab_range(ray);
         let (t0, t1) = (near.max(t_min), far.min(t_max));
         (t0 < t1).then_some((t0, t1))

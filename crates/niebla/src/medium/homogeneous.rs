@@ -26,10 +26,6 @@ impl HomogeneousMedium {
     /// Coefficients at any point.
     #[inline]
     pub fn point(&self) -> MediumPoint {
-        MediumPoint {
-            sigma_a: self.sigma_a,
-            sigma_s: self.sigma_s,
-            l_ve: self.l_ve,
-        }
+        MediumPoint { sigma_a: self.sigma_a, sigma_s: self.sigma_s, l_ve: self.l_ve }
     }
 }

@@ -46,10 +46,7 @@ impl CornetteShanks {
     pub fn new(g: f32) -> Result<CornetteShanks, PhaseError> {
         let hg = HenyeyGreenstein::new(check_open_unit("g", g)?)?;
         let g = hg.g();
-        Ok(CornetteShanks {
-            hg,
-            factor: 3.0 / (2.0 * (2.0 + g * g)),
-        })
+        Ok(CornetteShanks { hg, factor: 3.0 / (2.0 * (2.0 + g * g)) })
     }
 
     /// The HG parameter g in use (after clamping).
@@ -72,8 +69,7 @@ impl CornetteShanks {
     /// Scattering cosine from one uniform number (the rejection stream is
     /// keyed by its bits); `None` with probability below 3e-31.
     pub fn sample_mu(&self, u: f32) -> Option<f32> {
-        self.sample_cosine(u, hash_u64(u.to_bits() as u64))
-            .map(|c| c.mu)
+        self.sample_cosine(u, hash_u64(u.to_bits() as u64)).map(|c| c.mu)
     }
 
     /// Rejection sampling against HG: first candidate from `u`, acceptance
@@ -116,10 +112,7 @@ mod tests {
             for mu in [-1.0f32, -0.3, 0.0, 0.6, 1.0] {
                 let (g, m) = (g as f64, mu as f64);
                 let expected = 3.0 * (1.0 - g * g) * (1.0 + m * m)
-                    / (8.0
-                        * std::f64::consts::PI
-                        * (2.0 + g * g)
-                        * (1.0 + g * g - 2.0 * g * m).powf(1.5));
+                    / (8.0 * std::f64::consts::PI * (2.0 + g * g) * (1.0 + g * g - 2.0 * g * m).powf(1.5));
                 assert!((cs.eval_mu(mu) as f64 / expected - 1.0).abs() < 1e-5);
             }
         }

@@ -31,11 +31,7 @@ impl DoubleHg {
         if !(0.0..=1.0).contains(&w) {
             return Err(PhaseError::parameter("w", w, "0 <= w <= 1"));
         }
-        Ok(DoubleHg {
-            w,
-            lobe1: HenyeyGreenstein::new_named("g1", g1)?,
-            lobe2: HenyeyGreenstein::new_named("g2", g2)?,
-        })
+        Ok(DoubleHg { w, lobe1: HenyeyGreenstein::new_named("g1", g1)?, lobe2: HenyeyGreenstein::new_named("g2", g2)? })
     }
 
     /// Weight of the first lobe.

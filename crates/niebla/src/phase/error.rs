@@ -54,11 +54,7 @@ pub enum PhaseError {
 impl PhaseError {
     /// A parameter out of range.
     pub(crate) fn parameter(name: &'static str, value: f32, expected: &'static str) -> PhaseError {
-        PhaseError::Parameter {
-            name,
-            value: value as f64,
-            expected,
-        }
+        PhaseError::Parameter { name, value: value as f64, expected }
     }
 }
 

@@ -30,17 +30,13 @@ impl HenyeyGreenstein {
     /// Errors on `|g| >= 1` or NaN.
     pub fn new(g: f32) -> Result<HenyeyGreenstein, PhaseError> {
         let g = check_open_unit("g", g)?;
-        Ok(HenyeyGreenstein {
-            g: g.clamp(-MAX_HG_ASYMMETRY, MAX_HG_ASYMMETRY),
-        })
+        Ok(HenyeyGreenstein { g: g.clamp(-MAX_HG_ASYMMETRY, MAX_HG_ASYMMETRY) })
     }
 
     /// HG whose parameter name in error messages is `name` (for lobes of mixtures).
     pub(crate) fn new_named(name: &'static str, g: f32) -> Result<HenyeyGreenstein, PhaseError> {
         let g = check_open_unit(name, g)?;
-        Ok(HenyeyGreenstein {
-            g: g.clamp(-MAX_HG_ASYMMETRY, MAX_HG_ASYMMETRY),
-        })
+        Ok(HenyeyGreenstein { g: g.clamp(-MAX_HG_ASYMMETRY, MAX_HG_ASYMMETRY) })
     }
 
     /// The asymmetry in use (after clamping), which is also the mean cosine.
@@ -113,13 +109,9 @@ mod tests {
             for mu in [-1.0f32, -0.5, 0.0, 0.3, 0.99, 1.0] {
                 let g = g as f64;
                 let mu64 = mu as f64;
-                let expected = (1.0 - g * g)
-                    / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * mu64).powf(1.5));
+                let expected = (1.0 - g * g) / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * mu64).powf(1.5));
                 let got = hg.eval_mu(mu) as f64;
-                assert!(
-                    (got / expected - 1.0).abs() < 1e-5,
-                    "g {g} mu {mu}: {got} vs {expected}"
-                );
+                assert!((got / expected - 1.0).abs() < 1e-5, "g {g} mu {mu}: {got} vs {expected}");
             }
         }
     }
@@ -146,9 +138,6 @@ mod tests {
             assert!(HenyeyGreenstein::new(g).is_err());
         }
         assert_eq!(HenyeyGreenstein::new(0.999).unwrap().g(), MAX_HG_ASYMMETRY);
-        assert_eq!(
-            HenyeyGreenstein::new(-0.995).unwrap().g(),
-            -MAX_HG_ASYMMETRY
-        );
+        assert_eq!(HenyeyGreenstein::new(-0.995).unwrap().g(), -MAX_HG_ASYMMETRY);
     }
 }

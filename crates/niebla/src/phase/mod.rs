@@ -108,11 +108,7 @@ impl ScatteringCosine {
     #[inline]
     pub fn from_mu(mu: f32) -> ScatteringCosine {
         let mu = mu.clamp(-1.0, 1.0);
-        ScatteringCosine {
-            mu,
-            one_minus_mu: 1.0 - mu,
-            one_plus_mu: 1.0 + mu,
-        }
+        ScatteringCosine { mu, one_minus_mu: 1.0 - mu, one_plus_mu: 1.0 + mu }
     }
 
     /// From the scattering angle `theta` in radians (0 = forward), in double
@@ -133,18 +129,10 @@ impl ScatteringCosine {
     pub fn from_complements(one_minus_mu: f32, one_plus_mu: f32) -> ScatteringCosine {
         if one_minus_mu <= one_plus_mu {
             let one_minus_mu = one_minus_mu.clamp(0.0, 1.0);
-            ScatteringCosine {
-                mu: 1.0 - one_minus_mu,
-                one_minus_mu,
-                one_plus_mu: 2.0 - one_minus_mu,
-            }
+            ScatteringCosine { mu: 1.0 - one_minus_mu, one_minus_mu, one_plus_mu: 2.0 - one_minus_mu }
         } else {
             let one_plus_mu = one_plus_mu.clamp(0.0, 1.0);
-            ScatteringCosine {
-                mu: one_plus_mu - 1.0,
-                one_minus_mu: 2.0 - one_plus_mu,
-                one_plus_mu,
-            }
+            ScatteringCosine { mu: one_plus_mu - 1.0, one_minus_mu: 2.0 - one_plus_mu, one_plus_mu }
         }
     }
 
@@ -244,20 +232,14 @@ impl PhaseFunction {
             PhaseFunction::DoubleHg(f) => f.sample_cosine(u.x),
             PhaseFunction::Schlick(f) => f.sample_cosine(u.x),
             PhaseFunction::Rayleigh => Rayleigh.sample_cosine(u.x),
-            PhaseFunction::CornetteShanks(f) => {
-                f.sample_cosine(u.x, cornette_shanks::rejection_key(u))?
-            }
+            PhaseFunction::CornetteShanks(f) => f.sample_cosine(u.x, cornette_shanks::rejection_key(u))?,
             PhaseFunction::Tabulated(f) => f.sample_cosine(u.x),
         };
         let wi = direction_from_cosine(wo, c, u.y);
         // Evaluated from the returned (rounded) direction, so that
         // `pdf(wo, s.wi) == s.pdf` holds bit for bit.
         let value = self.eval(wo, wi);
-        Some(PhaseSample {
-            wi,
-            value,
-            pdf: value,
-        })
+        Some(PhaseSample { wi, value, pdf: value })
     }
 
     /// Mean cosine `<mu> = integral of p mu over the sphere` (the asymmetry

@@ -26,9 +26,7 @@ pub struct Schlick {
 impl Schlick {
     /// Schlick with parameter `k` in (-1, 1).
     pub fn new(k: f32) -> Result<Schlick, PhaseError> {
-        Ok(Schlick {
-            k: check_open_unit("k", k)?,
-        })
+        Ok(Schlick { k: check_open_unit("k", k)? })
     }
 
     /// Schlick whose mean cosine is exactly `g` (to f32 precision), with `k`
@@ -53,11 +51,7 @@ impl Schlick {
     #[inline]
     pub fn eval_cosine(&self, c: ScatteringCosine) -> f32 {
         let k = self.k;
-        let denom = if k >= 0.0 {
-            (1.0 - k) + k * c.one_minus_mu
-        } else {
-            (1.0 + k) - k * c.one_plus_mu
-        };
+        let denom = if k >= 0.0 { (1.0 - k) + k * c.one_minus_mu } else { (1.0 + k) - k * c.one_plus_mu };
         (1.0 - k) * (1.0 + k) * INV_4PI / (denom * denom)
     }
 
@@ -155,10 +149,7 @@ mod tests {
     fn schlick_mean_cosine_series_and_closed_form_agree_at_switch() {
         // d<mu>/dk ~ 2/3, so the 2e-12 step moves <mu> by 1.3e-12; the closed
         // form loses ~1e-14 to cancellation at k = 0.05.
-        let (a, b) = (
-            schlick_mean_cosine(0.05 - 1e-12),
-            schlick_mean_cosine(0.05 + 1e-12),
-        );
+        let (a, b) = (schlick_mean_cosine(0.05 - 1e-12), schlick_mean_cosine(0.05 + 1e-12));
         assert!((b - a - 1.334e-12).abs() < 1e-13, "{a} vs {b}");
         assert!((schlick_mean_cosine(-0.3) + schlick_mean_cosine(0.3)).abs() < 1e-15);
     }

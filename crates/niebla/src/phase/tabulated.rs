@@ -55,11 +55,7 @@ impl Tabulated {
         if theta_deg.len() != p.len() {
             return Err(PhaseError::Table {
                 row: theta_deg.len().min(p.len()) + 1,
-                what: format!(
-                    "theta has {} values but p has {}: expected one p per angle",
-                    theta_deg.len(),
-                    p.len()
-                ),
+                what: format!("theta has {} values but p has {}: expected one p per angle", theta_deg.len(), p.len()),
             });
         }
         Tabulated::build(theta_deg, p, "theta", "p").map_err(|fault| PhaseError::Table {
@@ -73,37 +69,24 @@ impl Tabulated {
     /// column is named `theta_deg` (or `theta`), in degrees. Errors name the
     /// file, the line and what was expected.
     pub fn from_csv_file(path: &Path, column: &str) -> Result<Tabulated, PhaseError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PhaseError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|source| PhaseError::Io { path: path.to_path_buf(), source })?;
         Tabulated::from_csv_str(&text, column, &path.display().to_string())
     }
 
     /// Like [`Tabulated::from_csv_file`] for text already in memory;
     /// `source_name` names it in errors.
-    pub fn from_csv_str(
-        text: &str,
-        column: &str,
-        source_name: &str,
-    ) -> Result<Tabulated, PhaseError> {
+    pub fn from_csv_str(text: &str, column: &str, source_name: &str) -> Result<Tabulated, PhaseError> {
         let csv = parse_csv(text, column, source_name)?;
-        Tabulated::build(&csv.theta_deg, &csv.p, csv.theta_name, column).map_err(|fault| {
-            PhaseError::Csv {
-                source_name: source_name.to_string(),
-                line: fault.index.map_or(csv.last_line, |i| csv.lines[i]),
-                what: fault.what,
-            }
+        Tabulated::build(&csv.theta_deg, &csv.p, csv.theta_name, column).map_err(|fault| PhaseError::Csv {
+            source_name: source_name.to_string(),
+            line: fault.index.map_or(csv.last_line, |i| csv.lines[i]),
+            what: fault.what,
         })
     }
 
     /// Validate the rows, then build nodes, normalization, CDF and mean cosine.
-    fn build(
-        theta_deg: &[f64],
-        p: &[f64],
-        theta_name: &str,
-        p_name: &str,
-    ) -> Result<Tabulated, RowFault> {
+    fn build(theta_deg: &[f64], p: &[f64], theta_name: &str, p_name: &str) -> Result<Tabulated, RowFault> {
         let n = theta_deg.len();
         if n < 2 {
             return Err(RowFault {
@@ -112,26 +95,15 @@ impl Tabulated {
             });
         }
         for (i, (&theta, &value)) in theta_deg.iter().zip(p).enumerate() {
-            let fault = |what: String| {
-                Err(RowFault {
-                    index: Some(i),
-                    what,
-                })
-            };
+            let fault = |what: String| Err(RowFault { index: Some(i), what });
             if !theta.is_finite() {
-                return fault(format!(
-                    "{theta_name} = {theta}: expected a finite angle in degrees"
-                ));
+                return fault(format!("{theta_name} = {theta}: expected a finite angle in degrees"));
             }
             if !value.is_finite() {
-                return fault(format!(
-                    "{p_name} = {value}: expected a finite value in 1/sr"
-                ));
+                return fault(format!("{p_name} = {value}: expected a finite value in 1/sr"));
             }
             if value < 0.0 {
-                return fault(format!(
-                    "{p_name} = {value} is negative: expected p >= 0 (1/sr)"
-                ));
+                return fault(format!("{p_name} = {value} is negative: expected p >= 0 (1/sr)"));
             }
             if i > 0 && theta <= theta_deg[i - 1] {
                 return fault(format!(
@@ -189,15 +161,12 @@ impl Tabulated {
         }
 
         // Normalization: exact integral of the interpolant over the sphere.
-        let interval_mass =
-            |j: usize, v: &[f64]| std::f64::consts::PI * (mu[j + 1] - mu[j]) * (v[j] + v[j + 1]);
+        let interval_mass = |j: usize, v: &[f64]| std::f64::consts::PI * (mu[j + 1] - mu[j]) * (v[j] + v[j + 1]);
         let normalization: f64 = (0..n - 1).map(|j| interval_mass(j, &values)).sum();
         if normalization <= 0.0 {
             return Err(RowFault {
                 index: None,
-                what: format!(
-                    "all {p_name} values are zero: expected a positive integral over the sphere"
-                ),
+                what: format!("all {p_name} values are zero: expected a positive integral over the sphere"),
             });
         }
         for v in &mut values {
@@ -219,14 +188,7 @@ impl Tabulated {
         }
         cdf[n - 1] = 1.0;
 
-        Ok(Tabulated {
-            theta_deg: theta_deg.to_vec(),
-            mu,
-            p: values,
-            cdf,
-            normalization,
-            mean_cosine,
-        })
+        Ok(Tabulated { theta_deg: theta_deg.to_vec(), mu, p: values, cdf, normalization, mean_cosine })
     }
 
     /// The table angles in degrees, ascending.
@@ -281,11 +243,7 @@ impl Tabulated {
         let h = m1 - m0;
         let c = (xi - self.cdf[j]).max(0.0) / (TWO_PI * h);
         let denom = p0 + (p0 * p0 + 2.0 * (p1 - p0) * c).max(0.0).sqrt();
-        let t = if denom > 0.0 {
-            (2.0 * c / denom).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
+        let t = if denom > 0.0 { (2.0 * c / denom).clamp(0.0, 1.0) } else { 0.0 };
         // 1 - mu and 1 + mu as sums of non-negative terms.
         let one_minus_mu = (1.0 - m1) + (1.0 - t) * h;
         let one_plus_mu = (1.0 + m0) + t * h;
@@ -325,9 +283,7 @@ mod tests {
             let mu = t.sample_cosine(u).mu_f64();
             let steps = 200_000;
             let h = (mu + 1.0) / steps as f64;
-            let cdf: f64 = (0..steps)
-                .map(|i| TWO_PI * t.eval_mu_f64(-1.0 + (i as f64 + 0.5) * h) * h)
-                .sum();
+            let cdf: f64 = (0..steps).map(|i| TWO_PI * t.eval_mu_f64(-1.0 + (i as f64 + 0.5) * h) * h).sum();
             assert!((cdf - u as f64).abs() < 1e-6, "u {u}: F = {cdf}");
         }
     }

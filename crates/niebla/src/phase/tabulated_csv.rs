@@ -32,21 +32,10 @@ pub(crate) struct CsvColumns {
 /// Read the angle column and `column` from CSV `text`: lines whose first
 /// non-blank character is `#` and blank lines are skipped; the first other
 /// line is the header; fields are separated by commas and trimmed.
-pub(crate) fn parse_csv(
-    text: &str,
-    column: &str,
-    source_name: &str,
-) -> Result<CsvColumns, PhaseError> {
-    let error = |line: usize, what: String| PhaseError::Csv {
-        source_name: source_name.to_string(),
-        line,
-        what,
-    };
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+pub(crate) fn parse_csv(text: &str, column: &str, source_name: &str) -> Result<CsvColumns, PhaseError> {
+    let error = |line: usize, what: String| PhaseError::Csv { source_name: source_name.to_string(), line, what };
+    let mut rows =
+        text.lines().enumerate().map(|(i, l)| (i + 1, l.trim())).filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
     let last_line = text.lines().count().max(1);
 
     // Header
@@ -57,9 +46,8 @@ pub(crate) fn parse_csv(
         ));
     };
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let Some((theta_index, theta_name)) = THETA_COLUMNS
-        .iter()
-        .find_map(|&t| names.iter().position(|&n| n == t).map(|i| (i, t)))
+    let Some((theta_index, theta_name)) =
+        THETA_COLUMNS.iter().find_map(|&t| names.iter().position(|&n| n == t).map(|i| (i, t)))
     else {
         return Err(error(
             header_line,
@@ -71,23 +59,11 @@ pub(crate) fn parse_csv(
         ));
     };
     let Some(p_index) = names.iter().position(|&n| n == column) else {
-        return Err(error(
-            header_line,
-            format!(
-                "header has no column '{column}' (found: {})",
-                names.join(", ")
-            ),
-        ));
+        return Err(error(header_line, format!("header has no column '{column}' (found: {})", names.join(", "))));
     };
 
     // Data rows
-    let mut out = CsvColumns {
-        theta_name,
-        theta_deg: Vec::new(),
-        p: Vec::new(),
-        lines: Vec::new(),
-        last_line,
-    };
+    let mut out = CsvColumns { theta_name, theta_deg: Vec::new(), p: Vec::new(), lines: Vec::new(), last_line };
     for (line, text) in rows {
         let fields: Vec<&str> = text.split(',').map(str::trim).collect();
         if fields.len() != names.len() {
@@ -102,13 +78,7 @@ pub(crate) fn parse_csv(
         }
         let number = |index: usize, name: &str| {
             fields[index].parse::<f64>().map_err(|_| {
-                error(
-                    line,
-                    format!(
-                        "{name} = '{}' is not a number: expected a decimal number",
-                        fields[index]
-                    ),
-                )
+                error(line, format!("{name} = '{}' is not a number: expected a decimal number", fields[index]))
             })
         };
         out.theta_deg.push(number(theta_index, theta_name)?);

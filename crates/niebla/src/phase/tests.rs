@@ -20,12 +20,7 @@ struct Case {
 }
 
 fn case(name: &str, phase: PhaseFunction, mean_cosine: f64) -> Case {
-    Case {
-        name: name.to_string(),
-        phase,
-        mean_cosine,
-        breakpoints_deg: Vec::new(),
-    }
+    Case { name: name.to_string(), phase, mean_cosine, breakpoints_deg: Vec::new() }
 }
 
 /// Every function and several parameters, including the extremes.
@@ -40,56 +35,28 @@ fn catalogue() -> Vec<Case> {
         PhaseFunction::double_hg(0.5, 0.8, -0.3),
         0.5 * 0.8f32 as f64 + 0.5 * -0.3f32 as f64,
     ));
-    let (w, g1, g2) = (
-        FOG_W as f32 as f64,
-        FOG_G1 as f32 as f64,
-        FOG_G2 as f32 as f64,
-    );
+    let (w, g1, g2) = (FOG_W as f32 as f64, FOG_G1 as f32 as f64, FOG_G2 as f32 as f64);
     cases.push(case("fog", PhaseFunction::fog(), w * g1 + (1.0 - w) * g2));
     for k in [-0.6f32, 0.0, 0.5, 0.95] {
         let mean = schlick_mean_cosine(k as f64);
-        cases.push(case(
-            &format!("schlick({k})"),
-            PhaseFunction::schlick(k),
-            mean,
-        ));
+        cases.push(case(&format!("schlick({k})"), PhaseFunction::schlick(k), mean));
     }
     let k = k_for_mean_cosine(0.76).unwrap();
-    cases.push(case(
-        "schlick(<mu> = 0.76)",
-        PhaseFunction::schlick(k),
-        0.76,
-    ));
+    cases.push(case("schlick(<mu> = 0.76)", PhaseFunction::schlick(k), 0.76));
     cases.push(case("rayleigh", PhaseFunction::rayleigh(), 0.0));
     for g in [-0.5f32, 0.0, 0.76, 0.95] {
         let phase = PhaseFunction::cornette_shanks(g);
-        cases.push(case(
-            &format!("cornette_shanks({g})"),
-            phase,
-            cs_mean(g as f64),
-        ));
+        cases.push(case(&format!("cornette_shanks({g})"), phase, cs_mean(g as f64)));
     }
-    let small = Tabulated::from_table(&[0.0, 20.0, 90.0, 150.0, 180.0], &[9.0, 3.0, 0.5, 0.0, 1.0])
-        .unwrap();
+    let small = Tabulated::from_table(&[0.0, 20.0, 90.0, 150.0, 180.0], &[9.0, 3.0, 0.5, 0.0, 1.0]).unwrap();
     let small_mean = small.mean_cosine_f64();
-    let mut small_case = case(
-        "tabulated(5 rows)",
-        PhaseFunction::tabulated(small),
-        small_mean,
-    );
+    let mut small_case = case("tabulated(5 rows)", PhaseFunction::tabulated(small), small_mean);
     small_case.breakpoints_deg = vec![20.0, 90.0, 150.0];
     cases.push(small_case);
     let mie = PhaseFunction::mie_fog();
-    let PhaseFunction::Tabulated(table) = &mie else {
-        unreachable!()
-    };
+    let PhaseFunction::Tabulated(table) = &mie else { unreachable!() };
     let breakpoints_deg = table.theta_deg().to_vec();
-    cases.push(Case {
-        name: "mie_fog".to_string(),
-        phase: mie,
-        mean_cosine: FOG_MEAN_COSINE,
-        breakpoints_deg,
-    });
+    cases.push(Case { name: "mie_fog".to_string(), phase: mie, mean_cosine: FOG_MEAN_COSINE, breakpoints_deg });
     cases
 }
 
@@ -124,9 +91,7 @@ fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
 /// the forward peak) plus the given kinks.
 fn fine_edges(breakpoints_deg: &[f64]) -> Vec<f64> {
     let m = 400;
-    let mut edges: Vec<f64> = (0..=m)
-        .map(|j| PI64 * (j as f64 / m as f64).powi(2))
-        .collect();
+    let mut edges: Vec<f64> = (0..=m).map(|j| PI64 * (j as f64 / m as f64).powi(2)).collect();
     edges.extend(breakpoints_deg.iter().map(|d| d.to_radians()));
     edges.sort_by(f64::total_cmp);
     edges.dedup_by(|a, b| (*a - *b).abs() < 1e-13);
@@ -155,10 +120,7 @@ fn solid_angle_integral(
 fn sphere_integral(c: &Case, weight: &dyn Fn(f64) -> f64) -> f64 {
     let rule = gauss_legendre(12);
     let edges = fine_edges(&c.breakpoints_deg);
-    edges
-        .windows(2)
-        .map(|e| solid_angle_integral(&c.phase, e[0], e[1], &rule, weight))
-        .sum()
+    edges.windows(2).map(|e| solid_angle_integral(&c.phase, e[0], e[1], &rule, weight)).sum()
 }
 
 #[test]
@@ -190,16 +152,8 @@ fn mean_cosine_matches_documented_formula_and_quadrature() {
             reported - c.mean_cosine
         );
         let tolerance = if c.name == "mie_fog" { 2e-4 } else { 1e-6 };
-        assert!(
-            (quadrature - c.mean_cosine).abs() < tolerance,
-            "{}: {quadrature}",
-            c.name
-        );
-        assert!(
-            (reported - quadrature).abs() < 1e-6,
-            "{}: {reported}",
-            c.name
-        );
+        assert!((quadrature - c.mean_cosine).abs() < tolerance, "{}: {quadrature}", c.name);
+        assert!((reported - quadrature).abs() < 1e-6, "{}: {reported}", c.name);
     }
 }
 
@@ -296,9 +250,7 @@ struct Chi2Outcome {
 fn chi_square_test(sampler: &PhaseFunction, density: &Case, n: usize, seed: u64) -> Chi2Outcome {
     const THETA_BINS: usize = 40;
     const PHI_BINS: usize = 8;
-    let theta_edges: Vec<f64> = (0..=THETA_BINS)
-        .map(|j| PI64 * (j as f64 / THETA_BINS as f64).powi(2))
-        .collect();
+    let theta_edges: Vec<f64> = (0..=THETA_BINS).map(|j| PI64 * (j as f64 / THETA_BINS as f64).powi(2)).collect();
 
     // Expected probabilities per theta bin from quadrature over the fine edges
     // (the chi-square edges are a subset of them).
@@ -316,18 +268,14 @@ fn chi_square_test(sampler: &PhaseFunction, density: &Case, n: usize, seed: u64)
     let (mut sum_mu, mut sum_mu2) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let wo = sample_uniform_sphere(stream.next_2d());
-        let s = sampler
-            .sample(wo, stream.next_2d())
-            .expect("sampling succeeds");
+        let s = sampler.sample(wo, stream.next_2d()).expect("sampling succeeds");
         assert_eq!(s.pdf, sampler.pdf(wo, s.wi), "pdf(wo, wi) != sample.pdf");
         assert_eq!(s.value, s.pdf, "value != pdf for an exact sampler");
         assert!((s.wi.length() - 1.0).abs() < 1e-5, "wi not unit: {}", s.wi);
         let (wo64, wi64) = (wo.as_dvec3(), s.wi.as_dvec3());
         let theta = 2.0 * (wi64 + wo64).length().atan2((wi64 - wo64).length());
         let local = Frame::from_z(-wo).to_local(s.wi);
-        let phi = (local.y as f64)
-            .atan2(local.x as f64)
-            .rem_euclid(2.0 * PI64);
+        let phi = (local.y as f64).atan2(local.x as f64).rem_euclid(2.0 * PI64);
         let theta_bin = (theta_edges.partition_point(|&t| t <= theta) - 1).min(THETA_BINS - 1);
         let phi_bin = ((phi / (2.0 * PI64) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
         observed[theta_bin * PHI_BINS + phi_bin] += 1;
@@ -353,10 +301,7 @@ fn chi_square_test(sampler: &PhaseFunction, density: &Case, n: usize, seed: u64)
         chi2 += (pooled_observed - pooled_expected).powi(2) / pooled_expected;
         cells += 1;
     } else {
-        assert!(
-            pooled_observed <= 10.0,
-            "{pooled_observed} samples where {pooled_expected} expected"
-        );
+        assert!(pooled_observed <= 10.0, "{pooled_observed} samples where {pooled_expected} expected");
     }
     let dof = cells - 1;
     let mean = sum_mu / n as f64;
@@ -388,17 +333,8 @@ fn every_sampler_passes_chi_square_against_its_pdf() {
             mean_error,
             mean_error / outcome.standard_error
         );
-        assert!(
-            outcome.p_value > alpha,
-            "{}: p = {:e}",
-            c.name,
-            outcome.p_value
-        );
-        assert!(
-            mean_error.abs() < 5.0 * outcome.standard_error,
-            "{}",
-            c.name
-        );
+        assert!(outcome.p_value > alpha, "{}: p = {:e}", c.name, outcome.p_value);
+        assert!(mean_error.abs() < 5.0 * outcome.standard_error, "{}", c.name);
     }
 }
 
@@ -407,10 +343,7 @@ fn chi_square_test_rejects_a_slightly_wrong_pdf() {
     // Power check: samples of HG(0.9) tested against the density of HG(0.88).
     let wrong = case("hg(0.88)", PhaseFunction::hg(0.88), 0.88);
     let outcome = chi_square_test(&PhaseFunction::hg(0.9), &wrong, 1_000_000, 7);
-    println!(
-        "hg(0.9) vs hg(0.88): chi2 = {:.1}, dof = {}, p = {:e}",
-        outcome.chi2, outcome.dof, outcome.p_value
-    );
+    println!("hg(0.9) vs hg(0.88): chi2 = {:.1}, dof = {}, p = {:e}", outcome.chi2, outcome.dof, outcome.p_value);
     assert!(outcome.p_value < 1e-10);
 }
 
@@ -429,17 +362,12 @@ fn hg_forward_is_wi_equal_minus_wo() {
     let expected_forward = 0.19 / (4.0 * std::f32::consts::PI * 1e-3);
     let expected_backward = 0.19 / (4.0 * std::f32::consts::PI * 1.9f32.powi(3));
     assert!((forward / expected_forward - 1.0).abs() < 1e-4, "{forward}");
-    assert!(
-        (backward / expected_backward - 1.0).abs() < 1e-4,
-        "{backward}"
-    );
+    assert!((backward / expected_backward - 1.0).abs() < 1e-4, "{backward}");
     // Samples continue along -wo: mean of dot(wi, -wo) is g (1e5 samples, SE < 1.5e-3).
     let mut stream = PixelSampler::from_key(5);
     let n = 100_000;
-    let mean: f64 = (0..n)
-        .map(|_| phase.sample(wo, stream.next_2d()).unwrap().wi.dot(-wo) as f64)
-        .sum::<f64>()
-        / n as f64;
+    let mean: f64 =
+        (0..n).map(|_| phase.sample(wo, stream.next_2d()).unwrap().wi.dot(-wo) as f64).sum::<f64>() / n as f64;
     assert!((mean - 0.9).abs() < 5.0 * 1.5e-3, "{mean}");
 }
 
@@ -447,10 +375,7 @@ fn hg_forward_is_wi_equal_minus_wo() {
 fn hg_zero_and_schlick_zero_equal_isotropic() {
     for mu in [-1.0f32, -0.4, 0.0, 0.7, 1.0] {
         assert_eq!(PhaseFunction::hg(0.0).eval_mu(mu), crate::math::INV_4PI);
-        assert_eq!(
-            PhaseFunction::schlick(0.0).eval_mu(mu),
-            crate::math::INV_4PI
-        );
+        assert_eq!(PhaseFunction::schlick(0.0).eval_mu(mu), crate::math::INV_4PI);
         assert_eq!(PhaseFunction::isotropic().eval_mu(mu), crate::math::INV_4PI);
     }
 }
@@ -494,14 +419,9 @@ fn mie_fog_reproduces_csv_at_table_angles() {
     // divided by that factor (energy conservation, pdf == eval), so values at
     // the table angles are the CSV values / 1.00158: exact to f32 rounding
     // (1e-6) after removing it, within 1.6e-3 of the raw CSV.
-    let PhaseFunction::Tabulated(table) = PhaseFunction::mie_fog() else {
-        unreachable!()
-    };
+    let PhaseFunction::Tabulated(table) = PhaseFunction::mie_fog() else { unreachable!() };
     let normalization = table.normalization();
-    println!(
-        "mie_fog normalization of the interpolant = 1 {:+.2e}",
-        normalization - 1.0
-    );
+    println!("mie_fog normalization of the interpolant = 1 {:+.2e}", normalization - 1.0);
     assert!((normalization - 1.001_582).abs() < 1e-6);
     let rows = csv_column(MIE_FOG_COLUMN);
     assert_eq!(rows.len(), 243);
@@ -511,10 +431,7 @@ fn mie_fog_reproduces_csv_at_table_angles() {
         let relative = (got * normalization / p - 1.0).abs();
         worst = worst.max(relative);
         // Against the raw CSV: off by exactly the renormalization.
-        assert!(
-            (got / p - 1.0).abs() < 1.6e-3,
-            "theta {theta}: {got} vs {p}"
-        );
+        assert!((got / p - 1.0).abs() < 1.6e-3, "theta {theta}: {got} vs {p}");
     }
     println!("mie_fog worst relative error at table angles (normalization removed) = {worst:.2e}");
     assert!(worst < 1e-6);
@@ -522,9 +439,7 @@ fn mie_fog_reproduces_csv_at_table_angles() {
 
 #[test]
 fn fog_preset_is_the_poly_two_lobe_fit() {
-    let PhaseFunction::DoubleHg(fog) = PhaseFunction::fog() else {
-        unreachable!()
-    };
+    let PhaseFunction::DoubleHg(fog) = PhaseFunction::fog() else { unreachable!() };
     // reference/README.md section 5 table: w 0.97046, g1 0.90448, g2 -0.60107.
     assert!((fog.w() - 0.97046).abs() < 5e-6);
     assert!((fog.g1() - 0.90448).abs() < 5e-6);
@@ -555,10 +470,7 @@ fn bad_parameters_give_documented_errors() {
         text(DoubleHg::new(0.5, 0.5, -1.0).unwrap_err()),
         "phase parameter g2 = -1 is out of range: expected -1 < g2 < 1"
     );
-    assert_eq!(
-        text(Schlick::new(1.0).unwrap_err()),
-        "phase parameter k = 1 is out of range: expected -1 < k < 1"
-    );
+    assert_eq!(text(Schlick::new(1.0).unwrap_err()), "phase parameter k = 1 is out of range: expected -1 < k < 1");
     assert_eq!(
         text(CornetteShanks::new(f32::NAN).unwrap_err()),
         "phase parameter g = NaN is out of range: expected -1 < g < 1"
@@ -576,19 +488,10 @@ fn bad_parameters_give_documented_errors() {
 #[test]
 fn bad_csv_inputs_name_file_line_and_expectation() {
     let header = "# comment\ntheta_deg,p\n";
-    let error = |body: &str| {
-        Tabulated::from_csv_str(&format!("{header}{body}"), "p", "fog.csv")
-            .unwrap_err()
-            .to_string()
-    };
-    assert_eq!(
-        error("0,1\n90,abc\n180,1\n"),
-        "fog.csv, line 4: p = 'abc' is not a number: expected a decimal number"
-    );
-    assert_eq!(
-        error("0,1\n90,-0.5\n180,1\n"),
-        "fog.csv, line 4: p = -0.5 is negative: expected p >= 0 (1/sr)"
-    );
+    let error =
+        |body: &str| Tabulated::from_csv_str(&format!("{header}{body}"), "p", "fog.csv").unwrap_err().to_string();
+    assert_eq!(error("0,1\n90,abc\n180,1\n"), "fog.csv, line 4: p = 'abc' is not a number: expected a decimal number");
+    assert_eq!(error("0,1\n90,-0.5\n180,1\n"), "fog.csv, line 4: p = -0.5 is negative: expected p >= 0 (1/sr)");
     assert_eq!(
         error("0,1\n90,1\n90,1\n180,1\n"),
         "fog.csv, line 5: theta_deg = 90 deg does not increase (previous row 90 deg): \
@@ -604,39 +507,24 @@ fn bad_csv_inputs_name_file_line_and_expectation() {
         "fog.csv, line 3: table starts at theta_deg = 5 deg: expected the first row at 0 deg \
          (theta must span 0..180)"
     );
-    assert_eq!(
-        error("0,1\n"),
-        "fog.csv, line 3: found 1 data rows: expected at least 2 (theta = 0 and 180 deg)"
-    );
-    assert_eq!(
-        error("0,1\n180,1,3\n"),
-        "fog.csv, line 4: found 3 fields: expected 2 as in the header (line 2)"
-    );
+    assert_eq!(error("0,1\n"), "fog.csv, line 3: found 1 data rows: expected at least 2 (theta = 0 and 180 deg)");
+    assert_eq!(error("0,1\n180,1,3\n"), "fog.csv, line 4: found 3 fields: expected 2 as in the header (line 2)");
     assert_eq!(
         error("0,0\n180,0\n"),
         "fog.csv, line 4: all p values are zero: expected a positive integral over the sphere"
     );
     assert_eq!(
-        Tabulated::from_csv_str("angle,p\n0,1\n180,1\n", "p", "fog.csv")
-            .unwrap_err()
-            .to_string(),
+        Tabulated::from_csv_str("angle,p\n0,1\n180,1\n", "p", "fog.csv").unwrap_err().to_string(),
         "fog.csv, line 1: header has no 'theta_deg' column: expected the scattering angle in \
          degrees under 'theta_deg' or 'theta' (found: angle, p)"
     );
     assert_eq!(
-        Tabulated::from_csv_str("theta_deg,p\n0,1\n180,1\n", "q", "fog.csv")
-            .unwrap_err()
-            .to_string(),
+        Tabulated::from_csv_str("theta_deg,p\n0,1\n180,1\n", "q", "fog.csv").unwrap_err().to_string(),
         "fog.csv, line 1: header has no column 'q' (found: theta_deg, p)"
     );
     let missing = std::path::Path::new("/nonexistent/fog.csv");
-    let message = Tabulated::from_csv_file(missing, "p")
-        .unwrap_err()
-        .to_string();
-    assert!(
-        message.starts_with("cannot read phase table /nonexistent/fog.csv: "),
-        "{message}"
-    );
+    let message = Tabulated::from_csv_file(missing, "p").unwrap_err().to_string();
+    assert!(message.starts_with("cannot read phase table /nonexistent/fog.csv: "), "{message}");
 }
 
 #[test]

@@ -31,9 +31,7 @@ impl PixelSampler {
     /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with `seed`.
     pub fn new(seed: u64, x: u32, y: u32, sample_index: u64) -> PixelSampler {
         let pixel = ((y as u64) << 32) | x as u64;
-        let key = hash_u64(
-            hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03),
-        );
+        let key = hash_u64(hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03));
         let stratum = sample_index.wrapping_add(hash_u64(hash_u64(seed) ^ pixel) % 1_000_003);
         PixelSampler { key, dimension: 0, stratum }
     }

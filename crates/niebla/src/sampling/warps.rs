@@ -100,13 +100,7 @@ mod tests {
 
     /// Chi-square statistic of `n` samples `x` binned on [a, b] against the pdf
     /// integrated per bin by the midpoint rule on 64 sub-steps.
-    fn chi2_1d(
-        samples: &[f32],
-        a: f32,
-        b: f32,
-        bins: usize,
-        pdf: impl Fn(f32) -> f32,
-    ) -> (f64, usize) {
+    fn chi2_1d(samples: &[f32], a: f32, b: f32, bins: usize, pdf: impl Fn(f32) -> f32) -> (f64, usize) {
         let mut observed = vec![0f64; bins];
         for &x in samples {
             let i = (((x - a) / (b - a)) * bins as f32) as usize;
@@ -136,9 +130,7 @@ mod tests {
         // 50 bins: chi-square with 49 dof has mean 49, sd 9.9; 99.9% quantile ~ 86.
         let (t_a, t_b, t_c, h) = (0.0, 4.0, 1.3, 0.2);
         let mut s = PixelSampler::from_key(11);
-        let xs: Vec<f32> = (0..200_000)
-            .map(|_| sample_equiangular(s.next_1d(), t_a, t_b, t_c, h))
-            .collect();
+        let xs: Vec<f32> = (0..200_000).map(|_| sample_equiangular(s.next_1d(), t_a, t_b, t_c, h)).collect();
         let (chi2, _dof) = chi2_1d(&xs, t_a, t_b, 50, |t| equiangular_pdf(t, t_a, t_b, t_c, h));
         assert!(chi2 < 86.0, "chi2 = {chi2}");
     }
@@ -147,12 +139,8 @@ mod tests {
     fn truncated_exponential_sampler_matches_its_pdf() {
         let (sigma, t_max) = (1.7, 2.5);
         let mut s = PixelSampler::from_key(12);
-        let xs: Vec<f32> = (0..200_000)
-            .map(|_| sample_truncated_exponential(s.next_1d(), sigma, t_max))
-            .collect();
-        let (chi2, _) = chi2_1d(&xs, 0.0, t_max, 50, |t| {
-            truncated_exponential_pdf(t, sigma, t_max)
-        });
+        let xs: Vec<f32> = (0..200_000).map(|_| sample_truncated_exponential(s.next_1d(), sigma, t_max)).collect();
+        let (chi2, _) = chi2_1d(&xs, 0.0, t_max, 50, |t| truncated_exponential_pdf(t, sigma, t_max));
         assert!(chi2 < 86.0, "chi2 = {chi2}");
     }
 

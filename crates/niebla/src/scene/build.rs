@@ -10,12 +10,11 @@ use super::desc::*;
 use super::{RenderSettings, Scene, SceneError, SceneObject};
 use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
-use crate::color::Rgb;
 use crate::geometry::{AxisAlignedBox, Rectangle, Shape, Sphere, Transform};
 use crate::integrator::{IntegratorSettings, SingleSampling};
 use crate::light::{ConstantLight, DirectionalLight, Light, PointLight, SpotLight};
 use crate::math::{Frame, Vec3};
-use crate::medium::{HomogeneousMedium, Medium, MediumId};
+use crate::medium::MediumId;
 use crate::phase::{PhaseFunction, Schlick, Tabulated};
 use crate::tracking::{MarchStep, TransmittanceMethod};
 
@@ -30,11 +29,7 @@ pub struct BuiltScene {
 
 /// Build a validated description. `source` names the file in messages;
 /// `base_dir` resolves relative paths (phase tables, later grids).
-pub fn build_scene(
-    desc: &SceneDesc,
-    source: &str,
-    base_dir: &Path,
-) -> Result<BuiltScene, SceneError> {
+pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<BuiltScene, SceneError> {
     let err = |path: &str, message: String| SceneError::new(source, path, message);
 
     // Media, in name order (BTreeMap), so ids are stable.
@@ -42,26 +37,13 @@ pub fn build_scene(
     let mut medium_names = Vec::new();
     for (name, m) in &desc.media {
         let path = format!("media.{name}");
-        let medium = match m {
-            MediumDesc::Homogeneous(h) => {
-                let (sigma_a, sigma_s) = h.sigma_a_sigma_s();
-                let phase = build_phase(&h.phase, &format!("{path}.phase"), source, base_dir)?;
-                let l_ve = h.emission.map_or(Rgb::ZERO, |e| e.l_ve.to_rgb());
-                Medium::Homogeneous(HomogeneousMedium {
-                    sigma_a,
-                    sigma_s,
-                    l_ve,
-                    phase,
-                })
-            }
-        };
+        let phase = build_phase(m.phase(), &format!("{path}.phase"), source, base_dir)?;
+        let medium = super::build_medium::build_medium(m, &path, source, base_dir, phase)?;
         media.push(medium);
         medium_names.push(name.clone());
     }
     let medium_id = |name: &Option<String>| -> Option<MediumId> {
-        name.as_ref()
-            .and_then(|n| medium_names.iter().position(|m| m == n))
-            .map(|i| MediumId(i as u32))
+        name.as_ref().and_then(|n| medium_names.iter().position(|m| m == n)).map(|i| MediumId(i as u32))
     };
 
     // Shapes.
@@ -70,29 +52,17 @@ pub fn build_scene(
     for (i, s) in desc.shapes.iter().enumerate() {
         let path = format!("shapes[{i}]");
         let shape = match &s.geometry {
-            GeometryDesc::Sphere(d) => Shape::Sphere(Sphere {
-                center: Vec3::from(d.center),
-                radius: d.radius,
-            }),
-            GeometryDesc::Box(d) => Shape::Box(AxisAlignedBox {
-                min: Vec3::from(d.min),
-                max: Vec3::from(d.max),
-            }),
+            GeometryDesc::Sphere(d) => Shape::Sphere(Sphere { center: Vec3::from(d.center), radius: d.radius }),
+            GeometryDesc::Box(d) => Shape::Box(AxisAlignedBox { min: Vec3::from(d.min), max: Vec3::from(d.max) }),
             GeometryDesc::Rectangle(d) => {
-                let t = build_transform(&d.to_world).ok_or_else(|| {
-                    err(
-                        &format!("{path}.to_world"),
-                        "transform is singular (zero scale?)".into(),
-                    )
-                })?;
+                let t = build_transform(&d.to_world)
+                    .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
                 Shape::Rectangle(Rectangle::new(t))
             }
         };
         let bsdf = match s.bsdf {
             BsdfDesc::Null => Bsdf::Null,
-            BsdfDesc::Diffuse { reflectance } => Bsdf::Diffuse {
-                reflectance: reflectance.to_rgb(),
-            },
+            BsdfDesc::Diffuse { reflectance } => Bsdf::Diffuse { reflectance: reflectance.to_rgb() },
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
@@ -112,22 +82,18 @@ pub fn build_scene(
     for (i, l) in desc.lights.iter().enumerate() {
         let path = format!("lights[{i}]");
         lights.push(match l {
-            LightDesc::Point(p) => Light::Point(PointLight {
-                position: Vec3::from(p.position),
-                intensity: p.intensity.to_rgb(),
-            }),
+            LightDesc::Point(p) => {
+                Light::Point(PointLight { position: Vec3::from(p.position), intensity: p.intensity.to_rgb() })
+            }
             LightDesc::Spot(s) => {
                 let position = Vec3::from(s.position);
                 let axis = match s.aim {
                     SpotAimDesc::Target(t) => Vec3::from(t) - position,
                     SpotAimDesc::Direction(d) => Vec3::from(d),
                 };
-                let axis = axis.try_normalize().ok_or_else(|| {
-                    err(
-                        &path,
-                        "spot light target equals its position (no direction)".into(),
-                    )
-                })?;
+                let axis = axis
+                    .try_normalize()
+                    .ok_or_else(|| err(&path, "spot light target equals its position (no direction)".into()))?;
                 Light::Spot(SpotLight {
                     position,
                     frame: Frame::from_z(axis),
@@ -137,17 +103,12 @@ pub fn build_scene(
                 })
             }
             LightDesc::Directional(d) => Light::Directional(DirectionalLight {
-                direction: Vec3::from(d.direction).try_normalize().ok_or_else(|| {
-                    err(
-                        &format!("{path}.direction"),
-                        "must be a non-zero vector".into(),
-                    )
-                })?,
+                direction: Vec3::from(d.direction)
+                    .try_normalize()
+                    .ok_or_else(|| err(&format!("{path}.direction"), "must be a non-zero vector".into()))?,
                 irradiance: d.irradiance.to_rgb(),
             }),
-            LightDesc::Constant(c) => Light::Constant(ConstantLight {
-                radiance: c.radiance.to_rgb(),
-            }),
+            LightDesc::Constant(c) => Light::Constant(ConstantLight { radiance: c.radiance.to_rgb() }),
         });
     }
 
@@ -161,12 +122,7 @@ pub fn build_scene(
         c.width,
         c.height,
     )
-    .ok_or_else(|| {
-        err(
-            "camera",
-            "position, target and up do not define a view (parallel or equal)".into(),
-        )
-    })?;
+    .ok_or_else(|| err("camera", "position, target and up do not define a view (parallel or equal)".into()))?;
 
     // Bounds of everything positioned.
     let mut lo = camera.position;
@@ -182,17 +138,15 @@ pub fn build_scene(
             hi = hi.max(p);
         }
     }
+    for m in &media {
+        if let crate::medium::Medium::Grid(g) = m {
+            lo = lo.min(g.world_bounds.0);
+            hi = hi.max(g.world_bounds.1);
+        }
+    }
 
-    let mut scene = Scene {
-        camera,
-        objects,
-        media,
-        medium_names,
-        lights,
-        ambient_medium,
-        camera_medium: None,
-        bounds: (lo, hi),
-    };
+    let mut scene =
+        Scene { camera, objects, media, medium_names, lights, ambient_medium, camera_medium: None, bounds: (lo, hi) };
     assign_enclosing_exteriors(&mut scene, &explicit_exterior);
     scene.camera_medium = scene.medium_at(scene.camera.position);
 
@@ -250,9 +204,10 @@ pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
     };
     let transmittance = |t: &TransmittanceDesc, s: Option<MarchStep>| match t {
         TransmittanceDesc::Analytic => TransmittanceMethod::Analytic,
-        TransmittanceDesc::RayMarch => {
-            TransmittanceMethod::RayMarch(s.unwrap_or(MarchStep::Count(64)))
-        }
+        TransmittanceDesc::RayMarch => TransmittanceMethod::RayMarch(s.unwrap_or(MarchStep::Count(64))),
+        TransmittanceDesc::Delta => TransmittanceMethod::Delta,
+        TransmittanceDesc::Ratio => TransmittanceMethod::Ratio,
+        TransmittanceDesc::ResidualRatio => TransmittanceMethod::ResidualRatio,
     };
     match desc {
         IntegratorDesc::Single(s) => IntegratorSettings::Single {
@@ -275,13 +230,7 @@ pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
 /// or a row-major 4x4 matrix whose last row must be (0, 0, 0, 1).
 pub fn build_transform(desc: &TransformDesc) -> Option<Transform> {
     match *desc {
-        TransformDesc::Components {
-            scale,
-            rotate_x,
-            rotate_y,
-            rotate_z,
-            translate,
-        } => Transform::from_components(
+        TransformDesc::Components { scale, rotate_x, rotate_y, rotate_z, translate } => Transform::from_components(
             Vec3::from(scale),
             Vec3::new(rotate_x, rotate_y, rotate_z),
             Vec3::from(translate),
@@ -296,12 +245,7 @@ pub fn build_transform(desc: &TransformDesc) -> Option<Transform> {
     }
 }
 
-fn build_phase(
-    desc: &PhaseDesc,
-    path: &str,
-    source: &str,
-    base_dir: &Path,
-) -> Result<PhaseFunction, SceneError> {
+fn build_phase(desc: &PhaseDesc, path: &str, source: &str, base_dir: &Path) -> Result<PhaseFunction, SceneError> {
     let err = |e: crate::phase::PhaseError| SceneError::new(source, path, e.to_string());
     Ok(match desc {
         PhaseDesc::Isotropic => PhaseFunction::isotropic(),
@@ -311,12 +255,8 @@ fn build_phase(
         PhaseDesc::DoubleHenyeyGreenstein { w, g1, g2 } => {
             PhaseFunction::DoubleHg(crate::phase::DoubleHg::new(*w, *g1, *g2).map_err(err)?)
         }
-        PhaseDesc::Schlick(SchlickDesc::K(k)) => {
-            PhaseFunction::Schlick(Schlick::new(*k).map_err(err)?)
-        }
-        PhaseDesc::Schlick(SchlickDesc::G(g)) => {
-            PhaseFunction::Schlick(Schlick::with_mean_cosine(*g).map_err(err)?)
-        }
+        PhaseDesc::Schlick(SchlickDesc::K(k)) => PhaseFunction::Schlick(Schlick::new(*k).map_err(err)?),
+        PhaseDesc::Schlick(SchlickDesc::G(g)) => PhaseFunction::Schlick(Schlick::with_mean_cosine(*g).map_err(err)?),
         PhaseDesc::Rayleigh => PhaseFunction::rayleigh(),
         PhaseDesc::CornetteShanks { g } => {
             PhaseFunction::CornetteShanks(crate::phase::CornetteShanks::new(*g).map_err(err)?)

@@ -41,16 +41,8 @@ pub struct SceneError {
 
 impl SceneError {
     /// An error at `path` (may be empty) in `file`.
-    pub fn new(
-        file: impl Into<String>,
-        path: impl Into<String>,
-        message: impl Into<String>,
-    ) -> SceneError {
-        SceneError {
-            file: file.into(),
-            path: path.into(),
-            message: message.into(),
-        }
+    pub fn new(file: impl Into<String>, path: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError { file: file.into(), path: path.into(), message: message.into() }
     }
 }
 
@@ -84,10 +76,7 @@ pub(super) struct Located {
 
 impl Located {
     pub(super) fn new(path: impl Into<String>, message: impl Into<String>) -> Located {
-        Located {
-            path: path.into(),
-            message: message.into(),
-        }
+        Located { path: path.into(), message: message.into() }
     }
 
     /// Passes this error out through serde, keeping its path in the message;
@@ -120,8 +109,7 @@ fn path_string(path: &serde_path_to_error::Path) -> String {
     for segment in path.iter() {
         match segment {
             serde_path_to_error::Segment::Seq { index } => out.push_str(&format!("[{index}]")),
-            serde_path_to_error::Segment::Map { key }
-            | serde_path_to_error::Segment::Enum { variant: key } => {
+            serde_path_to_error::Segment::Map { key } | serde_path_to_error::Segment::Enum { variant: key } => {
                 out = join(&out, key);
             }
             serde_path_to_error::Segment::Unknown => out = join(&out, "?"),
@@ -148,27 +136,15 @@ fn join(outer: &str, inner: &str) -> String {
 /// Rust type names become words, and an unknown string in a closed set (such
 /// as `sampling`) is an unknown value rather than a "variant".
 fn normalize(path: String, message: &str) -> Located {
-    if let Some(field) = message
-        .strip_prefix("missing field `")
-        .and_then(|rest| rest.strip_suffix('`'))
-    {
-        return Located::new(
-            join(&path, field),
-            format!("missing required field `{field}`"),
-        );
+    if let Some(field) = message.strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`')) {
+        return Located::new(join(&path, field), format!("missing required field `{field}`"));
     }
     let message = message
         .replace("expected f32", "expected a number")
-        .replace(
-            "expected u32",
-            "expected a whole number from 0 to 4294967295",
-        )
+        .replace("expected u32", "expected a whole number from 0 to 4294967295")
         .replace("expected u64", "expected a whole number >= 0")
         .replace("unknown variant `", "unknown value `")
-        .replace(
-            ", there are no fields",
-            "; this type has no fields besides `type`",
-        );
+        .replace(", there are no fields", "; this type has no fields besides `type`");
     Located::new(path, message)
 }
 
@@ -180,10 +156,7 @@ fn normalize(path: String, message: &str) -> Located {
 enum Frame {
     /// An object, with the key whose value comes next (if read) and the keys
     /// seen so far.
-    Object {
-        key: Option<String>,
-        seen: HashSet<String>,
-    },
+    Object { key: Option<String>, seen: HashSet<String> },
     /// An array, with the index of the current element.
     Array { index: usize },
 }
@@ -206,10 +179,7 @@ fn scan(text: &str, stop: usize) -> Scan {
     let mut i = 0;
     while i < stop {
         match bytes.get(i).copied().unwrap_or(b' ') {
-            b'{' => stack.push(Frame::Object {
-                key: None,
-                seen: HashSet::new(),
-            }),
+            b'{' => stack.push(Frame::Object { key: None, seen: HashSet::new() }),
             b'[' => stack.push(Frame::Array { index: 0 }),
             b'}' | b']' => {
                 stack.pop();
@@ -221,15 +191,11 @@ fn scan(text: &str, stop: usize) -> Scan {
             },
             b'"' => {
                 let end = string_end(bytes, i);
-                if let Some(Frame::Object {
-                    key: key @ None,
-                    seen,
-                }) = stack.last_mut()
-                {
+                if let Some(Frame::Object { key: key @ None, seen }) = stack.last_mut() {
                     // A string where a key is expected: the key.
                     let raw = text.get(i..end).unwrap_or("");
-                    let name = serde_json::from_str::<String>(raw)
-                        .unwrap_or_else(|_| raw.trim_matches('"').to_string());
+                    let name =
+                        serde_json::from_str::<String>(raw).unwrap_or_else(|_| raw.trim_matches('"').to_string());
                     let is_duplicate = !seen.insert(name.clone());
                     *key = Some(name.clone());
                     if is_duplicate && duplicate.is_none() {
@@ -243,10 +209,7 @@ fn scan(text: &str, stop: usize) -> Scan {
         }
         i += 1;
     }
-    Scan {
-        path: path_of(&stack),
-        duplicate,
-    }
+    Scan { path: path_of(&stack), duplicate }
 }
 
 /// Index just past the string starting at the quote at `start`.
@@ -287,11 +250,7 @@ pub(super) fn find_duplicate_key(text: &str) -> Option<(String, String)> {
 /// Byte offset of serde_json's 1-based `line` and `column` (columns count
 /// bytes; the column of an error is that of its last byte read).
 pub(super) fn byte_offset(text: &str, line: usize, column: usize) -> usize {
-    let line_start: usize = text
-        .split_inclusive('\n')
-        .take(line.saturating_sub(1))
-        .map(str::len)
-        .sum();
+    let line_start: usize = text.split_inclusive('\n').take(line.saturating_sub(1)).map(str::len).sum();
     (line_start + column.saturating_sub(1)).min(text.len())
 }
 
@@ -311,10 +270,7 @@ mod tests {
     #[test]
     fn scanner_finds_duplicate_keys_with_their_path() {
         let text = r#"{"m": {"x": 1, "s": "\"x\"", "x": 2}, "x": 0}"#;
-        assert_eq!(
-            find_duplicate_key(text),
-            Some(("m.x".to_string(), "x".to_string()))
-        );
+        assert_eq!(find_duplicate_key(text), Some(("m.x".to_string(), "x".to_string())));
         assert_eq!(find_duplicate_key(r#"{"a": [{"x": 1}, {"x": 2}]}"#), None);
     }
 

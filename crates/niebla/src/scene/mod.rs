@@ -10,6 +10,7 @@
 //! ```
 
 mod build;
+mod build_medium;
 pub mod desc;
 mod error;
 mod parse;
@@ -20,9 +21,7 @@ pub use build::{build_scene, build_transform, integrator_settings, BuiltScene};
 pub use desc::*;
 pub use error::SceneError;
 pub use parse::{load_scene_file, parse_scene_str};
-pub use render_scene::{
-    offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS,
-};
+pub use render_scene::{offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS};
 
 use crate::integrator::IntegratorSettings;
 

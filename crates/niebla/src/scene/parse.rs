@@ -44,8 +44,7 @@ use super::error::{byte_offset, find_duplicate_key, path_at, Located, SceneError
 /// assert!(err.to_string().starts_with("fog.json: media.fog.sigam_s: unknown field `sigam_s`"));
 /// ```
 pub fn parse_scene_str(text: &str, source: &str) -> Result<SceneDesc, SceneError> {
-    let value: Value =
-        serde_json::from_str(text).map_err(|e| json_syntax_error(text, source, &e))?;
+    let value: Value = serde_json::from_str(text).map_err(|e| json_syntax_error(text, source, &e))?;
     check_top_level(&value, source)?;
     if let Some((path, key)) = find_duplicate_key(text) {
         return Err(SceneError::new(
@@ -80,11 +79,7 @@ fn json_syntax_error(text: &str, source: &str, e: &serde_json::Error) -> SceneEr
         return SceneError::new(
             source,
             path_at(text, offset),
-            format!(
-                "number out of range, expected a finite number (at line {} column {})",
-                e.line(),
-                e.column()
-            ),
+            format!("number out of range, expected a finite number (at line {} column {})", e.line(), e.column()),
         );
     }
     SceneError::new(source, "", format!("invalid JSON: {message}"))
@@ -98,10 +93,7 @@ fn check_top_level(value: &Value, source: &str) -> Result<(), SceneError> {
         return Err(SceneError::new(
             source,
             "",
-            format!(
-                "expected a JSON object at the top level, got {}",
-                describe(value)
-            ),
+            format!("expected a JSON object at the top level, got {}", describe(value)),
         ));
     };
     if let Some(Value::Number(n)) = object.get("version") {
@@ -109,9 +101,7 @@ fn check_top_level(value: &Value, source: &str) -> Result<(), SceneError> {
             return Err(SceneError::new(
                 source,
                 "version",
-                format!(
-                    "unsupported scene version {n}; this build of niebla reads version {SCENE_VERSION}"
-                ),
+                format!("unsupported scene version {n}; this build of niebla reads version {SCENE_VERSION}"),
             ));
         }
     }
@@ -138,10 +128,7 @@ type Object = Map<String, Value>;
 
 /// Reads any JSON object into a map; `expecting` completes "expected ..." when
 /// the value is not an object.
-fn read_object<'de, D: Deserializer<'de>>(
-    deserializer: D,
-    expecting: &'static str,
-) -> Result<Object, D::Error> {
+fn read_object<'de, D: Deserializer<'de>>(deserializer: D, expecting: &'static str) -> Result<Object, D::Error> {
     struct ObjectVisitor(&'static str);
     impl<'de> Visitor<'de> for ObjectVisitor {
         type Value = Object;
@@ -161,53 +148,29 @@ fn read_object<'de, D: Deserializer<'de>>(
 
 /// Takes the `type` tag out of a tagged object. A missing tag is an error
 /// unless there is a `default`.
-fn take_tag(
-    object: &mut Object,
-    kind: &str,
-    types: &[&str],
-    default: Option<&str>,
-) -> Result<String, Located> {
+fn take_tag(object: &mut Object, kind: &str, types: &[&str], default: Option<&str>) -> Result<String, Located> {
     match object.remove("type") {
         Some(Value::String(tag)) => Ok(tag),
         Some(other) => Err(Located::new(
             "type",
-            format!(
-                "expected a string naming the {kind} type, one of: {}; got {}",
-                types.join(", "),
-                describe(&other)
-            ),
+            format!("expected a string naming the {kind} type, one of: {}; got {}", types.join(", "), describe(&other)),
         )),
         None => default.map(str::to_string).ok_or_else(|| {
-            Located::new(
-                "type",
-                format!(
-                    "missing required field `type`; expected one of: {}",
-                    types.join(", ")
-                ),
-            )
+            Located::new("type", format!("missing required field `type`; expected one of: {}", types.join(", ")))
         }),
     }
 }
 
 /// The error for a `type` that names no variant.
 fn unknown_type(kind: &str, tag: &str, types: &[&str]) -> Located {
-    Located::new(
-        "type",
-        format!(
-            "unknown {kind} type {tag:?}; expected one of: {}",
-            types.join(", ")
-        ),
-    )
+    Located::new("type", format!("unknown {kind} type {tag:?}; expected one of: {}", types.join(", ")))
 }
 
 /// Takes `key` out of the object and deserializes it, if present.
 fn take<T: DeserializeOwned>(object: &mut Object, key: &str) -> Result<Option<T>, Located> {
     object
         .remove(key)
-        .map(|value| {
-            serde_path_to_error::deserialize(value)
-                .map_err(|e| Located::from_path_error(e).under(key))
-        })
+        .map(|value| serde_path_to_error::deserialize(value).map_err(|e| Located::from_path_error(e).under(key)))
         .transpose()
 }
 
@@ -239,11 +202,7 @@ macro_rules! deserialize_object {
 // Camera and render settings
 // ---------------------------------------------------------------------------
 
-deserialize_object!(
-    CameraDesc,
-    "a camera object with a \"type\" field",
-    parse_camera
-);
+deserialize_object!(CameraDesc, "a camera object with a \"type\" field", parse_camera);
 
 fn parse_camera(mut object: Object) -> Result<CameraDesc, Located> {
     let tag = take_tag(&mut object, "camera", CameraDesc::TYPES, None)?;
@@ -253,11 +212,7 @@ fn parse_camera(mut object: Object) -> Result<CameraDesc, Located> {
     }
 }
 
-deserialize_object!(
-    IntegratorDesc,
-    "an integrator object with a \"type\" field",
-    parse_integrator
-);
+deserialize_object!(IntegratorDesc, "an integrator object with a \"type\" field", parse_integrator);
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -347,15 +302,41 @@ fn one() -> f32 {
     1.0
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGrid {
+    #[serde(default)]
+    sigma_a: Option<ColorDesc>,
+    #[serde(default)]
+    sigma_s: Option<ColorDesc>,
+    #[serde(default)]
+    sigma_t: Option<ColorDesc>,
+    #[serde(default)]
+    albedo: Option<ColorDesc>,
+    #[serde(default = "one")]
+    scale: f32,
+    #[serde(default)]
+    phase: PhaseDesc,
+    #[serde(default)]
+    to_world: TransformDesc,
+    #[serde(default)]
+    emission: Option<GridEmissionDesc>,
+    #[serde(default)]
+    majorant_resolution: Option<ResolutionDesc>,
+}
+
+/// Fields only a grid medium accepts; a homogeneous medium with one of them
+/// gets an error that says so (rather than a bare "unknown field").
+const GRID_ONLY_FIELDS: &[&str] = &["density", "to_world", "majorant_resolution"];
+
 fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
-    let tag = take_tag(
-        &mut object,
-        "medium",
-        MediumDesc::TYPES,
-        Some("homogeneous"),
-    )?;
+    // Without a `type`, a medium with a `density` is a grid medium (as in
+    // design.md's sketch), any other homogeneous.
+    let default = if object.contains_key("density") { "grid" } else { "homogeneous" };
+    let tag = take_tag(&mut object, "medium", MediumDesc::TYPES, Some(default))?;
     match tag.as_str() {
         "homogeneous" => {
+            check_homogeneous_has_no_grid_fields(&object)?;
             let raw: RawHomogeneous = rest(object)?;
             let coefficients = coefficients(raw.sigma_a, raw.sigma_s, raw.sigma_t, raw.albedo)?;
             Ok(MediumDesc::Homogeneous(HomogeneousMediumDesc {
@@ -365,8 +346,178 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                 emission: raw.emission,
             }))
         }
+        "grid" => {
+            let density = take::<DensitySourceDesc>(&mut object, "density")?.ok_or_else(|| {
+                Located::new(
+                    "density",
+                    format!(
+                        "missing required field `density`: a grid medium needs a density \
+                         source, an object with \"type\" one of: {}",
+                        DensitySourceDesc::TYPES.join(", ")
+                    ),
+                )
+            })?;
+            let raw: RawGrid = rest(object)?;
+            let coefficients = coefficients(raw.sigma_a, raw.sigma_s, raw.sigma_t, raw.albedo)?;
+            Ok(MediumDesc::Grid(GridMediumDesc {
+                coefficients,
+                scale: raw.scale,
+                phase: raw.phase,
+                density,
+                to_world: raw.to_world,
+                emission: raw.emission,
+                majorant_resolution: raw.majorant_resolution,
+            }))
+        }
         _ => Err(unknown_type("medium", &tag, MediumDesc::TYPES)),
     }
+}
+
+/// A homogeneous medium (the default type) given a grid medium's field: most
+/// likely `"type": "grid"` was forgotten, so say that.
+fn check_homogeneous_has_no_grid_fields(object: &Object) -> Result<(), Located> {
+    if let Some(key) = GRID_ONLY_FIELDS.iter().find(|k| object.contains_key(**k)) {
+        return Err(Located::new(
+            *key,
+            format!(
+                "`{key}` is only valid in a heterogeneous medium: add \"type\": \"grid\" \
+                 (a homogeneous medium, the default type, has the same coefficients everywhere)"
+            ),
+        ));
+    }
+    if let Some(Value::Object(emission)) = object.get("emission") {
+        if let Some(key) = ["grid", "temperature"].iter().find(|k| emission.contains_key(**k)) {
+            return Err(Located::new(
+                format!("emission.{key}"),
+                format!(
+                    "emission from a `{key}` source needs a heterogeneous medium: add \
+                     \"type\": \"grid\" (a homogeneous medium's emission is `L_ve` only)"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+deserialize_object!(
+    GridEmissionDesc,
+    "an emission object with one of `L_ve`, `grid`, `temperature`",
+    parse_grid_emission
+);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGridEmission {
+    #[serde(default, rename = "L_ve")]
+    l_ve: Option<ColorDesc>,
+    #[serde(default)]
+    grid: Option<DensitySourceDesc>,
+    #[serde(default)]
+    color: Option<ColorDesc>,
+    #[serde(default)]
+    temperature: Option<DensitySourceDesc>,
+    #[serde(default)]
+    emission_scale: Option<f32>,
+}
+
+fn parse_grid_emission(object: Object) -> Result<GridEmissionDesc, Located> {
+    const FORMS: &str = "give exactly one of `L_ve` (emission proportional to the density), \
+                         `grid` (an emission grid) and `temperature` (a temperature grid in Kelvin)";
+    let raw: RawGridEmission = rest(object)?;
+    let given: Vec<&str> =
+        [("L_ve", raw.l_ve.is_some()), ("grid", raw.grid.is_some()), ("temperature", raw.temperature.is_some())]
+            .iter()
+            .filter(|(_, given)| *given)
+            .map(|(name, _)| *name)
+            .collect();
+    match given.as_slice() {
+        [] => return Err(Located::new("", format!("missing emission: {FORMS}"))),
+        [_] => {}
+        [first, second, ..] => {
+            return Err(Located::new(*second, format!("`{second}` cannot be combined with `{first}`: {FORMS}")))
+        }
+    }
+    if raw.color.is_some() && raw.grid.is_none() {
+        return Err(Located::new("color", "`color` goes with `grid` only (it colors a one-channel emission grid)"));
+    }
+    if let (Some(l_ve), scale) = (raw.l_ve, raw.emission_scale) {
+        if scale.is_some() {
+            return Err(Located::new(
+                "emission_scale",
+                "`emission_scale` goes with `grid` or `temperature`; with `L_ve`, scale \
+                 `L_ve` itself",
+            ));
+        }
+        return Ok(GridEmissionDesc::ProportionalToDensity { l_ve });
+    }
+    let emission_scale = raw.emission_scale.unwrap_or(1.0);
+    if let Some(grid) = raw.grid {
+        return Ok(GridEmissionDesc::Field { grid, color: raw.color.unwrap_or(ColorDesc::Gray(1.0)), emission_scale });
+    }
+    match raw.temperature {
+        Some(temperature) => Ok(GridEmissionDesc::Temperature { temperature, emission_scale }),
+        // Unreachable: exactly one form was given. Answered anyway, never a panic.
+        None => Err(Located::new("", format!("missing emission: {FORMS}"))),
+    }
+}
+
+deserialize_object!(DensitySourceDesc, "a density source object with a \"type\" field", parse_density_source);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConstant {
+    #[serde(default = "one")]
+    value: f32,
+    #[serde(default)]
+    bounds: BoundsDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawNpy {
+    file: String,
+    #[serde(default)]
+    bounds: BoundsDesc,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawVol {
+    file: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawVdb {
+    file: String,
+    #[serde(default = "default_vdb_grid")]
+    grid: String,
+}
+
+fn default_vdb_grid() -> String {
+    "density".to_string()
+}
+
+fn parse_density_source(mut object: Object) -> Result<DensitySourceDesc, Located> {
+    let tag = take_tag(&mut object, "density source", DensitySourceDesc::TYPES, None)?;
+    Ok(match tag.as_str() {
+        "constant" => {
+            let raw: RawConstant = rest(object)?;
+            DensitySourceDesc::Constant { value: raw.value, bounds: raw.bounds }
+        }
+        "grid" => DensitySourceDesc::Grid(rest(object)?),
+        "npy" => {
+            let raw: RawNpy = rest(object)?;
+            DensitySourceDesc::Npy { file: raw.file, bounds: raw.bounds }
+        }
+        "vol" => DensitySourceDesc::Vol { file: rest::<RawVol>(object)?.file },
+        "vdb" => {
+            let raw: RawVdb = rest(object)?;
+            DensitySourceDesc::Vdb { file: raw.file, grid: raw.grid }
+        }
+        "procedural" => DensitySourceDesc::Procedural(rest(object)?),
+        _ => return Err(unknown_type("density source", &tag, DensitySourceDesc::TYPES)),
+    })
 }
 
 /// Exactly one of the forms `sigma_a` + `sigma_s` and `sigma_t` + `albedo`.
@@ -378,21 +529,14 @@ fn coefficients(
 ) -> Result<CoefficientsDesc, Located> {
     const FORMS: &str = "give either `sigma_a` and `sigma_s`, or `sigma_t` and `albedo`";
     match (sigma_a, sigma_s, sigma_t, albedo) {
-        (Some(sigma_a), Some(sigma_s), None, None) => {
-            Ok(CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s })
-        }
-        (None, None, Some(sigma_t), Some(albedo)) => {
-            Ok(CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo })
-        }
+        (Some(sigma_a), Some(sigma_s), None, None) => Ok(CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s }),
+        (None, None, Some(sigma_t), Some(albedo)) => Ok(CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo }),
         (None, None, None, None) => Err(Located::new("", format!("missing coefficients: {FORMS}"))),
         (a, s, t, al) => {
             let first_form = a.map(|_| "sigma_a").or(s.map(|_| "sigma_s"));
             let second_form = t.map(|_| "sigma_t").or(al.map(|_| "albedo"));
             if let (Some(first), Some(second)) = (first_form, second_form) {
-                return Err(Located::new(
-                    second,
-                    format!("`{second}` cannot be combined with `{first}`: {FORMS}"),
-                ));
+                return Err(Located::new(second, format!("`{second}` cannot be combined with `{first}`: {FORMS}")));
             }
             let (given, missing) = match (a, s, t) {
                 (Some(_), _, _) => ("sigma_a", "sigma_s"),
@@ -408,11 +552,7 @@ fn coefficients(
     }
 }
 
-deserialize_object!(
-    PhaseDesc,
-    "a phase function object with a \"type\" field",
-    parse_phase
-);
+deserialize_object!(PhaseDesc, "a phase function object with a \"type\" field", parse_phase);
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -457,16 +597,10 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
             no_fields(object)?;
             PhaseDesc::Isotropic
         }
-        "hg" => PhaseDesc::HenyeyGreenstein {
-            g: rest::<RawG>(object)?.g,
-        },
+        "hg" => PhaseDesc::HenyeyGreenstein { g: rest::<RawG>(object)?.g },
         "double_hg" => {
             let raw: RawDoubleHg = rest(object)?;
-            PhaseDesc::DoubleHenyeyGreenstein {
-                w: raw.w,
-                g1: raw.g1,
-                g2: raw.g2,
-            }
+            PhaseDesc::DoubleHenyeyGreenstein { w: raw.w, g1: raw.g1, g2: raw.g2 }
         }
         "schlick" => {
             let raw: RawSchlick = rest(object)?;
@@ -480,10 +614,7 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
                     ))
                 }
                 (None, None) => {
-                    return Err(Located::new(
-                        "k",
-                        "missing required field `k` (or give the HG asymmetry `g` instead)",
-                    ))
+                    return Err(Located::new("k", "missing required field `k` (or give the HG asymmetry `g` instead)"))
                 }
             })
         }
@@ -491,15 +622,10 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
             no_fields(object)?;
             PhaseDesc::Rayleigh
         }
-        "cornette_shanks" => PhaseDesc::CornetteShanks {
-            g: rest::<RawG>(object)?.g,
-        },
+        "cornette_shanks" => PhaseDesc::CornetteShanks { g: rest::<RawG>(object)?.g },
         "tabulated" => {
             let raw: RawTabulated = rest(object)?;
-            PhaseDesc::Tabulated {
-                file: raw.file,
-                column: raw.column,
-            }
+            PhaseDesc::Tabulated { file: raw.file, column: raw.column }
         }
         "fog" => {
             no_fields(object)?;
@@ -517,11 +643,7 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
 // Shapes, surfaces and transforms
 // ---------------------------------------------------------------------------
 
-deserialize_object!(
-    ShapeDesc,
-    "a shape object with a \"type\" field",
-    parse_shape
-);
+deserialize_object!(ShapeDesc, "a shape object with a \"type\" field", parse_shape);
 
 /// Fields every shape accepts besides its geometry's.
 const SHAPE_COMMON_FIELDS: &str = "`type`, `interior`, `exterior`, `bsdf`";
@@ -543,19 +665,11 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
     let geometry = geometry.map_err(|mut e| {
         let direct_child = !e.path.contains(['.', '[']);
         if direct_child && e.message.starts_with("unknown field") {
-            e.message = format!(
-                "{}; every shape also accepts {SHAPE_COMMON_FIELDS}",
-                e.message
-            );
+            e.message = format!("{}; every shape also accepts {SHAPE_COMMON_FIELDS}", e.message);
         }
         e
     })?;
-    Ok(ShapeDesc {
-        geometry,
-        interior,
-        exterior,
-        bsdf,
-    })
+    Ok(ShapeDesc { geometry, interior, exterior, bsdf })
 }
 
 deserialize_object!(BsdfDesc, "a bsdf object with a \"type\" field", parse_bsdf);
@@ -577,9 +691,7 @@ fn parse_bsdf(mut object: Object) -> Result<BsdfDesc, Located> {
         "null" => rest::<NoFields>(object).map(|_| BsdfDesc::Null),
         "diffuse" => {
             let raw: RawDiffuse = rest(object)?;
-            Ok(BsdfDesc::Diffuse {
-                reflectance: raw.reflectance,
-            })
+            Ok(BsdfDesc::Diffuse { reflectance: raw.reflectance })
         }
         _ => Err(unknown_type("bsdf", &tag, BsdfDesc::TYPES)),
     }
@@ -642,11 +754,7 @@ fn parse_transform(object: Object) -> Result<TransformDesc, Located> {
 // Lights
 // ---------------------------------------------------------------------------
 
-deserialize_object!(
-    LightDesc,
-    "a light object with a \"type\" field",
-    parse_light
-);
+deserialize_object!(LightDesc, "a light object with a \"type\" field", parse_light);
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -685,10 +793,7 @@ fn parse_light(mut object: Object) -> Result<LightDesc, Located> {
                     ))
                 }
                 (None, None) => {
-                    return Err(Located::new(
-                        "target",
-                        "missing required field `target` (or give `direction` instead)",
-                    ))
+                    return Err(Located::new("target", "missing required field `target` (or give `direction` instead)"))
                 }
             };
             Ok(LightDesc::Spot(SpotLightDesc {
@@ -733,6 +838,7 @@ mod tests {
         accepted(|o| parse_camera(o).map(drop), CameraDesc::TYPES);
         accepted(|o| parse_integrator(o).map(drop), IntegratorDesc::TYPES);
         accepted(|o| parse_medium(o).map(drop), MediumDesc::TYPES);
+        accepted(|o| parse_density_source(o).map(drop), DensitySourceDesc::TYPES);
         accepted(|o| parse_phase(o).map(drop), PhaseDesc::TYPES);
         accepted(|o| parse_shape(o).map(drop), GeometryDesc::TYPES);
         accepted(|o| parse_bsdf(o).map(drop), BsdfDesc::TYPES);

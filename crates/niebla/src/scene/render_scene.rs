@@ -84,10 +84,7 @@ impl Scene {
         for (i, object) in self.objects.iter().enumerate() {
             if let Some(h) = object.shape.intersect(ray, t_min, t_best) {
                 t_best = h.t;
-                best = Some(Hit {
-                    surface: h,
-                    object: i as u32,
-                });
+                best = Some(Hit { surface: h, object: i as u32 });
             }
         }
         best
@@ -108,12 +105,7 @@ impl Scene {
     /// The medium a ray travelling along `d` is in after crossing the
     /// index-matched boundary `hit`, given the medium it was in before.
     #[inline]
-    pub fn medium_after_crossing(
-        &self,
-        hit: &Hit,
-        d: Vec3,
-        current: Option<MediumId>,
-    ) -> Option<MediumId> {
+    pub fn medium_after_crossing(&self, hit: &Hit, d: Vec3, current: Option<MediumId>) -> Option<MediumId> {
         let object = self.object(hit);
         if !object.bounds_medium {
             return current;

@@ -21,7 +21,13 @@ impl SceneDesc {
     /// parameters `g`, `g1`, `g2`, `k` in (-1, 1) and `w` in [0, 1]; the
     /// camera has a valid resolution (each side 1 to 16384, at most 2^26
     /// pixels), a field of view in (0, 180) degrees, `position != target` and
-    /// an `up` not parallel to the view direction; shapes are non-degenerate;
+    /// an `up` not parallel to the view direction; grid media have valid
+    /// density and emission sources (inline grids with `nx * ny * nz` values,
+    /// each finite and >= 0, at most 2^28; boxes with `max > min`; file and
+    /// grid names non-empty; procedural parameters in range), an invertible
+    /// `to_world`, emission scales >= 0 and a majorant resolution from 1 to
+    /// 256 per axis (values inside files are checked when the scene is
+    /// built); shapes are non-degenerate;
     /// every medium name used (`interior`, `exterior`, `ambient_medium`) is
     /// defined in `media`. [`parse_scene_str`](super::parse_scene_str) calls
     /// this; call it again after editing a description in code.
@@ -39,20 +45,14 @@ struct Invalid {
 type Check = Result<(), Invalid>;
 
 fn fail(path: impl Into<String>, message: impl Into<String>) -> Check {
-    Err(Invalid {
-        path: path.into(),
-        message: message.into(),
-    })
+    Err(Invalid { path: path.into(), message: message.into() })
 }
 
 fn validate_scene(desc: &SceneDesc) -> Check {
     if desc.version != SCENE_VERSION {
         return fail(
             "version",
-            format!(
-                "unsupported scene version {}; this build of niebla reads version {SCENE_VERSION}",
-                desc.version
-            ),
+            format!("unsupported scene version {}; this build of niebla reads version {SCENE_VERSION}", desc.version),
         );
     }
     validate_camera(&desc.camera)?;
@@ -83,10 +83,7 @@ fn finite(path: &str, x: f32) -> Check {
     if x.is_finite() {
         Ok(())
     } else {
-        fail(
-            path,
-            format!("expected a finite number, got {x} (magnitude must be below 3.4e38)"),
-        )
+        fail(path, format!("expected a finite number, got {x} (magnitude must be below 3.4e38)"))
     }
 }
 
@@ -123,10 +120,7 @@ fn asymmetry(path: &str, x: f32) -> Check {
     if x > -1.0 && x < 1.0 {
         Ok(())
     } else {
-        fail(
-            path,
-            format!("must be in the open interval (-1, 1), got {x}"),
-        )
+        fail(path, format!("must be in the open interval (-1, 1), got {x}"))
     }
 }
 
@@ -164,11 +158,7 @@ fn length(v: [f64; 3]) -> f64 {
 }
 
 fn difference(a: &[f32; 3], b: &[f32; 3]) -> [f64; 3] {
-    [
-        f64::from(a[0]) - f64::from(b[0]),
-        f64::from(a[1]) - f64::from(b[1]),
-        f64::from(a[2]) - f64::from(b[2]),
-    ]
+    [f64::from(a[0]) - f64::from(b[0]), f64::from(a[1]) - f64::from(b[1]), f64::from(a[2]) - f64::from(b[2])]
 }
 
 // ---------------------------------------------------------------------------
@@ -185,10 +175,7 @@ fn validate_camera(camera: &CameraDesc) -> Check {
             if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
                 return fail(
                     "camera.fov_y",
-                    format!(
-                        "vertical field of view must be in the open interval (0, 180) degrees, got {}",
-                        c.fov_y
-                    ),
+                    format!("vertical field of view must be in the open interval (0, 180) degrees, got {}", c.fov_y),
                 );
             }
             image_side("camera.width", c.width)?;
@@ -218,10 +205,7 @@ fn validate_camera(camera: &CameraDesc) -> Check {
                 return fail("camera.up", "must be a non-zero vector");
             }
             if length(cross) <= 1e-6 * length(view) * length(up) {
-                return fail(
-                    "camera.up",
-                    "must not be parallel to the view direction (target - position)",
-                );
+                return fail("camera.up", "must not be parallel to the view direction (target - position)");
             }
             Ok(())
         }
@@ -232,10 +216,7 @@ fn image_side(path: &str, pixels: u32) -> Check {
     if pixels == 0 {
         fail(path, "must be at least 1 pixel, got 0")
     } else if pixels > MAX_IMAGE_SIDE {
-        fail(
-            path,
-            format!("must be at most {MAX_IMAGE_SIDE} pixels, got {pixels}"),
-        )
+        fail(path, format!("must be at most {MAX_IMAGE_SIDE} pixels, got {pixels}"))
     } else {
         Ok(())
     }
@@ -253,9 +234,7 @@ fn validate_render(render: &RenderDesc) -> Check {
     match march {
         MarchStepDesc::Auto => Ok(()),
         MarchStepDesc::Length(step) => positive("render.integrator.step", step),
-        MarchStepDesc::PerSegment(0) => {
-            fail("render.integrator.steps", "must be at least 1, got 0")
-        }
+        MarchStepDesc::PerSegment(0) => fail("render.integrator.steps", "must be at least 1, got 0"),
         MarchStepDesc::PerSegment(_) => Ok(()),
     }
 }
@@ -267,36 +246,179 @@ fn validate_render(render: &RenderDesc) -> Check {
 fn validate_medium(base: &str, medium: &MediumDesc) -> Check {
     match medium {
         MediumDesc::Homogeneous(m) => {
-            match &m.coefficients {
-                CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s } => {
-                    color(&format!("{base}.sigma_a"), sigma_a, non_negative)?;
-                    color(&format!("{base}.sigma_s"), sigma_s, non_negative)?;
-                }
-                CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo } => {
-                    color(&format!("{base}.sigma_t"), sigma_t, non_negative)?;
-                    color(&format!("{base}.albedo"), albedo, in_unit_interval)?;
-                }
-            }
-            positive(&format!("{base}.scale"), m.scale)?;
+            validate_coefficients(base, &m.coefficients, m.scale)?;
             validate_phase(&format!("{base}.phase"), &m.phase)?;
             if let Some(emission) = &m.emission {
-                color(
-                    &format!("{base}.emission.L_ve"),
-                    &emission.l_ve,
-                    non_negative,
-                )?;
+                color(&format!("{base}.emission.L_ve"), &emission.l_ve, non_negative)?;
+            }
+            Ok(())
+        }
+        MediumDesc::Grid(m) => {
+            validate_coefficients(base, &m.coefficients, m.scale)?;
+            validate_phase(&format!("{base}.phase"), &m.phase)?;
+            validate_source(&format!("{base}.density"), &m.density)?;
+            validate_transform(&format!("{base}.to_world"), &m.to_world)?;
+            if let Some(emission) = &m.emission {
+                validate_grid_emission(&format!("{base}.emission"), emission)?;
+            }
+            if let Some(r) = &m.majorant_resolution {
+                resolution(&format!("{base}.majorant_resolution"), r, MAX_MAJORANT_RESOLUTION)?;
             }
             Ok(())
         }
     }
 }
 
+fn validate_coefficients(base: &str, coefficients: &CoefficientsDesc, scale: f32) -> Check {
+    match coefficients {
+        CoefficientsDesc::AbsorptionScattering { sigma_a, sigma_s } => {
+            color(&format!("{base}.sigma_a"), sigma_a, non_negative)?;
+            color(&format!("{base}.sigma_s"), sigma_s, non_negative)?;
+        }
+        CoefficientsDesc::ExtinctionAlbedo { sigma_t, albedo } => {
+            color(&format!("{base}.sigma_t"), sigma_t, non_negative)?;
+            color(&format!("{base}.albedo"), albedo, in_unit_interval)?;
+        }
+    }
+    positive(&format!("{base}.scale"), scale)
+}
+
+fn validate_grid_emission(base: &str, emission: &GridEmissionDesc) -> Check {
+    match emission {
+        GridEmissionDesc::ProportionalToDensity { l_ve } => color(&format!("{base}.L_ve"), l_ve, non_negative),
+        GridEmissionDesc::Field { grid, color: c, emission_scale } => {
+            validate_source(&format!("{base}.grid"), grid)?;
+            color(&format!("{base}.color"), c, non_negative)?;
+            non_negative(&format!("{base}.emission_scale"), *emission_scale)
+        }
+        GridEmissionDesc::Temperature { temperature, emission_scale } => {
+            validate_source(&format!("{base}.temperature"), temperature)?;
+            non_negative(&format!("{base}.emission_scale"), *emission_scale)
+        }
+    }
+}
+
+/// Checks a field source (density, emission grid or temperature): values
+/// finite and >= 0, sizes within limits, boxes non-empty, names non-empty.
+/// Values in files are checked when the scene is built.
+fn validate_source(base: &str, source: &DensitySourceDesc) -> Check {
+    match source {
+        DensitySourceDesc::Constant { value, bounds } => {
+            non_negative(&format!("{base}.value"), *value)?;
+            validate_bounds(&format!("{base}.bounds"), bounds)
+        }
+        DensitySourceDesc::Grid(g) => {
+            let voxels = resolution(&format!("{base}.dims"), &ResolutionDesc::PerAxis(g.dims), u32::MAX)?;
+            if g.data.len() as u64 != voxels {
+                let [nx, ny, nz] = g.dims;
+                return fail(
+                    format!("{base}.data"),
+                    format!(
+                        "expected nx * ny * nz = {nx} * {ny} * {nz} = {voxels} values for \
+                         dims [{nx}, {ny}, {nz}], got {}",
+                        g.data.len()
+                    ),
+                );
+            }
+            for (i, v) in g.data.iter().enumerate() {
+                non_negative(&format!("{base}.data[{i}]"), *v)?;
+            }
+            validate_bounds(&format!("{base}.bounds"), &g.bounds)
+        }
+        DensitySourceDesc::Npy { file, bounds } => {
+            file_name(&format!("{base}.file"), file)?;
+            validate_bounds(&format!("{base}.bounds"), bounds)
+        }
+        DensitySourceDesc::Vol { file } => file_name(&format!("{base}.file"), file),
+        DensitySourceDesc::Vdb { file, grid } => {
+            file_name(&format!("{base}.file"), file)?;
+            if grid.is_empty() {
+                return fail(format!("{base}.grid"), "expected a grid name, got \"\"");
+            }
+            Ok(())
+        }
+        DensitySourceDesc::Procedural(p) => {
+            resolution(&format!("{base}.resolution"), &p.resolution, MAX_PROCEDURAL_RESOLUTION)?;
+            if !(1..=MAX_OCTAVES).contains(&p.octaves) {
+                return fail(format!("{base}.octaves"), format!("must be from 1 to {MAX_OCTAVES}, got {}", p.octaves));
+            }
+            in_range(&format!("{base}.frequency"), p.frequency, 0.0, 1000.0, true)?;
+            in_range(&format!("{base}.lacunarity"), p.lacunarity, 1.0, 8.0, false)?;
+            in_unit_interval(&format!("{base}.gain"), p.gain)?;
+            in_unit_interval(&format!("{base}.coverage"), p.coverage)?;
+            in_range(&format!("{base}.sharpness"), p.sharpness, 0.0, 1000.0, true)
+        }
+    }
+}
+
+/// Most noise octaves of a procedural source (`niebla_volume`'s limit).
+const MAX_OCTAVES: u32 = 12;
+/// Most voxels per axis of a procedural source (`niebla_volume`'s limit).
+const MAX_PROCEDURAL_RESOLUTION: u32 = 1024;
+
+/// A number in `(lo, hi]` (with `open_low`) or `[lo, hi]`.
+fn in_range(path: &str, x: f32, lo: f32, hi: f32, open_low: bool) -> Check {
+    finite(path, x)?;
+    let above = if open_low { x > lo } else { x >= lo };
+    if above && x <= hi {
+        return Ok(());
+    }
+    let open = if open_low { '(' } else { '[' };
+    fail(path, format!("must be in {open}{lo}, {hi}], got {x}"))
+}
+
+fn file_name(path: &str, file: &str) -> Check {
+    if file.is_empty() {
+        return fail(path, "expected a file name, got \"\"");
+    }
+    Ok(())
+}
+
+/// Checks a resolution: each count from 1 to `max_per_axis`, at most
+/// [`MAX_GRID_VOXELS`] in all. Returns the number of cells.
+fn resolution(path: &str, r: &ResolutionDesc, max_per_axis: u32) -> Result<u64, Invalid> {
+    let dims = r.dims();
+    for (i, n) in dims.iter().enumerate() {
+        let at = match r {
+            ResolutionDesc::Uniform(_) => path.to_string(),
+            ResolutionDesc::PerAxis(_) => format!("{path}[{i}]"),
+        };
+        if *n == 0 {
+            return Err(Invalid { path: at, message: "must be at least 1, got 0".into() });
+        }
+        if *n > max_per_axis {
+            return Err(Invalid { path: at, message: format!("must be at most {max_per_axis}, got {n}") });
+        }
+    }
+    let cells = dims.iter().map(|n| u64::from(*n)).product::<u64>();
+    if cells > MAX_GRID_VOXELS {
+        let [nx, ny, nz] = dims;
+        return Err(Invalid {
+            path: path.to_string(),
+            message: format!("{nx} x {ny} x {nz} = {cells} cells exceeds the limit of {MAX_GRID_VOXELS} (2^28)"),
+        });
+    }
+    Ok(cells)
+}
+
+fn validate_bounds(base: &str, bounds: &BoundsDesc) -> Check {
+    vector(&format!("{base}.min"), &bounds.min)?;
+    vector(&format!("{base}.max"), &bounds.max)?;
+    for axis in 0..3 {
+        if bounds.min[axis] >= bounds.max[axis] {
+            return fail(
+                format!("{base}.max[{axis}]"),
+                format!("must be greater than min[{axis}] = {}, got {}", bounds.min[axis], bounds.max[axis]),
+            );
+        }
+    }
+    Ok(())
+}
+
 fn validate_phase(base: &str, phase: &PhaseDesc) -> Check {
     match phase {
         PhaseDesc::Isotropic | PhaseDesc::Rayleigh | PhaseDesc::Fog | PhaseDesc::MieFog => Ok(()),
-        PhaseDesc::HenyeyGreenstein { g } | PhaseDesc::CornetteShanks { g } => {
-            asymmetry(&format!("{base}.g"), *g)
-        }
+        PhaseDesc::HenyeyGreenstein { g } | PhaseDesc::CornetteShanks { g } => asymmetry(&format!("{base}.g"), *g),
         PhaseDesc::DoubleHenyeyGreenstein { w, g1, g2 } => {
             in_unit_interval(&format!("{base}.w"), *w)?;
             asymmetry(&format!("{base}.g1"), *g1)?;
@@ -325,16 +447,10 @@ fn medium_exists(desc: &SceneDesc, path: &str, name: &str) -> Check {
         return Ok(());
     }
     if desc.media.is_empty() {
-        return fail(
-            path,
-            format!("unknown medium {name:?}; the scene defines no media (add it under `media`)"),
-        );
+        return fail(path, format!("unknown medium {name:?}; the scene defines no media (add it under `media`)"));
     }
     let known: Vec<&str> = desc.media.keys().map(String::as_str).collect();
-    fail(
-        path,
-        format!("unknown medium {name:?}; known media: {}", known.join(", ")),
-    )
+    fail(path, format!("unknown medium {name:?}; known media: {}", known.join(", ")))
 }
 
 fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
@@ -350,10 +466,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
                 if b.min[axis] >= b.max[axis] {
                     return fail(
                         format!("{base}.max[{axis}]"),
-                        format!(
-                            "must be greater than min[{axis}] = {}, got {}",
-                            b.min[axis], b.max[axis]
-                        ),
+                        format!("must be greater than min[{axis}] = {}, got {}", b.min[axis], b.max[axis]),
                     );
                 }
             }
@@ -368,32 +481,18 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
     }
     match &shape.bsdf {
         BsdfDesc::Null => Ok(()),
-        BsdfDesc::Diffuse { reflectance } => color(
-            &format!("{base}.bsdf.reflectance"),
-            reflectance,
-            in_unit_interval,
-        ),
+        BsdfDesc::Diffuse { reflectance } => color(&format!("{base}.bsdf.reflectance"), reflectance, in_unit_interval),
     }
 }
 
 fn validate_transform(base: &str, transform: &TransformDesc) -> Check {
     match transform {
-        TransformDesc::Components {
-            scale,
-            rotate_x,
-            rotate_y,
-            rotate_z,
-            translate,
-        } => {
+        TransformDesc::Components { scale, rotate_x, rotate_y, rotate_z, translate } => {
             // A uniform scale may have been written as one number: point at
             // the field rather than at a component.
             let uniform = scale[0] == scale[1] && scale[1] == scale[2];
             for (i, s) in scale.iter().enumerate() {
-                let path = if uniform {
-                    format!("{base}.scale")
-                } else {
-                    format!("{base}.scale[{i}]")
-                };
+                let path = if uniform { format!("{base}.scale") } else { format!("{base}.scale[{i}]") };
                 finite(&path, *s)?;
                 if *s == 0.0 {
                     return fail(path, "scale factors must be non-zero");
@@ -420,10 +519,7 @@ fn validate_transform(base: &str, transform: &TransformDesc) -> Check {
             let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
                 - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
                 + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
-            let size = (0..3)
-                .flat_map(|r| (0..3).map(move |c| (r, c)))
-                .map(|(r, c)| a(r, c).abs())
-                .fold(0.0, f64::max);
+            let size = (0..3).flat_map(|r| (0..3).map(move |c| (r, c))).map(|(r, c)| a(r, c).abs()).fold(0.0, f64::max);
             if det.abs() <= 1e-12 * size * size * size {
                 return fail(
                     format!("{base}.matrix"),
@@ -463,20 +559,14 @@ fn validate_light(base: &str, light: &LightDesc) -> Check {
             let cutoff_path = format!("{base}.cutoff_angle");
             finite(&cutoff_path, s.cutoff_angle)?;
             if !(s.cutoff_angle > 0.0 && s.cutoff_angle <= 90.0) {
-                return fail(
-                    cutoff_path,
-                    format!("must be in (0, 90] degrees, got {}", s.cutoff_angle),
-                );
+                return fail(cutoff_path, format!("must be in (0, 90] degrees, got {}", s.cutoff_angle));
             }
             let beam_path = format!("{base}.beam_width");
             finite(&beam_path, s.beam_width)?;
             if !(s.beam_width > 0.0 && s.beam_width <= s.cutoff_angle) {
                 return fail(
                     beam_path,
-                    format!(
-                        "must be in (0, cutoff_angle = {}] degrees, got {}",
-                        s.cutoff_angle, s.beam_width
-                    ),
+                    format!("must be in (0, cutoff_angle = {}] degrees, got {}", s.cutoff_angle, s.beam_width),
                 );
             }
             Ok(())

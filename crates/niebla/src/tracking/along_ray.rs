@@ -47,12 +47,7 @@ impl DensityAlongRay for UnitDensity {
     }
     #[inline]
     fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
-        f(DensitySegment {
-            t0: self.t0,
-            t1: self.t1,
-            d_min: 1.0,
-            d_max: 1.0,
-        })
+        f(DensitySegment { t0: self.t0, t1: self.t1, d_min: 1.0, d_max: 1.0 })
     }
 }
 
@@ -104,20 +99,9 @@ impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
     #[inline]
     fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
         let minorant = self.minorant;
-        self.majorant.walk_cells(
-            self.o.to_array(),
-            self.d.to_array(),
-            self.t0,
-            self.t1,
-            |cell, s| {
-                let d_min = minorant.map_or(0.0, |m| m.value(cell[0], cell[1], cell[2]));
-                f(DensitySegment {
-                    t0: s.t0,
-                    t1: s.t1,
-                    d_min: d_min.min(s.max_density),
-                    d_max: s.max_density,
-                })
-            },
-        )
+        self.majorant.walk_cells(self.o.to_array(), self.d.to_array(), self.t0, self.t1, |cell, s| {
+            let d_min = minorant.map_or(0.0, |m| m.value(cell[0], cell[1], cell[2]));
+            f(DensitySegment { t0: s.t0, t1: s.t1, d_min: d_min.min(s.max_density), d_max: s.max_density })
+        })
     }
 }

@@ -90,10 +90,7 @@ mod tests {
         fn density(&self, _t: f32) -> f32 {
             unreachable!()
         }
-        fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(
-            &self,
-            mut f: F,
-        ) -> ControlFlow<()> {
+        fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
             for s in &self.0 {
                 f(*s)?;
             }
@@ -103,24 +100,12 @@ mod tests {
 
     #[test]
     fn profile_sampler_matches_its_pdf_and_integrates_to_one() {
-        let seg = |t0, t1, d| DensitySegment {
-            t0,
-            t1,
-            d_min: 0.0,
-            d_max: d,
-        };
-        let r = Steps(vec![
-            seg(0.5, 1.0, 2.0),
-            seg(1.0, 1.5, 0.0),
-            seg(1.5, 3.0, 0.7),
-            seg(3.0, 3.2, 5.0),
-        ]);
+        let seg = |t0, t1, d| DensitySegment { t0, t1, d_min: 0.0, d_max: d };
+        let r = Steps(vec![seg(0.5, 1.0, 2.0), seg(1.0, 1.5, 0.0), seg(1.5, 3.0, 0.7), seg(3.0, 3.2, 5.0)]);
         let p = MajorantProfile::new(&r, 1.3);
         // pdf integrates to 1 (midpoint rule).
         let n = 200_000;
-        let integral: f64 = (0..n)
-            .map(|i| p.pdf(3.5 * (i as f32 + 0.5) / n as f32) as f64 * 3.5 / n as f64)
-            .sum();
+        let integral: f64 = (0..n).map(|i| p.pdf(3.5 * (i as f32 + 0.5) / n as f32) as f64 * 3.5 / n as f64).sum();
         assert!((integral - 1.0).abs() < 1e-3, "{integral}");
         // Histogram of samples against the pdf: 35 bins over [0, 3.5].
         let mut hist = [0u32; 35];
@@ -134,9 +119,7 @@ mod tests {
         let mut chi2 = 0.0;
         let mut dof = 0;
         for (i, &h) in hist.iter().enumerate() {
-            let e: f64 = (0..100)
-                .map(|k| p.pdf(0.1 * i as f32 + 0.001 * (k as f32 + 0.5)) as f64 * 0.001)
-                .sum::<f64>()
+            let e: f64 = (0..100).map(|k| p.pdf(0.1 * i as f32 + 0.001 * (k as f32 + 0.5)) as f64 * 0.001).sum::<f64>()
                 * m as f64;
             if e > 5.0 {
                 chi2 += (h as f64 - e).powi(2) / e;
@@ -146,18 +129,9 @@ mod tests {
             }
         }
         // 99.9% quantile of chi-square with ~25 dof is about 52.6.
-        assert!(
-            chi2 < 52.6 + 2.0 * (dof as f64 - 25.0).max(0.0),
-            "chi2 {chi2} dof {dof}"
-        );
+        assert!(chi2 < 52.6 + 2.0 * (dof as f64 - 25.0).max(0.0), "chi2 {chi2} dof {dof}");
         // Unbounded homogeneous: plain exponential.
-        let u = MajorantProfile::new(
-            &UnitDensity {
-                t0: 0.0,
-                t1: f32::INFINITY,
-            },
-            2.0,
-        );
+        let u = MajorantProfile::new(&UnitDensity { t0: 0.0, t1: f32::INFINITY }, 2.0);
         assert!((u.pdf(0.5) - 2.0 * (-1.0f32).exp()).abs() < 1e-6);
         assert!((u.sample(1.0 - (-1.0f32).exp()).unwrap() - 0.5).abs() < 1e-5);
     }

@@ -64,27 +64,13 @@ where
             };
             match &g.density {
                 DensityGrid::Dense(grid) => {
-                    let r = GridAlongRay {
-                        grid: grid.as_ref(),
-                        majorant: &g.majorant,
-                        minorant: None,
-                        o,
-                        d,
-                        t0: a,
-                        t1: b,
-                    };
+                    let r =
+                        GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b };
                     walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
                 }
                 DensityGrid::Sparse(grid) => {
-                    let r = GridAlongRay {
-                        grid: grid.as_ref(),
-                        majorant: &g.majorant,
-                        minorant: None,
-                        o,
-                        d,
-                        t0: a,
-                        t1: b,
-                    };
+                    let r =
+                        GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b };
                     walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
                 }
             }
@@ -125,13 +111,7 @@ where
             }
             t_maj *= (sigma_maj * (t - t_min)).exp_neg();
             let p = ray.at(t);
-            let collision = MajorantCollision {
-                t,
-                p,
-                point: point_at(p, r.density(t)),
-                sigma_maj,
-                t_maj,
-            };
+            let collision = MajorantCollision { t, p, point: point_at(p, r.density(t)), sigma_maj, t_maj };
             if !callback(collision, sampler) {
                 stopped = true;
                 return std::ops::ControlFlow::Break(());

@@ -59,10 +59,7 @@ pub fn segment_transmittance(
             let sigma_t = h.sigma_t();
             if !t1.is_finite() {
                 // Only the closed form handles an unbounded homogeneous segment.
-                return medium
-                    .exact_optical_depth(ray, t0, t1)
-                    .unwrap_or(Rgb::ZERO)
-                    .exp_neg();
+                return medium.exact_optical_depth(ray, t0, t1).unwrap_or(Rgb::ZERO).exp_neg();
             }
             let r = UnitDensity { t0, t1 };
             match method {
@@ -137,9 +134,7 @@ fn run_tracker<R: DensityAlongRay>(
             ray_march_optical_depth(|t| sigma_t * r.density(t), t0, t1, step, u).exp_neg()
         }
         TransmittanceMethod::Delta => delta_tracking(r, sigma_t, sampler),
-        TransmittanceMethod::Analytic | TransmittanceMethod::Ratio => {
-            ratio_tracking(r, sigma_t, sampler)
-        }
+        TransmittanceMethod::Analytic | TransmittanceMethod::Ratio => ratio_tracking(r, sigma_t, sampler),
         TransmittanceMethod::ResidualRatio => residual_ratio_tracking(r, sigma_t, sampler),
     }
 }
@@ -147,13 +142,7 @@ fn run_tracker<R: DensityAlongRay>(
 /// The piecewise-exponential distance-sampling profile of `ray` over
 /// `[t0, t1]` in `medium`: rate `d_max * rate_per_density` per majorant
 /// segment (one segment for a homogeneous medium).
-pub fn majorant_profile(
-    medium: &Medium,
-    ray: &Ray,
-    t0: f32,
-    t1: f32,
-    rate_per_density: f32,
-) -> MajorantProfile {
+pub fn majorant_profile(medium: &Medium, ray: &Ray, t0: f32, t1: f32, rate_per_density: f32) -> MajorantProfile {
     match medium {
         Medium::Homogeneous(_) => MajorantProfile::new(&UnitDensity { t0, t1 }, rate_per_density),
         Medium::Grid(g) => {
@@ -163,27 +152,11 @@ pub fn majorant_profile(
             let (o, d) = g.ray_to_grid(ray);
             match &g.density {
                 DensityGrid::Dense(grid) => MajorantProfile::new(
-                    &GridAlongRay {
-                        grid: grid.as_ref(),
-                        majorant: &g.majorant,
-                        minorant: None,
-                        o,
-                        d,
-                        t0: a,
-                        t1: b,
-                    },
+                    &GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b },
                     rate_per_density,
                 ),
                 DensityGrid::Sparse(grid) => MajorantProfile::new(
-                    &GridAlongRay {
-                        grid: grid.as_ref(),
-                        majorant: &g.majorant,
-                        minorant: None,
-                        o,
-                        d,
-                        t0: a,
-                        t1: b,
-                    },
+                    &GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b },
                     rate_per_density,
                 ),
             }
@@ -209,12 +182,7 @@ mod tests {
     use crate::phase::PhaseFunction;
 
     fn fog(sigma_a: Rgb, sigma_s: Rgb) -> Medium {
-        Medium::Homogeneous(HomogeneousMedium {
-            sigma_a,
-            sigma_s,
-            l_ve: Rgb::ZERO,
-            phase: PhaseFunction::Isotropic,
-        })
+        Medium::Homogeneous(HomogeneousMedium { sigma_a, sigma_s, l_ve: Rgb::ZERO, phase: PhaseFunction::Isotropic })
     }
 
     #[test]
@@ -232,32 +200,15 @@ mod tests {
                 let t = segment_transmittance(&m, &ray, 1.0, 1.0 + d, method, &mut s);
                 for c in 0..3 {
                     // f32 closed form: relative error a few ulps.
-                    assert!(
-                        (t[c] - exact[c]).abs() <= 1e-5 * exact[c].max(1e-3),
-                        "{method:?} d={d} c={c}"
-                    );
+                    assert!((t[c] - exact[c]).abs() <= 1e-5 * exact[c].max(1e-3), "{method:?} d={d} c={c}");
                 }
             }
         }
         // An unbounded segment: zero where sigma_t > 0.
-        let t = segment_transmittance(
-            &m,
-            &ray,
-            0.0,
-            f32::INFINITY,
-            TransmittanceMethod::Analytic,
-            &mut s,
-        );
+        let t = segment_transmittance(&m, &ray, 0.0, f32::INFINITY, TransmittanceMethod::Analytic, &mut s);
         assert_eq!(t, Rgb::ZERO);
         let clear = fog(Rgb::ZERO, Rgb::ZERO);
-        let t = segment_transmittance(
-            &clear,
-            &ray,
-            0.0,
-            f32::INFINITY,
-            TransmittanceMethod::Analytic,
-            &mut s,
-        );
+        let t = segment_transmittance(&clear, &ray, 0.0, f32::INFINITY, TransmittanceMethod::Analytic, &mut s);
         assert_eq!(t, Rgb::ONE);
     }
 }

@@ -26,13 +26,7 @@ impl MarchStep {
 /// sample points at `t0 + (i + u) dt`: a randomly shifted lattice, so the
 /// optical depth estimate is unbiased for any `u` uniform in [0, 1) (methods.md
 /// section 1.2). `sigma_t` maps a ray parameter to per-channel extinction.
-pub fn ray_march_optical_depth(
-    sigma_t: impl Fn(f32) -> Rgb,
-    t0: f32,
-    t1: f32,
-    step: MarchStep,
-    u: f32,
-) -> Rgb {
+pub fn ray_march_optical_depth(sigma_t: impl Fn(f32) -> Rgb, t0: f32, t1: f32, step: MarchStep, u: f32) -> Rgb {
     let n = step.count_for(t1 - t0);
     let dt = (t1 - t0) / n as f32;
     let mut tau = Rgb::ZERO;
@@ -61,13 +55,8 @@ mod tests {
             let mut sum = 0.0f64;
             let mut sum2 = 0.0f64;
             for _ in 0..n {
-                let tau = ray_march_optical_depth(
-                    |t| Rgb::splat(2.0 * t),
-                    0.0,
-                    1.0,
-                    MarchStep::Count(steps),
-                    s.next_1d(),
-                );
+                let tau =
+                    ray_march_optical_depth(|t| Rgb::splat(2.0 * t), 0.0, 1.0, MarchStep::Count(steps), s.next_1d());
                 let t = (-tau.r() as f64).exp();
                 sum += t;
                 sum2 += t * t;
@@ -78,19 +67,10 @@ mod tests {
             // The analytic bias of the 1-step estimator: E[exp(-2u)] - e^-1 = (1 - e^-2)/2 - e^-1.
             if steps == 1 {
                 let analytic = (1.0 - (-2.0f64).exp()) / 2.0 - exact;
-                assert!(
-                    (bias - analytic).abs() < 4.0 * se,
-                    "bias {bias} vs {analytic}"
-                );
+                assert!((bias - analytic).abs() < 4.0 * se, "bias {bias} vs {analytic}");
             }
-            assert!(
-                bias > -4.0 * se,
-                "ray marching must not be biased low: {bias}"
-            );
-            assert!(
-                (bias - expected_bias).abs() < 0.25 * expected_bias + 4.0 * se,
-                "steps {steps}: bias {bias}"
-            );
+            assert!(bias > -4.0 * se, "ray marching must not be biased low: {bias}");
+            assert!((bias - expected_bias).abs() < 0.25 * expected_bias + 4.0 * se, "steps {steps}: bias {bias}");
             assert!(bias < previous_bias);
             previous_bias = bias;
         }

@@ -111,26 +111,16 @@ pub fn delta_tracking<R: DensityAlongRay>(r: &R, sigma_t: Rgb, sampler: &mut Pix
 /// the sample mean converges very slowly), so there the control falls back to
 /// the minimum, where every factor is in [0, 1]. Where the density is
 /// constant over a segment no lookup is made at all.
-pub fn residual_ratio_tracking<R: DensityAlongRay>(
-    r: &R,
-    sigma_t: Rgb,
-    sampler: &mut PixelSampler,
-) -> Rgb {
+pub fn residual_ratio_tracking<R: DensityAlongRay>(r: &R, sigma_t: Rgb, sampler: &mut PixelSampler) -> Rgb {
     let sigma_t_max = sigma_t.max_channel();
     let mut tr = Rgb::ONE;
     let _ = r.segments(|seg| {
         let length = seg.t1 - seg.t0;
         let half_range = 0.5 * (seg.d_max - seg.d_min);
         let thin = half_range * sigma_t_max * length <= 1.0;
-        let d_control = if thin {
-            seg.d_min + half_range
-        } else {
-            seg.d_min
-        };
+        let d_control = if thin { seg.d_min + half_range } else { seg.d_min };
         // Control: exact.
-        tr *= (sigma_t * (d_control * length))
-            .map(|x| if x.is_nan() { 0.0 } else { x })
-            .exp_neg();
+        tr *= (sigma_t * (d_control * length)).map(|x| if x.is_nan() { 0.0 } else { x }).exp_neg();
         let sigma_residual = if thin { half_range } else { 2.0 * half_range } * sigma_t_max;
         if tr.is_black() {
             return ControlFlow::Break(());

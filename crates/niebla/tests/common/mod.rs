@@ -12,28 +12,11 @@ use niebla::scene::{Scene, SceneObject};
 
 /// Rows of a reference CSV (comment lines start with '#', then a header).
 pub fn read_reference_csv(name: &str) -> Vec<std::collections::HashMap<String, String>> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/reference")
-        .join(name);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/reference").join(name);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
-    let header: Vec<String> = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(|s| s.trim().to_string()))
-                .collect()
-        })
-        .collect()
+    let mut lines = text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let header: Vec<String> = lines.next().unwrap().split(',').map(|s| s.trim().to_string()).collect();
+    lines.map(|l| header.iter().cloned().zip(l.split(',').map(|s| s.trim().to_string())).collect()).collect()
 }
 
 /// A parsed float field (`inf` allowed).
@@ -50,12 +33,7 @@ pub fn field(row: &std::collections::HashMap<String, String>, key: &str) -> f64 
 /// Runtime types do not validate, so tests may build the non-physical
 /// `sigma_a < 0` needed for "attenuation neglected" reference rows.
 pub fn homogeneous(sigma_a: f32, sigma_s: f32, l_ve: Rgb, phase: PhaseFunction) -> Medium {
-    Medium::Homogeneous(HomogeneousMedium {
-        sigma_a: Rgb::splat(sigma_a),
-        sigma_s: Rgb::splat(sigma_s),
-        l_ve,
-        phase,
-    })
+    Medium::Homogeneous(HomogeneousMedium { sigma_a: Rgb::splat(sigma_a), sigma_s: Rgb::splat(sigma_s), l_ve, phase })
 }
 
 /// A scene made of its parts, with bounds from the camera, shapes and lights.

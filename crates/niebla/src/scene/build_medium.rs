@@ -1,0 +1,350 @@
+//! From a medium description to the runtime [`Medium`]: homogeneous
+//! coefficients, or a grid medium's voxel data loaded from its source
+//! (inline, `.npy`, `.vol`, OpenVDB, procedural), checked, placed in the
+//! world and given its majorant grid.
+//!
+//! Spaces (design.md section 1): a dense source's values fill a box in its
+//! own *local* space, which the medium's `to_world` places in the world, so
+//! `world_to_grid = inverse(to_world)`. A VDB grid keeps its own
+//! index-to-world map, after which `to_world` applies, so `world_to_grid =
+//! inverse(to_world * index_to_world)`; that product is formed and inverted
+//! in double precision, since VDB index spaces reach thousands of voxels.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec3A};
+use niebla_volume::{
+    procedural_density, read_npy, read_vol, Affine, DenseGrid, DenseVolume, GridStorage, Leaf, MajorantGrid,
+    ProceduralParams, ProceduralShape, SparseGrid, VdbFile, VolumeError,
+};
+
+use super::build_transform;
+use super::desc::*;
+use super::SceneError;
+use crate::color::{BlackbodyTable, Rgb};
+use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, HomogeneousMedium, Medium};
+use crate::phase::PhaseFunction;
+
+/// Majorant cells per axis of a dense grid when the file gives none (at most
+/// one cell per voxel).
+pub const DEFAULT_DENSE_MAJORANT_RESOLUTION: usize = 16;
+
+/// Build the runtime medium of one scene medium description.
+///
+/// `path` is the medium's JSON path (`media.smoke`), `source` the scene file
+/// named in errors, `base_dir` the folder relative file names resolve
+/// against, and `phase` the medium's phase function, already built by the
+/// caller. Errors name the JSON path of the source at fault (`.file` for
+/// unreadable files and bad values in them, `.grid` for a VDB grid that is
+/// not in its file) and, through the volume crate's message, the file.
+pub(crate) fn build_medium(
+    desc: &MediumDesc,
+    path: &str,
+    source: &str,
+    base_dir: &Path,
+    phase: PhaseFunction,
+) -> Result<Medium, SceneError> {
+    match desc {
+        MediumDesc::Homogeneous(h) => {
+            let (sigma_a, sigma_s) = h.sigma_a_sigma_s();
+            let l_ve = h.emission.map_or(Rgb::ZERO, |e| e.l_ve.to_rgb());
+            Ok(Medium::Homogeneous(HomogeneousMedium { sigma_a, sigma_s, l_ve, phase }))
+        }
+        MediumDesc::Grid(g) => {
+            let mut loader = Loader { source, base_dir, vdb_files: Vec::new() };
+            build_grid_medium(g, path, &mut loader, phase).map(Medium::Grid)
+        }
+    }
+}
+
+fn build_grid_medium(
+    desc: &GridMediumDesc,
+    path: &str,
+    loader: &mut Loader,
+    phase: PhaseFunction,
+) -> Result<GridMedium, SceneError> {
+    let to_world = build_transform(&desc.to_world)
+        .ok_or_else(|| loader.error(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
+    let to_world = to_world.to_world;
+
+    // Density, placed in the world.
+    let density_path = format!("{path}.density");
+    let density = loader.load(&density_path, &desc.density, FieldKind::Density)?;
+    let world_to_grid = loader.world_to_grid(&density_path, &density, &to_world)?;
+
+    // Majorant and minorant grids (the same cells), in the density grid's
+    // space; the minorant is residual ratio tracking's control density.
+    let (majorant, minorant) = match &density {
+        DensityGrid::Dense(g) => {
+            let res = match desc.majorant_resolution {
+                Some(r) => r.dims().map(|n| n as usize),
+                // More cells than voxels bound nothing tighter.
+                None => g.dims().map(|n| n.min(DEFAULT_DENSE_MAJORANT_RESOLUTION)),
+            };
+            (MajorantGrid::from_dense(g, res), MajorantGrid::minorant_from_dense(g, res))
+        }
+        DensityGrid::Sparse(g) => {
+            // A given resolution is a cell budget; the cells stay cubic and
+            // aligned to the VDB leaves.
+            let max_cells = desc
+                .majorant_resolution
+                .map_or(MajorantGrid::DEFAULT_MAX_CELLS, |r| r.dims().iter().map(|&n| n as usize).product());
+            (MajorantGrid::from_sparse(g, max_cells), MajorantGrid::minorant_from_sparse(g, max_cells))
+        }
+    };
+    let minorant = Some(minorant);
+
+    // Emission.
+    let emission = match &desc.emission {
+        None => GridEmission::None,
+        Some(GridEmissionDesc::ProportionalToDensity { l_ve }) => GridEmission::ProportionalToDensity(l_ve.to_rgb()),
+        Some(GridEmissionDesc::Field { grid, color, emission_scale }) => {
+            let field_path = format!("{path}.emission.grid");
+            let field = loader.field(&field_path, grid, FieldKind::Emission, &to_world)?;
+            GridEmission::Field { field, scale: color.to_rgb() * *emission_scale }
+        }
+        Some(GridEmissionDesc::Temperature { temperature, emission_scale }) => {
+            let field_path = format!("{path}.emission.temperature");
+            let field = loader.field(&field_path, temperature, FieldKind::Temperature, &to_world)?;
+            GridEmission::Temperature { field, scale: *emission_scale, table: Arc::new(BlackbodyTable::new()) }
+        }
+    };
+
+    let (sigma_a, sigma_s) = desc.sigma_a_sigma_s();
+    Ok(GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, minorant, emission, phase))
+}
+
+/// What a field means, for messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FieldKind {
+    Density,
+    Emission,
+    Temperature,
+}
+
+impl FieldKind {
+    fn noun(self) -> &'static str {
+        match self {
+            FieldKind::Density => "density",
+            FieldKind::Emission => "emission",
+            FieldKind::Temperature => "temperature",
+        }
+    }
+}
+
+/// Loads field sources of one medium; an OpenVDB file read for the density
+/// is reused for the emission.
+struct Loader<'a> {
+    source: &'a str,
+    base_dir: &'a Path,
+    vdb_files: Vec<(PathBuf, VdbFile)>,
+}
+
+impl Loader<'_> {
+    fn error(&self, path: &str, message: String) -> SceneError {
+        SceneError::new(self.source, path, message)
+    }
+
+    /// A volume crate error at `{field}.file` (its message names the file).
+    fn file_error(&self, field: &str, e: VolumeError) -> SceneError {
+        let at = match e {
+            VolumeError::GridNotFound { .. } | VolumeError::UnsupportedGridType { .. } => {
+                format!("{field}.grid")
+            }
+            _ => format!("{field}.file"),
+        };
+        self.error(&at, e.to_string())
+    }
+
+    /// A field source placed in the world by `to_world`.
+    fn field(
+        &mut self,
+        field: &str,
+        desc: &DensitySourceDesc,
+        kind: FieldKind,
+        to_world: &Affine3A,
+    ) -> Result<GridField, SceneError> {
+        let grid = self.load(field, desc, kind)?;
+        let world_to_grid = self.world_to_grid(field, &grid, to_world)?;
+        Ok(GridField { grid, world_to_grid })
+    }
+
+    /// World to the grid's own space (dense: local box; sparse: index).
+    fn world_to_grid(&self, field: &str, grid: &DensityGrid, to_world: &Affine3A) -> Result<Affine3A, SceneError> {
+        match grid {
+            DensityGrid::Dense(_) => Ok(to_world.inverse()),
+            DensityGrid::Sparse(g) => {
+                let index_to_world = affine_f64(to_world).compose(g.transform());
+                let world_to_index = index_to_world.inverse().ok_or_else(|| {
+                    self.error(
+                        field,
+                        "the VDB grid's index-to-world transform followed by the medium's \
+                         `to_world` is singular"
+                            .into(),
+                    )
+                })?;
+                Ok(affine_f32(&world_to_index))
+            }
+        }
+    }
+
+    /// Loads and checks one field source.
+    fn load(&mut self, field: &str, desc: &DensitySourceDesc, kind: FieldKind) -> Result<DensityGrid, SceneError> {
+        let file_path = format!("{field}.file");
+        let dense = |g: Result<DenseGrid, VolumeError>, at: &str| g.map_err(|e| self.error(at, e.to_string()));
+        let grid = match desc {
+            DensitySourceDesc::Constant { value, bounds } => {
+                dense(DenseGrid::new([1, 1, 1], vec![*value], bounds.min, bounds.max), field)?
+            }
+            DensitySourceDesc::Grid(g) => {
+                dense(DenseGrid::new(g.dims.map(|n| n as usize), g.data.clone(), g.bounds.min, g.bounds.max), field)?
+            }
+            DensitySourceDesc::Npy { file, bounds } => {
+                let full = self.base_dir.join(file);
+                let volume = read_npy(&full)
+                    .and_then(|v| v.with_bounds(bounds.min, bounds.max))
+                    .map_err(|e| self.file_error(field, e))?;
+                self.scalar(&file_path, &full, volume, kind)?
+            }
+            DensitySourceDesc::Vol { file } => {
+                let full = self.base_dir.join(file);
+                let volume = read_vol(&full).map_err(|e| self.file_error(field, e))?;
+                self.scalar(&file_path, &full, volume, kind)?
+            }
+            DensitySourceDesc::Vdb { file, grid } => {
+                let full = self.base_dir.join(file);
+                let sparse = self.read_vdb(field, &full, grid)?;
+                check_sparse(&sparse, kind)
+                    .map_err(|what| self.error(&file_path, format!("{}: grid {grid:?}: {what}", full.display())))?;
+                return Ok(DensityGrid::Sparse(Arc::new(sparse)));
+            }
+            DensitySourceDesc::Procedural(p) => {
+                build_procedural(p).map_err(|e| self.error(field, format!("procedural {}: {e}", kind.noun())))?
+            }
+        };
+        check_dense(&grid, kind).map_err(|what| {
+            let at = desc.file().map_or(field, |_| file_path.as_str());
+            let label = desc
+                .file()
+                .map_or_else(|| format!("{} source", kind.noun()), |f| self.base_dir.join(f).display().to_string());
+            self.error(at, format!("{label}: {what}"))
+        })?;
+        Ok(DensityGrid::Dense(Arc::new(grid)))
+    }
+
+    /// The one channel of a dense file volume; RGB volumes are rejected.
+    fn scalar(&self, at: &str, file: &Path, volume: DenseVolume, kind: FieldKind) -> Result<DenseGrid, SceneError> {
+        match volume {
+            DenseVolume::Scalar(g) => Ok(g),
+            DenseVolume::Rgb(_) => {
+                let hint = match kind {
+                    FieldKind::Density => "a density must have one channel",
+                    FieldKind::Emission => {
+                        "RGB emission grids are not supported yet: give a one-channel grid \
+                         and its `color`"
+                    }
+                    FieldKind::Temperature => "a temperature must have one channel",
+                };
+                Err(self.error(at, format!("{}: has 3 channels (RGB); {hint}", file.display())))
+            }
+        }
+    }
+
+    /// One float grid of an OpenVDB file; each file is read once per medium.
+    fn read_vdb(&mut self, field: &str, file: &Path, grid: &str) -> Result<SparseGrid, SceneError> {
+        let index = match self.vdb_files.iter().position(|(p, _)| p == file) {
+            Some(i) => i,
+            None => {
+                let opened = VdbFile::open(file).map_err(|e| self.file_error(field, e))?;
+                self.vdb_files.push((file.to_path_buf(), opened));
+                self.vdb_files.len() - 1
+            }
+        };
+        self.vdb_files[index].1.read_float_grid(grid).map_err(|e| self.file_error(field, e))
+    }
+}
+
+/// The procedural field over the unit box.
+fn build_procedural(desc: &ProceduralDesc) -> Result<DenseGrid, VolumeError> {
+    let params = ProceduralParams {
+        shape: match desc.shape {
+            ProceduralShapeDesc::Cloud => ProceduralShape::Cloud,
+            ProceduralShapeDesc::Plume => ProceduralShape::Plume,
+        },
+        seed: desc.seed,
+        resolution: desc.resolution.dims().map(|n| n as usize),
+        octaves: desc.octaves,
+        frequency: desc.frequency,
+        lacunarity: desc.lacunarity,
+        gain: desc.gain,
+        coverage: desc.coverage,
+        sharpness: desc.sharpness,
+    };
+    procedural_density(&params)
+}
+
+/// First voxel of a dense grid that is NaN, infinite or negative, as a
+/// message.
+fn check_dense(grid: &DenseGrid, kind: FieldKind) -> Result<(), String> {
+    let storage = grid.storage();
+    let bad = match storage {
+        GridStorage::F32(v) => v.iter().position(|x| !valid(*x)),
+        GridStorage::F16(_) => (0..storage.len()).find(|&i| !valid(storage.get(i))),
+    };
+    let Some(i) = bad else { return Ok(()) };
+    let [nx, ny, _] = grid.dims();
+    let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+    Err(format!(
+        "voxel (x, y, z) = ({x}, {y}, {z}) has value {}; {} values must be finite and >= 0",
+        storage.get(i),
+        kind.noun()
+    ))
+}
+
+/// The first stored value of a sparse grid (background, tiles, leaves, in
+/// that order) that is NaN, infinite or negative, as a message. Inactive
+/// values count too: interpolation reads them.
+fn check_sparse(grid: &SparseGrid, kind: FieldKind) -> Result<(), String> {
+    let rule = format!("{} values must be finite and >= 0", kind.noun());
+    if !valid(grid.background()) {
+        return Err(format!("the background value is {}; {rule}", grid.background()));
+    }
+    if let Some(t) = grid.tiles().iter().find(|t| !valid(t.value)) {
+        let s = t.size();
+        return Err(format!(
+            "the tile of {s}^3 voxels at index (i, j, k) = ({}, {}, {}) has value {}; {rule}",
+            t.origin[0], t.origin[1], t.origin[2], t.value
+        ));
+    }
+    for leaf in grid.leaves() {
+        if let Some(n) = leaf.values.iter().position(|v| !valid(*v)) {
+            let [i, j, k] = leaf_voxel(leaf, n);
+            return Err(format!("voxel (i, j, k) = ({i}, {j}, {k}) has value {}; {rule}", leaf.values[n]));
+        }
+    }
+    Ok(())
+}
+
+/// Index-space coordinates of value `n` of a leaf (`n = i << 6 | j << 3 | k`
+/// in the leaf).
+fn leaf_voxel(leaf: &Leaf, n: usize) -> [i32; 3] {
+    let n = n as i32;
+    [leaf.origin[0] + (n >> 6 & 7), leaf.origin[1] + (n >> 3 & 7), leaf.origin[2] + (n & 7)]
+}
+
+fn valid(x: f32) -> bool {
+    x.is_finite() && x >= 0.0
+}
+
+/// An `Affine3A` in double precision.
+fn affine_f64(m: &Affine3A) -> Affine {
+    let cols = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis, m.translation];
+    Affine { rows: std::array::from_fn(|r| std::array::from_fn(|c| f64::from(cols[c][r]))) }
+}
+
+/// A double-precision affine map rounded to `Affine3A`.
+fn affine_f32(m: &Affine) -> Affine3A {
+    let col = |c: usize| Vec3A::from(std::array::from_fn::<f32, 3, _>(|r| m.rows[r][c] as f32));
+    Affine3A::from_cols(col(0), col(1), col(2), col(3))
+}

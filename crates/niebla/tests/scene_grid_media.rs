@@ -1,0 +1,501 @@
+//! Grid media from scene files: each density source parses, builds and puts
+//! its voxels where design.md section 1 says (values at cell centers of the
+//! box, zero outside, `to_world` placing the source's space in the world,
+//! VDB index-to-world composed before `to_world`); bad data in files is an
+//! error naming the JSON path, the file and the voxel.
+
+use std::path::{Path, PathBuf};
+
+use niebla::color::{BlackbodyTable, Rgb};
+use niebla::integrator::IntegratorSettings;
+use niebla::math::Vec3;
+use niebla::medium::{DensityGrid, GridEmission, GridMedium, Medium};
+use niebla::scene::{build_scene, load_scene, parse_scene_str, BuiltScene, SceneError};
+use niebla::tracking::TransmittanceMethod;
+
+const FILE: &str = "grid_test.json";
+
+/// A scene whose `media` object is `media` (JSON text), with a box that
+/// holds the medium `smoke`.
+fn scene_text(media: &str) -> String {
+    format!(
+        r#"{{"version": 1,
+            "camera": {{"type": "perspective", "position": [0, 0, 8], "target": [0, 0, 0],
+                        "width": 16, "height": 16}},
+            "media": {media},
+            "shapes": [{{"type": "box", "min": [-4, -4, -4], "max": [4, 4, 4], "interior": "smoke"}}]}}"#
+    )
+}
+
+/// Parses and builds a scene with one grid medium `smoke` given as JSON
+/// text; relative files resolve against `dir`.
+fn build_in(dir: &Path, medium: &str) -> Result<BuiltScene, SceneError> {
+    let text = scene_text(&format!(r#"{{"smoke": {medium}}}"#));
+    let desc = parse_scene_str(&text, FILE)?;
+    build_scene(&desc, FILE, dir)
+}
+
+fn build(medium: &str) -> BuiltScene {
+    build_in(Path::new("."), medium).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn grid(built: &BuiltScene) -> &GridMedium {
+    match &built.scene.media[0] {
+        Medium::Grid(g) => g,
+        other => panic!("not a grid medium: {other:?}"),
+    }
+}
+
+/// Density at world point `p` through the runtime medium (`sigma_t` is 1
+/// per unit density in these scenes).
+fn density(built: &BuiltScene, p: [f32; 3]) -> f32 {
+    built.scene.media[0].at(Vec3::from(p)).sigma_t().r()
+}
+
+#[track_caller]
+fn assert_close(actual: f32, expected: f32, tolerance: f32) {
+    assert!((actual - expected).abs() <= tolerance, "got {actual}, expected {expected} (tolerance {tolerance})");
+}
+
+/// A fresh folder under cargo's temporary directory for integration tests.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("scene_grid_media_{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Flat index of voxel `(x, y, z)` in a `[z][y][x]` array of `dims`.
+fn flat(dims: [usize; 3], x: usize, y: usize, z: usize) -> usize {
+    (z * dims[1] + y) * dims[0] + x
+}
+
+/// Writes a little-endian float32 `.npy` file (format version 1.0) of the
+/// given shape, C order.
+fn write_npy(path: &Path, shape: &[usize], data: &[f32]) {
+    assert_eq!(shape.iter().product::<usize>(), data.len());
+    let dims: Vec<String> = shape.iter().map(|n| n.to_string()).collect();
+    let shape = if dims.len() == 1 { format!("({},)", dims[0]) } else { format!("({})", dims.join(", ")) };
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
+    // Magic (6) + version (2) + length (2) + header + '\n' is a multiple of 64.
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in data {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A 4^3 grid over [-1, 1]^3 (cells 0.5 wide), zero but for voxel
+/// [z = 2][y = 1][x = 3] = 5, whose center is (0.75, -0.25, 0.25).
+const ONE_BRIGHT_VOXEL: &str = r#"{"type": "grid", "dims": [4, 4, 4],
+    "bounds": {"min": [-1, -1, -1], "max": [1, 1, 1]},
+    "data": [0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0,
+             0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0,
+             0,0,0,0, 0,0,0,5, 0,0,0,0, 0,0,0,0,
+             0,0,0,0, 0,0,0,0, 0,0,0,0, 0,0,0,0]}"#;
+
+const VOXEL_CENTER: [f32; 3] = [0.75, -0.25, 0.25];
+
+// ---------------------------------------------------------------------------
+// Inline grids, constants and to_world
+// ---------------------------------------------------------------------------
+
+#[test]
+fn inline_grid_voxel_lands_at_its_world_position() {
+    let built = build(&format!(r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {ONE_BRIGHT_VOXEL}}}"#));
+    assert_eq!(density(&built, VOXEL_CENTER), 5.0);
+    // Halfway to the next cell center along x (inside the clamp band near
+    // the face at x = 1 the value stays 5); halfway toward y's neighbor.
+    assert_close(density(&built, [0.9, -0.25, 0.25]), 5.0, 1e-5);
+    assert_close(density(&built, [0.75, 0.0, 0.25]), 2.5, 1e-5);
+    // Neighbouring cell centers are zero, and so is everything outside the box.
+    assert_eq!(density(&built, [0.25, -0.25, 0.25]), 0.0);
+    assert_eq!(density(&built, [1.01, -0.25, 0.25]), 0.0);
+    assert_eq!(density(&built, [0.75, -0.25, -1.5]), 0.0);
+    // Coefficients are per unit density: sigma_s = albedo sigma_t.
+    let point = built.scene.media[0].at(Vec3::from(VOXEL_CENTER));
+    assert_close(point.sigma_s.g(), 2.5, 1e-6);
+    let m = grid(&built);
+    assert_eq!(m.world_bounds, (Vec3::splat(-1.0), Vec3::splat(1.0)));
+}
+
+#[test]
+fn to_world_scale_translate_and_rotation_move_the_density() {
+    let medium = |to_world: &str| {
+        build(&format!(
+            r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {ONE_BRIGHT_VOXEL},
+                 "to_world": {to_world}}}"#
+        ))
+    };
+    // Scale 2 then translate (1, 2, 3): the center goes to 2 c + t.
+    let built = medium(r#"{"scale": 2, "translate": [1, 2, 3]}"#);
+    assert_close(density(&built, [2.5, 1.5, 3.5]), 5.0, 1e-5);
+    assert_eq!(density(&built, VOXEL_CENTER), 0.0);
+    let m = grid(&built);
+    assert_eq!(m.world_bounds, (Vec3::new(-1.0, 0.0, 1.0), Vec3::new(3.0, 4.0, 5.0)));
+    // A cell is 1 unit wide now: half a cell along -x is half the value.
+    assert_close(density(&built, [2.0, 1.5, 3.5]), 2.5, 1e-5);
+
+    // Rotation by 90 degrees about z: (x, y, z) -> (-y, x, z).
+    let built = medium(r#"{"rotate_z": 90}"#);
+    assert_close(density(&built, [0.25, 0.75, 0.25]), 5.0, 1e-4);
+    assert_eq!(density(&built, VOXEL_CENTER), 0.0);
+
+    // A full matrix: the same as scale 2 and translate (1, 2, 3).
+    let built = medium(r#"{"matrix": [[2, 0, 0, 1], [0, 2, 0, 2], [0, 0, 2, 3], [0, 0, 0, 1]]}"#);
+    assert_close(density(&built, [2.5, 1.5, 3.5]), 5.0, 1e-5);
+}
+
+#[test]
+fn constant_density_fills_its_bounds() {
+    let built = build(
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1,
+            "density": {"type": "constant", "value": 0.5,
+                        "bounds": {"min": [0, 0, 0], "max": [2, 1, 3]}},
+            "to_world": {"translate": [-1, 0, 0]}}"#,
+    );
+    for p in [[-0.99, 0.01, 0.01], [0.0, 0.5, 1.5], [0.99, 0.99, 2.99]] {
+        assert_eq!(density(&built, p), 0.5, "{p:?}");
+    }
+    for p in [[1.01, 0.5, 1.0], [0.0, -0.01, 1.0], [0.0, 0.5, 3.01]] {
+        assert_eq!(density(&built, p), 0.0, "{p:?}");
+    }
+    // One voxel: one majorant cell, equal to the minorant.
+    let m = grid(&built);
+    assert_eq!(m.majorant.res(), [1, 1, 1]);
+    assert_eq!(m.majorant.values(), &[0.5]);
+    assert_eq!(m.minorant.as_ref().map(|g| g.values().to_vec()), Some(vec![0.5]));
+    // Default type, a unit box and value 1.
+    let built = build(r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "constant"}}"#);
+    assert_eq!(density(&built, [0.5, 0.5, 0.5]), 1.0);
+    assert_eq!(density(&built, [-0.5, 0.5, 0.5]), 0.0);
+}
+
+#[test]
+fn majorants_and_minorants_bound_the_density() {
+    let built = build(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {ONE_BRIGHT_VOXEL},
+             "majorant_resolution": [2, 2, 1]}}"#
+    ));
+    let m = grid(&built);
+    assert_eq!(m.majorant.res(), [2, 2, 1]);
+    assert_eq!(m.majorant.max_value(), 5.0);
+    let minorant = m.minorant.as_ref().expect("a minorant grid");
+    assert!(minorant.same_layout(&m.majorant));
+    assert!(minorant.values().iter().all(|v| *v == 0.0));
+    // Without a resolution, a 4^3 grid gets 4^3 cells (at most one per voxel).
+    let built = build(&format!(r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {ONE_BRIGHT_VOXEL}}}"#));
+    assert_eq!(grid(&built).majorant.res(), [4, 4, 4]);
+}
+
+// ---------------------------------------------------------------------------
+// Emission
+// ---------------------------------------------------------------------------
+
+#[test]
+fn emission_forms_give_the_documented_radiance() {
+    // Proportional to the density.
+    let built = build(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {ONE_BRIGHT_VOXEL},
+             "emission": {{"L_ve": [1, 2, 3]}}}}"#
+    ));
+    let l_ve = built.scene.media[0].at(Vec3::from(VOXEL_CENTER)).l_ve;
+    assert_eq!(l_ve, Rgb([5.0, 10.0, 15.0]));
+    assert!(built.scene.media[0].is_emissive());
+
+    // An emission grid with a color and a scale, placed by to_world.
+    let built = build(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {{"type": "constant"}},
+             "to_world": {{"scale": 2}},
+             "emission": {{"grid": {ONE_BRIGHT_VOXEL}, "color": [1, 0.5, 0.25],
+                           "emission_scale": 2}}}}"#
+    ));
+    let l_ve = built.scene.media[0].at(Vec3::new(1.5, -0.5, 0.5)).l_ve;
+    assert_eq!(l_ve, Rgb([10.0, 5.0, 2.5]));
+    assert!(matches!(grid(&built).emission, GridEmission::Field { .. }));
+
+    // A temperature: unit-luminance blackbody color times the scale.
+    let built = build(
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 0.5, "density": {"type": "constant"},
+            "emission": {"temperature": {"type": "constant", "value": 1500},
+                         "emission_scale": 3}}"#,
+    );
+    let l_ve = built.scene.media[0].at(Vec3::splat(0.5)).l_ve;
+    let expected = BlackbodyTable::new().rgb(1500.0) * 3.0;
+    for c in 0..3 {
+        assert_close(l_ve.0[c], expected.0[c], 1e-5 * expected.0[c].max(1.0));
+    }
+    assert!(l_ve.0[0] > l_ve.0[2], "1500 K is red: {l_ve:?}");
+}
+
+// ---------------------------------------------------------------------------
+// Files: .npy
+// ---------------------------------------------------------------------------
+
+#[test]
+fn npy_density_is_read_relative_to_the_scene_file() {
+    let dir = temp_dir("npy");
+    // nx = 4, ny = 3, nz = 2 over [0, 4] x [0, 3] x [0, 2]: unit cells.
+    let mut data = vec![0.0f32; 24];
+    data[flat([4, 3, 2], 1, 2, 1)] = 7.0;
+    write_npy(&dir.join("density.npy"), &[2, 3, 4], &data);
+    let scene = dir.join("scene.json");
+    std::fs::write(
+        &scene,
+        scene_text(
+            r#"{"smoke": {"type": "grid", "sigma_t": 1, "albedo": 0.5,
+                 "density": {"type": "npy", "file": "density.npy",
+                             "bounds": {"min": [0, 0, 0], "max": [4, 3, 2]}}}}"#,
+        ),
+    )
+    .unwrap();
+    let built = load_scene(&scene).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(density(&built, [1.5, 2.5, 1.5]), 7.0);
+    assert_eq!(density(&built, [2.5, 2.5, 1.5]), 0.0);
+    assert_eq!(density(&built, [1.5, 3.5, 1.5]), 0.0);
+    match &grid(&built).density {
+        DensityGrid::Dense(g) => assert_eq!(g.dims(), [4, 3, 2]),
+        other => panic!("expected a dense grid, got {other:?}"),
+    }
+}
+
+#[test]
+fn npy_rgb_density_is_rejected_for_having_three_channels() {
+    let dir = temp_dir("npy_rgb");
+    write_npy(&dir.join("rgb.npy"), &[2, 2, 2, 3], &[0.5; 24]);
+    let err =
+        build_in(&dir, r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "npy", "file": "rgb.npy"}}"#)
+            .unwrap_err();
+    assert_eq!(err.path, "media.smoke.density.file", "{err}");
+    assert!(err.message.contains("rgb.npy"), "{err}");
+    assert!(err.message.contains("a density must have one channel"), "{err}");
+    // An RGB emission grid is not supported yet, and says so.
+    let err = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "constant"},
+            "emission": {"grid": {"type": "npy", "file": "rgb.npy"}}}"#,
+    )
+    .unwrap_err();
+    assert_eq!(err.path, "media.smoke.emission.grid.file", "{err}");
+    assert!(err.message.contains("RGB emission grids are not supported"), "{err}");
+}
+
+#[test]
+fn negative_or_nan_values_in_files_name_the_file_and_voxel() {
+    let dir = temp_dir("npy_bad");
+    let mut data = vec![0.25f32; 24];
+    data[flat([4, 3, 2], 2, 0, 1)] = -1.0;
+    write_npy(&dir.join("negative.npy"), &[2, 3, 4], &data);
+    data[flat([4, 3, 2], 2, 0, 1)] = 0.0;
+    data[flat([4, 3, 2], 1, 1, 0)] = f32::NAN;
+    write_npy(&dir.join("nan.npy"), &[2, 3, 4], &data);
+    let medium = |file: &str| {
+        format!(r#"{{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {{"type": "npy", "file": "{file}"}}}}"#)
+    };
+    let err = build_in(&dir, &medium("negative.npy")).unwrap_err();
+    assert_eq!(err.path, "media.smoke.density.file", "{err}");
+    assert!(err.message.contains("negative.npy"), "{err}");
+    assert!(err.message.contains("voxel (x, y, z) = (2, 0, 1) has value -1"), "{err}");
+    assert!(err.message.contains("density values must be finite and >= 0"), "{err}");
+    let err = build_in(&dir, &medium("nan.npy")).unwrap_err();
+    assert!(err.message.contains("voxel (x, y, z) = (1, 1, 0) has value NaN"), "{err}");
+}
+
+#[test]
+fn unreadable_files_are_reported_at_their_path() {
+    let dir = temp_dir("missing");
+    let err = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "vol", "file": "nope.vol"}}"#,
+    )
+    .unwrap_err();
+    assert_eq!(err.path, "media.smoke.density.file", "{err}");
+    assert!(err.message.contains("nope.vol") && err.message.contains("cannot read"), "{err}");
+    assert_eq!(err.file, FILE);
+    // Not a VDB file.
+    std::fs::write(dir.join("fake.vdb"), b"definitely not a vdb").unwrap();
+    let err = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "constant"},
+            "emission": {"temperature": {"type": "vdb", "file": "fake.vdb"}}}"#,
+    )
+    .unwrap_err();
+    assert_eq!(err.path, "media.smoke.emission.temperature.file", "{err}");
+    assert!(err.message.contains("fake.vdb"), "{err}");
+}
+
+// ---------------------------------------------------------------------------
+// Procedural
+// ---------------------------------------------------------------------------
+
+#[test]
+fn procedural_density_is_deterministic_bounded_and_placed_by_to_world() {
+    let medium = r#"{"type": "grid", "sigma_t": 1, "albedo": 1,
+        "density": {"type": "procedural", "shape": "plume", "seed": 3, "resolution": 24},
+        "to_world": {"scale": 4, "translate": [-2, -2, -2]}}"#;
+    let a = build(medium);
+    let b = build(medium);
+    let m = grid(&a);
+    let DensityGrid::Dense(g) = &m.density else { panic!("procedural densities are dense") };
+    assert_eq!(g.dims(), [24, 24, 24]);
+    assert_eq!(g.bounds(), ([0.0; 3], [1.0; 3]));
+    assert!(g.max_value() > 0.0 && g.max_value() <= 1.0);
+    assert_eq!(m.majorant.res(), [16, 16, 16]);
+    assert_eq!(m.world_bounds, (Vec3::splat(-2.0), Vec3::splat(2.0)));
+    // Each voxel's value sits at its center, mapped by to_world (scale 4,
+    // translate -2): the two builds agree bit for bit.
+    let mut nonzero = 0;
+    for z in 0..24 {
+        for y in 0..24 {
+            for x in 0..24 {
+                let center = [x, y, z].map(|i| 4.0 * (i as f32 + 0.5) / 24.0 - 2.0);
+                let d = density(&a, center);
+                assert_close(d, g.voxel(x, y, z), 1e-5);
+                assert_eq!(d.to_bits(), density(&b, center).to_bits());
+                assert!((0.0..=1.0).contains(&d), "{d} at {center:?}");
+                nonzero += usize::from(d > 0.0);
+            }
+        }
+    }
+    assert!(nonzero > 100, "the plume is nearly empty: {nonzero} voxels");
+    // Zero on the faces of the box.
+    assert_eq!(density(&a, [-1.99, 0.0, 0.0]), 0.0);
+}
+
+// ---------------------------------------------------------------------------
+// OpenVDB (files from /work/shared/vdb/make_test_vdbs.py, when present)
+// ---------------------------------------------------------------------------
+
+/// The folder of reference VDB files, if some earlier run generated it.
+fn test_vdbs() -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("niebla_test_vdbs");
+    if dir.join("multi_density_temperature.vdb").is_file() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: no VDB test files in {} (run /usr/bin/python3 \
+             /work/shared/vdb/make_test_vdbs.py {} --no-big)",
+            dir.display(),
+            dir.display()
+        );
+        None
+    }
+}
+
+#[test]
+fn vdb_density_composes_index_to_world_with_to_world() {
+    let Some(dir) = test_vdbs() else { return };
+    // Written probe voxels (ijk -> value); neighbours of these are unset.
+    let probes = [([0, 0, 0], 0.25), ([1, 2, 3], 0.5), ([7, 7, 7], 0.75)];
+    let file = dir.join("xform_affine_rotated.vdb");
+    let sparse = niebla_volume::VdbFile::open(&file).unwrap().read_float_grid("density").unwrap();
+    let medium = |to_world: &str| {
+        let text = format!(
+            r#"{{"type": "grid", "sigma_t": 1, "albedo": 1,
+                 "density": {{"type": "vdb", "file": "xform_affine_rotated.vdb"}},
+                 "to_world": {to_world}}}"#
+        );
+        build_in(&dir, &text).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let identity = medium("{}");
+    let moved = medium(r#"{"scale": 2, "translate": [1, 0, -1]}"#);
+    assert!(matches!(grid(&identity).density, DensityGrid::Sparse(_)));
+    assert!(grid(&identity).minorant.is_some());
+    for (ijk, value) in probes {
+        let world = sparse.index_to_world(ijk.map(|v| v as f32));
+        assert_close(density(&identity, world), value, 1e-3);
+        let moved_world = [2.0 * world[0] + 1.0, 2.0 * world[1], 2.0 * world[2] - 1.0];
+        assert_close(density(&moved, moved_world), value, 1e-3);
+        // The old place is empty in the moved medium (0 between voxels).
+        assert!(density(&moved, world) < value, "{ijk:?}");
+    }
+}
+
+#[test]
+fn vdb_temperature_emission_and_default_grid_name() {
+    let Some(dir) = test_vdbs() else { return };
+    let built = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1,
+            "density": {"type": "vdb", "file": "multi_density_temperature.vdb"},
+            "emission": {"temperature": {"type": "vdb", "file": "multi_density_temperature.vdb",
+                                         "grid": "temperature"},
+                         "emission_scale": 2},
+            "majorant_resolution": 64}"#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    // Density 0.5 and temperature 1500 K at voxel (1, 2, 3), identity transforms.
+    let p = [1.0, 2.0, 3.0];
+    assert_close(density(&built, p), 0.5, 1e-6);
+    let l_ve = built.scene.media[0].at(Vec3::from(p)).l_ve;
+    let expected = BlackbodyTable::new().rgb(1500.0) * 2.0;
+    for c in 0..3 {
+        assert_close(l_ve.0[c], expected.0[c], 1e-4 * expected.0[c].max(1.0));
+    }
+    // A resolution is a cell budget for sparse grids.
+    let res = grid(&built).majorant.res();
+    assert!(res.iter().product::<usize>() <= 64 * 64 * 64, "{res:?}");
+    assert!(matches!(grid(&built).emission, GridEmission::Temperature { .. }));
+}
+
+#[test]
+fn vdb_errors_name_the_grid_or_the_bad_voxel() {
+    let Some(dir) = test_vdbs() else { return };
+    let err = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1,
+            "density": {"type": "vdb", "file": "multi_density_temperature.vdb", "grid": "smoke"}}"#,
+    )
+    .unwrap_err();
+    assert_eq!(err.path, "media.smoke.density.grid", "{err}");
+    assert!(err.message.contains("no grid named \"smoke\"") && err.message.contains("temperature"), "{err}");
+    if !dir.join("levelset_sphere.vdb").is_file() {
+        return;
+    }
+    // A level set stores negative distances inside: not a density.
+    let err = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1, "albedo": 1,
+            "density": {"type": "vdb", "file": "levelset_sphere.vdb", "grid": "surface"}}"#,
+    )
+    .unwrap_err();
+    assert_eq!(err.path, "media.smoke.density.file", "{err}");
+    assert!(err.message.contains("levelset_sphere.vdb: grid \"surface\""), "{err}");
+    assert!(err.message.contains("density values must be finite and >= 0"), "{err}");
+}
+
+// ---------------------------------------------------------------------------
+// Integrator settings
+// ---------------------------------------------------------------------------
+
+#[test]
+fn tracking_transmittance_methods_reach_the_integrator_settings() {
+    for (name, method) in [
+        ("delta", TransmittanceMethod::Delta),
+        ("ratio", TransmittanceMethod::Ratio),
+        ("residual_ratio", TransmittanceMethod::ResidualRatio),
+    ] {
+        let text =
+            scene_text(r#"{"smoke": {"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "constant"}}}"#)
+                .replace(
+                    r#""media""#,
+                    &format!(
+                        r#""render": {{"integrator": {{"type": "emission", "transmittance": "{name}"}}}}, "media""#
+                    ),
+                );
+        let desc = parse_scene_str(&text, FILE).unwrap();
+        let built = build_scene(&desc, FILE, Path::new(".")).unwrap();
+        match built.settings.integrator {
+            IntegratorSettings::Emission { transmittance, .. } => {
+                assert_eq!(transmittance, method, "{name}")
+            }
+            other => panic!("wrong integrator {other:?}"),
+        }
+    }
+}
