@@ -1112,3 +1112,21 @@ fn random_mutations_never_panic_and_always_name_the_file() {
     // The mutations exercise both outcomes.
     assert!(accepted > 10 && rejected > 300, "accepted {accepted}, rejected {rejected}");
 }
+
+#[test]
+fn volpath_integrator_parses_and_rejects_a_zero_depth() {
+    let text = edit(
+        r#"{"type": "single", "step": 0.05, "sampling": "mis",
+                            "transmittance": "analytic"}"#,
+        r#"{"type": "volpath", "max_depth": 64}"#,
+    );
+    let desc = parse_scene_str(&text, FILE).unwrap();
+    assert_eq!(
+        desc.render.integrator,
+        niebla::scene::IntegratorDesc::VolPath(niebla::scene::VolPathDesc { max_depth: 64 })
+    );
+    let zero = text.replace(r#""max_depth": 64"#, r#""max_depth": 0"#);
+    assert_error(&zero, "render.integrator.max_depth", "at least 1");
+    let typo = text.replace(r#""max_depth": 64"#, r#""max_dept": 64"#);
+    assert_error(&typo, "render.integrator.max_dept", "unknown field");
+}

@@ -15,8 +15,8 @@ use niebla::medium::{DensityGrid, GridEmission, GridMedium, Medium};
 use niebla::phase::PhaseFunction;
 use niebla::sampling::PixelSampler;
 use niebla::tracking::{
-    delta_tracking, ratio_tracking, residual_ratio_tracking, segment_transmittance, DensityAlongRay, DensitySegment,
-    MarchStep, TransmittanceMethod,
+    delta_tracking, ratio_tracking, residual_ratio_tracking, residual_ratio_tracking_with, segment_transmittance,
+    DensityAlongRay, DensitySegment, MarchStep, TransmittanceMethod,
 };
 use niebla_volume::{Affine, DenseGrid, MajorantGrid, SparseGridBuilder};
 
@@ -65,7 +65,12 @@ fn trackers_match_beer_lambert_and_documented_variances_on_a_ramp() {
         ("ratio, majorant 2", Ramp { d_min: 0.0, d_max: 1.0 }, ratio_tracking::<Ramp>, 0.128),
         ("ratio, majorant 4", Ramp { d_min: 0.0, d_max: 2.0 }, ratio_tracking::<Ramp>, 0.053),
         // control density (0 + 1)/2 = 0.5 -> sigma_c = 1, residual majorant 1.
-        ("residual ratio", Ramp { d_min: 0.0, d_max: 1.0 }, residual_ratio_tracking::<Ramp>, 0.054),
+        (
+            "residual ratio, majorant 1",
+            Ramp { d_min: 0.0, d_max: 1.0 },
+            |r, st, s| residual_ratio_tracking_with(r, st, 1.0, s),
+            0.054,
+        ),
     ];
     for (name, ramp, tracker, expected_variance) in cases {
         let (mean, var) = mean_and_variance(n, |s| tracker(&ramp, sigma_t, s).r());
@@ -77,6 +82,13 @@ fn trackers_match_beer_lambert_and_documented_variances_on_a_ramp() {
             "{name}: variance {var} vs {expected_variance}"
         );
     }
+    // The default residual majorant (the full range, as many lookups as ratio
+    // tracking with majorant 2) must beat that ratio tracker's variance.
+    let ramp = Ramp { d_min: 0.0, d_max: 1.0 };
+    let (mean, var) = mean_and_variance(n, |s| residual_ratio_tracking(&ramp, sigma_t, s).r());
+    assert!((mean - exact).abs() < 4.0 * (var / n as f64).sqrt(), "residual ratio: mean {mean}");
+    println!("residual ratio, default: variance {var:.4}");
+    assert!(var < 0.128, "residual ratio variance {var} not below ratio tracking's 0.128");
 }
 
 /// A 12^3 grid with sharp features: random blocks of 0 or up to 4, plus a few

@@ -223,6 +223,7 @@ pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
             step: step(&e.march),
             transmittance: transmittance(&e.transmittance, step(&e.march)),
         },
+        IntegratorDesc::VolPath(v) => IntegratorSettings::VolPath { max_depth: v.max_depth },
     }
 }
 

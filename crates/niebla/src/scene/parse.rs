@@ -238,6 +238,13 @@ struct RawEmission {
     transmittance: TransmittanceDesc,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawVolPath {
+    #[serde(default)]
+    max_depth: Option<u32>,
+}
+
 fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
     let tag = take_tag(&mut object, "integrator", IntegratorDesc::TYPES, None)?;
     match tag.as_str() {
@@ -254,6 +261,12 @@ fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
             Ok(IntegratorDesc::Emission(EmissionIntegratorDesc {
                 march: march_step(raw.step, raw.steps)?,
                 transmittance: raw.transmittance,
+            }))
+        }
+        "volpath" => {
+            let raw: RawVolPath = rest(object)?;
+            Ok(IntegratorDesc::VolPath(VolPathDesc {
+                max_depth: raw.max_depth.unwrap_or(crate::integrator::IntegratorSettings::DEFAULT_MAX_DEPTH),
             }))
         }
         _ => Err(unknown_type("integrator", &tag, IntegratorDesc::TYPES)),

@@ -230,6 +230,12 @@ fn validate_render(render: &RenderDesc) -> Check {
     let march = match &render.integrator {
         IntegratorDesc::Single(s) => s.march,
         IntegratorDesc::Emission(e) => e.march,
+        IntegratorDesc::VolPath(v) => {
+            if v.max_depth == 0 {
+                return fail("render.integrator.max_depth", "must be at least 1, got 0");
+            }
+            MarchStepDesc::Auto
+        }
     };
     match march {
         MarchStepDesc::Auto => Ok(()),

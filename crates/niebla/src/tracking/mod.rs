@@ -15,7 +15,7 @@ pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, U
 pub use distance::MajorantProfile;
 pub use free_flight::{sample_t_maj, MajorantCollision};
 pub use ray_march::{ray_march_optical_depth, MarchStep};
-pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking};
+pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking, residual_ratio_tracking_with};
 
 use crate::color::Rgb;
 use crate::math::Ray;

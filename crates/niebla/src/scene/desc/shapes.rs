@@ -1,0 +1,214 @@
+//! Shapes, surfaces, transforms and lights of the scene description.
+
+use super::*;
+
+// ---------------------------------------------------------------------------
+// Shapes
+// ---------------------------------------------------------------------------
+
+/// A shape: its geometry (tagged by `type` in the file), the media on either
+/// side and its surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeDesc {
+    /// Geometry; `type` names it.
+    pub geometry: GeometryDesc,
+    /// Name of the medium inside (behind the surface normal), a key of
+    /// `media`; `None` means vacuum, or for open shapes nothing.
+    pub interior: Option<String>,
+    /// Name of the medium outside (on the normal's side), a key of `media`;
+    /// `None` means the surrounding medium.
+    pub exterior: Option<String>,
+    /// Surface scattering; default `null` (an index-matched medium boundary).
+    pub bsdf: BsdfDesc,
+}
+
+/// The geometry of a shape.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeometryDesc {
+    /// `"type": "sphere"`.
+    Sphere(SphereDesc),
+    /// `"type": "box"`: an axis-aligned box.
+    Box(BoxDesc),
+    /// `"type": "rectangle"`.
+    Rectangle(RectangleDesc),
+}
+
+impl GeometryDesc {
+    /// The `type` names, in the order of the variants.
+    pub const TYPES: &'static [&'static str] = &["sphere", "box", "rectangle"];
+}
+
+/// A sphere; its normal points outward.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereDesc {
+    /// Center, in scene units.
+    #[serde(deserialize_with = "vec3")]
+    pub center: [f32; 3],
+    /// Radius in scene units, > 0.
+    pub radius: f32,
+}
+
+/// An axis-aligned box; its normals point outward.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxDesc {
+    /// Minimum corner, in scene units.
+    #[serde(deserialize_with = "vec3")]
+    pub min: [f32; 3],
+    /// Maximum corner; greater than `min` on every axis.
+    #[serde(deserialize_with = "vec3")]
+    pub max: [f32; 3],
+}
+
+/// A rectangle: the square [-1, 1]^2 in the xy plane with normal +z
+/// (Mitsuba's convention), mapped by `to_world`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectangleDesc {
+    /// Object-to-world transform; default identity.
+    #[serde(default)]
+    pub to_world: TransformDesc,
+}
+
+/// Surface scattering, tagged by `type` in the file; default `null`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum BsdfDesc {
+    /// `"null"`: no surface; light passes unchanged (an index-matched
+    /// boundary between media).
+    #[default]
+    Null,
+    /// `"diffuse"`: Lambertian reflection.
+    Diffuse {
+        /// Reflectance (albedo), each channel in [0, 1]; default 0.5.
+        reflectance: ColorDesc,
+    },
+}
+
+impl BsdfDesc {
+    /// The `type` names, in the order of the variants.
+    pub const TYPES: &'static [&'static str] = &["null", "diffuse"];
+}
+
+/// An object-to-world transform.
+///
+/// In a file: an object with any of `scale` (a number or `[x, y, z]`, each
+/// non-zero), `rotate_x`, `rotate_y`, `rotate_z` (degrees, right-handed about
+/// the world axes) and `translate` (`[x, y, z]`), applied in that order: scale,
+/// then rotate about x, then y, then z, then translate. Or just `matrix`: a
+/// row-major 4x4 array of 4 rows of 4 numbers, acting on column vectors
+/// `[x, y, z, 1]` (last row `[0, 0, 0, 1]`, upper 3x3 invertible).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TransformDesc {
+    /// Scale, rotations and translation.
+    Components {
+        /// Per-axis scale factors, each non-zero (a scalar `s` in the file
+        /// gives `[s, s, s]`).
+        scale: [f32; 3],
+        /// Rotation about the x axis, in degrees.
+        rotate_x: f32,
+        /// Rotation about the y axis, in degrees.
+        rotate_y: f32,
+        /// Rotation about the z axis, in degrees.
+        rotate_z: f32,
+        /// Translation, in scene units.
+        translate: [f32; 3],
+    },
+    /// A row-major 4x4 affine matrix.
+    Matrix([[f32; 4]; 4]),
+}
+
+impl TransformDesc {
+    /// The identity transform.
+    pub const IDENTITY: TransformDesc =
+        TransformDesc::Components { scale: [1.0; 3], rotate_x: 0.0, rotate_y: 0.0, rotate_z: 0.0, translate: [0.0; 3] };
+}
+
+impl Default for TransformDesc {
+    fn default() -> TransformDesc {
+        TransformDesc::IDENTITY
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Lights
+// ---------------------------------------------------------------------------
+
+/// A light source, tagged by `type` in the file. Radiometry follows Mitsuba 3.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightDesc {
+    /// `"type": "point"`.
+    Point(PointLightDesc),
+    /// `"type": "spot"`.
+    Spot(SpotLightDesc),
+    /// `"type": "directional"`.
+    Directional(DirectionalLightDesc),
+    /// `"type": "constant"`: uniform environment.
+    Constant(ConstantLightDesc),
+}
+
+impl LightDesc {
+    /// The `type` names, in the order of the variants.
+    pub const TYPES: &'static [&'static str] = &["point", "spot", "directional", "constant"];
+}
+
+/// An isotropic point light.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLightDesc {
+    /// Position, in scene units.
+    #[serde(deserialize_with = "vec3")]
+    pub position: [f32; 3],
+    /// Radiant intensity in W/sr, finite and >= 0.
+    pub intensity: ColorDesc,
+}
+
+/// A spot light: a point light limited to a cone, with a smooth falloff
+/// between `beam_width` and `cutoff_angle` (Mitsuba 3's `spot`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpotLightDesc {
+    /// Position (apex of the cone), in scene units.
+    pub position: [f32; 3],
+    /// Where the axis of the cone points.
+    pub aim: SpotAimDesc,
+    /// Radiant intensity on the axis in W/sr, finite and >= 0.
+    pub intensity: ColorDesc,
+    /// Half-angle of the cone in degrees, in (0, 90]; no light outside it.
+    /// Default 20.
+    pub cutoff_angle: f32,
+    /// Half-angle in degrees within which the intensity is full, in
+    /// (0, `cutoff_angle`]; default 3/4 of `cutoff_angle`.
+    pub beam_width: f32,
+}
+
+/// The axis of a spot light: the file gives exactly one of `target` and
+/// `direction`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpotAimDesc {
+    /// `target`: a point on the axis, different from the position.
+    Target([f32; 3]),
+    /// `direction`: the direction of the axis (need not be unit length;
+    /// non-zero).
+    Direction([f32; 3]),
+}
+
+/// A directional light (infinitely far away).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DirectionalLightDesc {
+    /// Direction in which the light travels (need not be unit length;
+    /// non-zero).
+    #[serde(deserialize_with = "vec3")]
+    pub direction: [f32; 3],
+    /// Irradiance in W/m^2 on a surface perpendicular to `direction`, finite
+    /// and >= 0.
+    pub irradiance: ColorDesc,
+}
+
+/// A uniform environment light.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstantLightDesc {
+    /// Radiance in W/(sr m^2) arriving from every direction, finite and >= 0.
+    pub radiance: ColorDesc,
+}
