@@ -270,7 +270,33 @@ pub fn info(scene: Option<&Path>) -> Result<(), String> {
                 h.phase.name(),
                 h.phase.mean_cosine()
             ),
-            None => println!("  {name}: max sigma_t {}", m.max_sigma_t()),
+            None => {
+                if let niebla::medium::Medium::Grid(g) = m {
+                    let kind = match &g.density {
+                        niebla::medium::DensityGrid::Dense(d) => format!("dense grid {:?} voxels", d.dims()),
+                        niebla::medium::DensityGrid::Sparse(sp) => format!("sparse grid, {} leaves", sp.leaf_count()),
+                    };
+                    let emission = match &g.emission {
+                        niebla::medium::GridEmission::None => "none".to_string(),
+                        niebla::medium::GridEmission::ProportionalToDensity(l) => format!("L_ve {:?} x density", l.0),
+                        niebla::medium::GridEmission::Field { scale, .. } => format!("grid x {:?}", scale.0),
+                        niebla::medium::GridEmission::Temperature { scale, .. } => {
+                            format!("blackbody of a temperature grid x {scale}")
+                        }
+                    };
+                    println!(
+                        "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \
+                         world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
+                        g.sigma_a.0,
+                        g.sigma_s.0,
+                        g.max_sigma_t(),
+                        g.world_bounds.0.to_array(),
+                        g.world_bounds.1.to_array(),
+                        g.majorant.res(),
+                        g.phase.name()
+                    );
+                }
+            }
         }
     }
     let name_of = |id: Option<niebla::medium::MediumId>| {
