@@ -157,3 +157,49 @@ fn volpath_white_furnace_returns_environment() {
         assert!(m > 0.7 * tr[c] as f64 * 0.9, "channel {c}: {m} below the attenuated environment {}", 0.7 * tr[c]);
     }
 }
+
+/// With one scattering event allowed, the path tracer computes single
+/// scattering: it must agree with the quadrature of
+/// tests/reference/single_scatter_point.csv (homogeneous medium everywhere,
+/// point light, no surfaces) within 4 standard errors, and equiangular
+/// sampling must keep its noise low near the light.
+#[test]
+fn volpath_with_one_bounce_matches_single_scattering_quadrature() {
+    let rows = read_reference_csv("single_scatter_point.csv");
+    let mut checked = 0;
+    let mut worst: f64 = 0.0;
+    for row in &rows {
+        let (sigma_t, sigma_s) = (field(row, "sigma_t") as f32, field(row, "sigma_s") as f32);
+        let length = field(row, "L");
+        if sigma_t == 0.0 || length.is_finite() {
+            // Non-physical rows (sigma_s > sigma_t) and finite segments (a black
+            // wall that must not occlude shadow rays) are the single integrator's.
+            continue;
+        }
+        let phase = match row["phase"].as_str() {
+            "isotropic" => PhaseFunction::isotropic(),
+            _ => PhaseFunction::hg(field(row, "g") as f32),
+        };
+        let medium = Medium::Homogeneous(HomogeneousMedium {
+            sigma_a: Rgb::splat(sigma_t - sigma_s),
+            sigma_s: Rgb::splat(sigma_s),
+            l_ve: Rgb::ZERO,
+            phase,
+        });
+        let light = Light::Point(niebla::light::PointLight {
+            position: Vec3::new(field(row, "t0") as f32, field(row, "h") as f32, 0.0),
+            intensity: Rgb::splat(field(row, "I") as f32),
+        });
+        let s = scene(common::camera_along_x(1, 1, 30.0), vec![], vec![medium], vec![light], Some(MediumId(0)));
+        let stats = estimate(&s, Ray::new(Vec3::ZERO, Vec3::X), Some(MediumId(0)), 20_000, 1);
+        let reference = field(row, "radiance");
+        let (mean, se) = (stats[1].mean(), stats[1].standard_error());
+        let z = (mean - reference) / (se + 5e-6 * reference);
+        worst = worst.max(z.abs());
+        assert!(z.abs() < 4.0, "case {}: {mean:.6e} +- {se:.2e} vs {reference:.6e}", row["case"]);
+        assert!(se < 0.03 * reference, "case {}: relative standard error {:.3} too large", row["case"], se / reference);
+        checked += 1;
+    }
+    assert_eq!(checked, 4);
+    println!("one-bounce volpath: {checked} rows, worst |z| = {worst:.2}");
+}

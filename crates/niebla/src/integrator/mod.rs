@@ -6,6 +6,7 @@
 mod camera_ray;
 mod direct;
 mod emission;
+mod equiangular;
 mod single;
 mod volpath;
 

@@ -19,12 +19,13 @@ use crate::bsdf::Bsdf;
 use crate::color::Rgb;
 use crate::light::Light;
 use crate::math::{Frame, Ray, Vec3};
-use crate::medium::MediumId;
+use crate::medium::{Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::{sample_cosine_hemisphere, PixelSampler};
 use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
-use crate::tracking::sample_t_maj;
+use crate::tracking::{majorant_profile, sample_t_maj, segment_transmittance, TransmittanceMethod};
 
+use super::equiangular::{equiangular_target, PointLightTarget};
 use super::Integrator;
 
 /// The volumetric path tracer.
@@ -92,6 +93,11 @@ impl Integrator for VolPathIntegrator {
             // Free flight through the medium up to the surface.
             if let Some(id) = medium {
                 let m = scene.medium(id);
+                // Equiangular sampling toward point and spot lights along this
+                // segment, MIS-weighted against the free-flight vertices' NEE.
+                if depth < self.max_depth {
+                    l += equiangular_ld(scene, &ray, t_end, m, id, hero, beta / r_u.average(), sampler);
+                }
                 let mut scattered: Option<Ray> = None;
                 let mut terminated = false;
                 let wo = -ray.d;
@@ -130,7 +136,19 @@ impl Integrator for VolPathIntegrator {
                             return false;
                         }
                         let phase = m.phase();
-                        l += sample_ld(scene, c.p, wo, Scatter::Phase(phase), Some(id), hero, beta, r_u, sampler);
+                        let segment = Segment { ray: &ray, t_end, t: c.t, medium: m };
+                        l += sample_ld(
+                            scene,
+                            c.p,
+                            wo,
+                            Scatter::Phase(phase),
+                            Some(id),
+                            hero,
+                            beta,
+                            r_u,
+                            Some(segment),
+                            sampler,
+                        );
                         let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
                             terminated = true;
                             return false;
@@ -219,7 +237,7 @@ impl Integrator for VolPathIntegrator {
             let wo = -ray.d;
             let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
-            l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, sampler);
+            l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, None, sampler);
             match object.bsdf {
                 Bsdf::Diffuse { reflectance } => {
                     let local = sample_cosine_hemisphere(sampler.next_2d());
@@ -266,6 +284,7 @@ fn sample_ld(
     hero: usize,
     beta: Rgb,
     r_p: Rgb,
+    segment: Option<Segment>,
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let n_lights = scene.lights.len();
@@ -303,10 +322,119 @@ fn sample_ld(
     r_l *= r_p * light_pdf;
     r_u *= r_p * scatter_pdf;
     if ls.is_delta {
-        beta * f_hat * t_ray * ls.li / r_l.average()
+        // A point or spot light seen from a free-flight vertex: the same path can
+        // come from equiangular sampling on the segment (`equiangular_ld`).
+        let weight = segment
+            .map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, hero, n_lights).unwrap_or(1.0));
+        beta * f_hat * t_ray * ls.li * weight / r_l.average()
     } else {
         beta * f_hat * t_ray * ls.li / (r_l + r_u).average()
     }
+}
+
+/// The medium segment on which a free-flight vertex was found.
+#[derive(Clone, Copy)]
+struct Segment<'a> {
+    ray: &'a Ray,
+    t_end: f32,
+    t: f32,
+    medium: &'a Medium,
+}
+
+/// Density (per unit length, hero channel) with which free flight on the
+/// segment produces a real scattering at `t`: `sigma_s(t) T(0, t)`, with the
+/// transmittance exact in homogeneous media and from the majorants in grids
+/// (a deterministic stand-in; MIS weights only need to be consistent).
+fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32, hero: usize) -> f32 {
+    let sigma_s = m.at(ray.at(t)).sigma_s[hero];
+    match m.as_homogeneous() {
+        Some(h) => sigma_s * (-h.sigma_t()[hero] * t).exp(),
+        None => {
+            let profile = majorant_profile(m, ray, 0.0, t_end, m.sigma_t_per_density()[hero]);
+            sigma_s * profile.transmittance(t)
+        }
+    }
+}
+
+/// Number of point and spot lights (the lights equiangular sampling chooses from).
+fn point_light_count(scene: &Scene) -> usize {
+    scene.lights.iter().filter(|l| l.point_position().is_some()).count()
+}
+
+/// Balance-heuristic weight of light sampling from a free-flight vertex
+/// (light chosen with probability 1/N) against equiangular sampling of the
+/// same vertex (point light chosen with probability 1/P); `None` when the
+/// light is not point-like or equiangular sampling cannot produce the vertex.
+fn light_weight_against_equiangular(
+    scene: &Scene,
+    seg: Segment,
+    light: &Light,
+    hero: usize,
+    n_lights: usize,
+) -> Option<f32> {
+    let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
+        return None;
+    };
+    let p_eq = e.pdf(seg.t) / point_light_count(scene) as f32;
+    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, hero) / n_lights as f32;
+    (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
+}
+
+/// Equiangular next-event estimation on the segment `[0, t_end)` of `ray` in
+/// medium `id` (Kulla and Fajardo 2012, combined by MIS with free-flight
+/// sampling as Cycles does): one point or spot light chosen uniformly, one
+/// point sampled equiangularly toward it (within the spot's cone), camera-side
+/// and light-side transmittance exact (homogeneous) or by ratio tracking.
+/// `throughput` is the MIS-normalized path throughput at the segment start.
+#[allow(clippy::too_many_arguments)]
+fn equiangular_ld(
+    scene: &Scene,
+    ray: &Ray,
+    t_end: f32,
+    m: &Medium,
+    id: MediumId,
+    hero: usize,
+    throughput: Rgb,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let count = point_light_count(scene);
+    if count == 0 {
+        return Rgb::ZERO;
+    }
+    let (u_light, u_t, u_dir) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
+    let k = ((u_light * count as f32) as usize).min(count - 1);
+    let Some(light) = scene.lights.iter().filter(|l| l.point_position().is_some()).nth(k) else {
+        return Rgb::ZERO;
+    };
+    let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
+        return Rgb::ZERO;
+    };
+    let t = e.sample(u_t);
+    let pdf_eq = e.pdf(t);
+    if !(pdf_eq > 0.0 && pdf_eq.is_finite()) {
+        return Rgb::ZERO;
+    }
+    let p = ray.at(t);
+    let sigma_s = m.at(p).sigma_s;
+    if sigma_s.is_black() {
+        return Rgb::ZERO;
+    }
+    let Some(ls) = light.sample_li(p, None, u_dir) else {
+        return Rgb::ZERO;
+    };
+    let f = m.phase().eval(-ray.d, ls.wi);
+    if f == 0.0 || ls.li.is_black() {
+        return Rgb::ZERO;
+    }
+    let tr_camera = segment_transmittance(m, ray, 0.0, t, TransmittanceMethod::Analytic, sampler);
+    if tr_camera.is_black() {
+        return Rgb::ZERO;
+    }
+    let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
+    let p_eq = pdf_eq / count as f32;
+    let p_d = free_flight_scatter_density(m, ray, t_end, t, hero) / scene.lights.len() as f32;
+    let weight = p_eq / (p_eq + p_d);
+    throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
 }
 
 /// Ratio tracking along a shadow ray with the null-scattering MIS weights of

@@ -63,6 +63,18 @@ impl MajorantProfile {
         self.pieces.last().map(|p| p.1)
     }
 
+    /// `exp(-integral_0^t rate)`: the profile's transmittance up to `t`.
+    pub fn transmittance(&self, t: f32) -> f32 {
+        let mut acc = 0.0f32;
+        for &(t0, t1, rate) in &self.pieces {
+            if t <= t0 {
+                break;
+            }
+            acc += rate * (t.min(t1) - t0);
+        }
+        (-acc).exp()
+    }
+
     /// Density of [`MajorantProfile::sample`] at `t` (0 outside the pieces).
     pub fn pdf(&self, t: f32) -> f32 {
         let mut acc = 0.0f32;
