@@ -499,3 +499,25 @@ fn tracking_transmittance_methods_reach_the_integrator_settings() {
         }
     }
 }
+
+#[test]
+fn half_precision_storage_keeps_densities_within_half_precision() {
+    let medium = r#"{"type": "grid", "sigma_t": 1, "albedo": 0.5, "storage": "f16",
+                     "density": {"type": "procedural", "shape": "cloud", "seed": 3, "resolution": 24}}"#;
+    let half = build(medium);
+    let full = build(&medium.replace(r#""storage": "f16","#, ""));
+    let DensityGrid::Dense(g) = &grid(&half).density else { panic!("expected a dense grid") };
+    assert!(matches!(g.storage(), niebla_volume::GridStorage::F16(_)));
+    let mut compared = 0;
+    for i in 0..400 {
+        let p = [(i % 7) as f32 / 7.0 + 0.03, (i % 11) as f32 / 11.0 + 0.02, (i % 13) as f32 / 13.0 + 0.01];
+        let (a, b) = (density(&half, p), density(&full, p));
+        // f16 has an 11-bit significand: relative rounding error below 2^-11.
+        assert!((a - b).abs() <= b.abs() * 4.9e-4 + 1e-7, "at {p:?}: f16 {a} vs f32 {b}");
+        compared += usize::from(b > 0.0);
+    }
+    assert!(compared > 20);
+    let bad = medium.replace(r#""f16""#, r#""f8""#);
+    let err = parse_scene_str(&scene_text(&format!(r#"{{"smoke": {bad}}}"#)), FILE).unwrap_err();
+    assert_eq!(err.path, "media.smoke.storage", "{err}");
+}

@@ -71,6 +71,10 @@ fn build_grid_medium(
     // Density, placed in the world.
     let density_path = format!("{path}.density");
     let density = loader.load(&density_path, &desc.density, FieldKind::Density)?;
+    let density = match (density, desc.storage) {
+        (DensityGrid::Dense(g), GridStorageDesc::F16) => DensityGrid::Dense(std::sync::Arc::new(g.to_f16())),
+        (other, _) => other,
+    };
     let world_to_grid = loader.world_to_grid(&density_path, &density, &to_world)?;
 
     // Majorant and minorant grids (the same cells), in the density grid's

@@ -336,11 +336,13 @@ struct RawGrid {
     emission: Option<GridEmissionDesc>,
     #[serde(default)]
     majorant_resolution: Option<ResolutionDesc>,
+    #[serde(default)]
+    storage: GridStorageDesc,
 }
 
 /// Fields only a grid medium accepts; a homogeneous medium with one of them
 /// gets an error that says so (rather than a bare "unknown field").
-const GRID_ONLY_FIELDS: &[&str] = &["density", "to_world", "majorant_resolution"];
+const GRID_ONLY_FIELDS: &[&str] = &["density", "to_world", "majorant_resolution", "storage"];
 
 fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
     // Without a `type`, a medium with a `density` is a grid medium (as in
@@ -380,6 +382,7 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                 to_world: raw.to_world,
                 emission: raw.emission,
                 majorant_resolution: raw.majorant_resolution,
+                storage: raw.storage,
             }))
         }
         _ => Err(unknown_type("medium", &tag, MediumDesc::TYPES)),

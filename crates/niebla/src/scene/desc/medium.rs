@@ -134,6 +134,20 @@ pub struct GridMediumDesc {
     /// [`MajorantGrid::DEFAULT_MAX_CELLS`](niebla_volume::MajorantGrid::DEFAULT_MAX_CELLS)
     /// cells for VDB grids).
     pub majorant_resolution: Option<ResolutionDesc>,
+    /// Precision of dense voxel storage: `"f32"` (default) or `"f16"` (half
+    /// the memory, about 3 significant digits; sparse VDB grids keep f32).
+    pub storage: GridStorageDesc,
+}
+
+/// Precision in which a dense density grid is stored (`storage` in the file).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GridStorageDesc {
+    /// 32-bit floats.
+    #[default]
+    F32,
+    /// 16-bit floats (IEEE half).
+    F16,
 }
 
 impl GridMediumDesc {
