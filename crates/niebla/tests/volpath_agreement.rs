@@ -29,6 +29,7 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
         interior: Some(MediumId(0)),
         exterior: None,
         bounds_medium: true,
+        emitter: None,
     };
     scene(common::camera_along_x(8, 8, 30.0), vec![sphere], vec![medium], lights, None)
 }

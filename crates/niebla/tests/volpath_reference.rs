@@ -21,7 +21,14 @@ use niebla::scene::{Scene, SceneObject};
 use niebla_volume::{DenseGrid, MajorantGrid};
 
 fn boundary(shape: Shape, interior: u32) -> SceneObject {
-    SceneObject { shape, bsdf: Bsdf::Null, interior: Some(MediumId(interior)), exterior: None, bounds_medium: true }
+    SceneObject {
+        shape,
+        bsdf: Bsdf::Null,
+        interior: Some(MediumId(interior)),
+        exterior: None,
+        bounds_medium: true,
+        emitter: None,
+    }
 }
 
 fn black_plane(y: f32) -> SceneObject {
@@ -32,6 +39,7 @@ fn black_plane(y: f32) -> SceneObject {
         interior: None,
         exterior: None,
         bounds_medium: false,
+        emitter: None,
     }
 }
 

@@ -11,6 +11,9 @@ use crate::tracking::TransmittanceMethod;
 
 use super::direct_surface_radiance;
 
+/// Largest number of specular reflections and refractions a camera ray follows.
+pub const MAX_SPECULAR_BOUNCES: u32 = 16;
+
 /// What a medium segment adds: radiance leaving the segment toward the camera
 /// (emission and in-scattering, attenuated to the segment's start) and the
 /// transmittance across the whole segment.
@@ -36,6 +39,7 @@ pub(crate) fn trace_camera_ray(
     let mut l = Rgb::ZERO;
     let mut beta = Rgb::ONE;
     let mut t_min = 0.0;
+    let mut specular_bounces = 0u32;
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
         let hit = scene.intersect(&ray, t_min, f32::INFINITY);
         let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
@@ -62,6 +66,32 @@ pub(crate) fn trace_camera_ray(
             // Continue from the hit point itself so no path length is lost.
             medium = scene.medium_after_crossing(&hit, ray.d, medium);
             ray = Ray::new(hit.surface.p, ray.d);
+            t_min = surface_epsilon(hit.surface.p);
+            continue;
+        }
+
+        // An area light: its emitted radiance (its surface reflects nothing).
+        if let Some((le, _)) = scene.emitted_radiance(&hit, -ray.d) {
+            l += beta * le;
+            break;
+        }
+
+        // Specular surface (glass, metal): follow the sampled reflection or
+        // refraction, as a Whitted-style ray tracer would.
+        if object.bsdf.is_specular() {
+            specular_bounces += 1;
+            if specular_bounces > MAX_SPECULAR_BOUNCES {
+                break;
+            }
+            let u_lobe = sampler.next_1d();
+            let Some(bs) = object.bsdf.sample(hit.surface.n, -ray.d, u_lobe, sampler.next_2d()) else {
+                break;
+            };
+            beta *= bs.weight(hit.surface.n);
+            if bs.is_transmission {
+                medium = scene.medium_after_crossing(&hit, bs.wi, medium);
+            }
+            ray = Ray::new(hit.surface.p, bs.wi);
             t_min = surface_epsilon(hit.surface.p);
             continue;
         }

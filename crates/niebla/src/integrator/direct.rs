@@ -3,7 +3,6 @@
 //! transmittance through the media in between.
 
 use crate::color::Rgb;
-use crate::light::Light;
 use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
@@ -27,7 +26,7 @@ pub fn direct_surface_radiance(
 ) -> Rgb {
     let n = if n.dot(wo) < 0.0 { -n } else { n };
     let mut l = Rgb::ZERO;
-    for light in &scene.lights {
+    for (index, light) in scene.lights.iter().enumerate() {
         let u = sampler.next_2d();
         let Some(ls) = light.sample_li(p, Some(n), u) else {
             continue;
@@ -41,7 +40,15 @@ pub fn direct_surface_radiance(
             continue;
         }
         let origin = offset_origin(p, n);
-        let tr = scene.transmittance(origin, medium, ls.wi, ls.distance, method, sampler);
+        let tr = scene.transmittance_ignoring(
+            origin,
+            medium,
+            ls.wi,
+            ls.distance,
+            scene.light_object(index),
+            method,
+            sampler,
+        );
         l += f * ls.li * tr * (cos / ls.pdf);
     }
     l
@@ -60,19 +67,19 @@ pub fn in_scattered_radiance(
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
-    for light in &scene.lights {
-        l += light_in_scattered_radiance(scene, light, p, wo, phase, medium, method, sampler);
+    for index in 0..scene.lights.len() {
+        l += light_in_scattered_radiance(scene, index, p, wo, phase, medium, method, sampler);
     }
     l
 }
 
 /// One light's share of [`in_scattered_radiance`]: `p(wo, wi) T(p, light) L_i / pdf`
-/// for one sampled direction `wi` toward `light`.
+/// for one sampled direction `wi` toward light `light_index` of the scene.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn light_in_scattered_radiance(
     scene: &Scene,
-    light: &Light,
+    light_index: usize,
     p: Vec3,
     wo: Vec3,
     phase: &PhaseFunction,
@@ -80,6 +87,7 @@ pub fn light_in_scattered_radiance(
     method: TransmittanceMethod,
     sampler: &mut PixelSampler,
 ) -> Rgb {
+    let light = &scene.lights[light_index];
     let u = sampler.next_2d();
     let Some(ls) = light.sample_li(p, None, u) else {
         return Rgb::ZERO;
@@ -91,6 +99,7 @@ pub fn light_in_scattered_radiance(
     if f == 0.0 {
         return Rgb::ZERO;
     }
-    let tr = scene.transmittance(p, medium, ls.wi, ls.distance, method, sampler);
+    let ignore = scene.light_object(light_index);
+    let tr = scene.transmittance_ignoring(p, medium, ls.wi, ls.distance, ignore, method, sampler);
     ls.li * tr * (f / ls.pdf)
 }

@@ -109,8 +109,8 @@ impl SingleIntegrator {
         let scattered = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, p, sampler| {
             let mut source = Rgb::ZERO;
             if !mp.sigma_s.is_black() {
-                for light in &scene.lights {
-                    source += light_in_scattered_radiance(scene, light, p, wo, m.phase(), Some(id), method, sampler);
+                for index in 0..scene.lights.len() {
+                    source += light_in_scattered_radiance(scene, index, p, wo, m.phase(), Some(id), method, sampler);
                 }
                 source *= mp.sigma_s;
             }
@@ -153,7 +153,7 @@ impl SingleIntegrator {
                 if !mp.sigma_s.is_black() {
                     let tr = segment_transmittance(m, ray, 0.0, t, self.transmittance, sampler);
                     let mut li = Rgb::ZERO;
-                    for light in &scene.lights {
+                    for (index, light) in scene.lights.iter().enumerate() {
                         let weight = match equiangular_target(light, ray, t_end) {
                             PointLightTarget::Interval(e) if mis => balance_heuristic(pdf, e.pdf(t)),
                             // Equiangular sampling alone covers its interval.
@@ -164,7 +164,7 @@ impl SingleIntegrator {
                         if weight > 0.0 {
                             li += light_in_scattered_radiance(
                                 scene,
-                                light,
+                                index,
                                 p,
                                 wo,
                                 m.phase(),
@@ -180,7 +180,7 @@ impl SingleIntegrator {
         }
 
         // Equiangular samples toward each point-like light.
-        for light in &scene.lights {
+        for (index, light) in scene.lights.iter().enumerate() {
             if light.point_position().is_none() {
                 continue;
             }
@@ -200,7 +200,7 @@ impl SingleIntegrator {
                 continue;
             }
             let tr = segment_transmittance(m, ray, 0.0, t, self.transmittance, sampler);
-            let li = light_in_scattered_radiance(scene, light, p, wo, m.phase(), Some(id), self.transmittance, sampler);
+            let li = light_in_scattered_radiance(scene, index, p, wo, m.phase(), Some(id), self.transmittance, sampler);
             seg.radiance += tr * mp.sigma_s * li * (weight / pdf);
         }
         seg

@@ -18,10 +18,10 @@
 use crate::bsdf::Bsdf;
 use crate::color::Rgb;
 use crate::light::Light;
-use crate::math::{Frame, Ray, Vec3};
+use crate::math::{Ray, Vec3};
 use crate::medium::{Medium, MediumId};
 use crate::phase::PhaseFunction;
-use crate::sampling::{sample_cosine_hemisphere, PixelSampler};
+use crate::sampling::PixelSampler;
 use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
 use crate::tracking::{majorant_profile, sample_t_maj, segment_transmittance, TransmittanceMethod};
 
@@ -65,7 +65,7 @@ impl Scatter<'_> {
                 if cos <= 0.0 {
                     return (Rgb::ZERO, 0.0);
                 }
-                (bsdf.eval(n, wo, wi) * cos, cos * crate::math::INV_PI)
+                (bsdf.eval(n, wo, wi) * cos, bsdf.pdf(n, wo, wi))
             }
         }
     }
@@ -82,6 +82,9 @@ impl Integrator for VolPathIntegrator {
         let mut r_l = Rgb::ONE;
         let mut depth = 0u32;
         let mut specular_bounce = false;
+        // Product of etap^2 over refractions: radiance scaling that Russian
+        // roulette must not mistake for lost energy (pbrt-v4's etaScale).
+        let mut eta_scale = 1.0f32;
         let mut previous = PreviousVertex { p: ray.o, normal: None };
         let mut t_min = 0.0f32;
         let mut crossings = 0u32;
@@ -229,6 +232,22 @@ impl Integrator for VolPathIntegrator {
                 continue;
             }
 
+            // An area light: emitted radiance, MIS-weighted against light
+            // sampling from the previous vertex; its black surface ends the path.
+            if let Some((le, index)) = scene.emitted_radiance(&hit, -ray.d) {
+                if !le.is_black() {
+                    if depth == 0 || specular_bounce {
+                        l += beta * le / r_u.average();
+                    } else {
+                        let light = &scene.lights[index as usize];
+                        let pmf = 1.0 / scene.lights.len() as f32;
+                        let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        l += beta * le / (r_u + r_l_hit).average();
+                    }
+                }
+                return l;
+            }
+
             // Opaque surface: next-event estimation, then BSDF sampling.
             if depth >= self.max_depth {
                 return l;
@@ -237,28 +256,31 @@ impl Integrator for VolPathIntegrator {
             let wo = -ray.d;
             let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
-            l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, None, sampler);
-            match object.bsdf {
-                Bsdf::Diffuse { reflectance } => {
-                    let local = sample_cosine_hemisphere(sampler.next_2d());
-                    let wi = Frame::from_z(n).to_world(local);
-                    let pdf = local.z * crate::math::INV_PI;
-                    if !(pdf > 0.0) {
-                        return l;
-                    }
-                    // f cos / pdf = reflectance for a Lambertian surface.
-                    beta *= reflectance;
-                    r_l = r_u / pdf;
-                    specular_bounce = false;
-                    previous = PreviousVertex { p, normal: Some(n) };
-                    ray = Ray::new(p, wi);
-                    t_min = surface_epsilon(p);
-                }
-                Bsdf::Null => unreachable!("null surfaces are crossed above"),
+            if !object.bsdf.is_specular() {
+                l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, None, sampler);
             }
+            // BSDF sampling with the outward geometric normal (dielectrics need it).
+            let u_lobe = sampler.next_1d();
+            let Some(bs) = object.bsdf.sample(hit.surface.n, wo, u_lobe, sampler.next_2d()) else {
+                return l;
+            };
+            if !(bs.pdf > 0.0) {
+                return l;
+            }
+            beta *= bs.weight(hit.surface.n);
+            r_l = r_u / bs.pdf;
+            specular_bounce = bs.is_specular;
+            if bs.is_transmission {
+                eta_scale *= bs.eta * bs.eta;
+                medium = scene.medium_after_crossing(&hit, bs.wi, medium);
+            }
+            let side = if hit.surface.n.dot(bs.wi) < 0.0 { -hit.surface.n } else { hit.surface.n };
+            previous = PreviousVertex { p, normal: Some(side) };
+            ray = Ray::new(p, bs.wi);
+            t_min = surface_epsilon(p);
 
             // Russian roulette on the MIS-normalized throughput.
-            let rr_beta = beta / r_u.average();
+            let rr_beta = beta * eta_scale / r_u.average();
             let u = sampler.next_1d();
             if rr_beta.max_channel() < 1.0 && depth > 1 {
                 let q = (1.0 - rr_beta.max_channel()).max(0.0);
@@ -293,7 +315,8 @@ fn sample_ld(
     if n_lights == 0 {
         return Rgb::ZERO;
     }
-    let light: &Light = &scene.lights[((u_light * n_lights as f32) as usize).min(n_lights - 1)];
+    let light_index = ((u_light * n_lights as f32) as usize).min(n_lights - 1);
+    let light: &Light = &scene.lights[light_index];
     let pmf = 1.0 / n_lights as f32;
     let normal = match scatter {
         Scatter::Surface(_, n) => Some(n),
@@ -314,7 +337,7 @@ fn sample_ld(
         None => p,
     };
     let Some((t_ray, mut r_l, mut r_u)) =
-        shadow_transmittance(scene, origin, medium, ls.wi, ls.distance, hero, sampler)
+        shadow_transmittance(scene, origin, medium, ls.wi, ls.distance, scene.light_object(light_index), hero, sampler)
     else {
         return Rgb::ZERO;
     };
@@ -440,12 +463,14 @@ fn equiangular_ld(
 /// Ratio tracking along a shadow ray with the null-scattering MIS weights of
 /// pbrt-v4: returns `(T_ray, r_l, r_u)` or `None` when the ray is blocked by
 /// an opaque surface or its estimate was terminated.
+#[allow(clippy::too_many_arguments)]
 fn shadow_transmittance(
     scene: &Scene,
     p: Vec3,
     mut medium: Option<MediumId>,
     wi: Vec3,
     distance: f32,
+    ignore: Option<u32>,
     hero: usize,
     sampler: &mut PixelSampler,
 ) -> Option<(Rgb, Rgb, Rgb)> {
@@ -456,10 +481,15 @@ fn shadow_transmittance(
     let mut remaining = distance;
     let mut t_min = 0.0;
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
-        let hit = scene.intersect(&ray, t_min, remaining);
+        let mut hit = scene.intersect(&ray, t_min, remaining);
+        let mut reached_light = false;
         if let Some(h) = hit {
             if !scene.object(&h).bsdf.is_null() {
-                return None;
+                if Some(h.object) != ignore {
+                    return None;
+                }
+                // The sampled light's own surface: the shadow ray ends there.
+                reached_light = true;
             }
         }
         let t_end = hit.map_or(remaining, |h| h.surface.t);
@@ -502,6 +532,9 @@ fn shadow_transmittance(
         }
         if t_ray.is_black() || !t_ray.is_finite() {
             return None;
+        }
+        if reached_light {
+            hit = None;
         }
         let Some(hit) = hit else {
             return Some((t_ray, r_l, r_u));

@@ -4,6 +4,12 @@
 //! to its direction of travel), a constant environment `radiance`
 //! (W/(sr m^2)).
 
+mod area;
+mod envmap;
+
+pub use area::{AreaLight, AreaLightSample, AreaShape};
+pub use envmap::{latlong_direction, latlong_uv, EnvironmentMap, EnvironmentSample, LightError};
+
 use crate::color::Rgb;
 use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_sphere, uniform_sphere_pdf};
@@ -19,6 +25,11 @@ pub enum Light {
     Directional(DirectionalLight),
     /// Uniform environment of constant radiance.
     Constant(ConstantLight),
+    /// Emitting rectangle or sphere of uniform radiance (its shape is also a
+    /// scene object, which rays hit).
+    Area(AreaLight),
+    /// Lat-long environment map, importance sampled.
+    Environment(std::sync::Arc<EnvironmentMap>),
 }
 
 /// Isotropic point light.
@@ -133,6 +144,16 @@ impl Light {
                 pdf: 1.0,
                 is_delta: true,
             }),
+            Light::Area(a) => {
+                let s = a.sample_li(p, u)?;
+                // Stop shadow rays just short of the emitting surface itself.
+                let distance = s.distance * (1.0 - 1e-4);
+                Some(LightSample { wi: s.wi, distance, li: s.li, pdf: s.pdf, is_delta: false })
+            }
+            Light::Environment(e) => {
+                let s = e.sample_li(u)?;
+                Some(LightSample { wi: s.wi, distance: f32::INFINITY, li: s.li, pdf: s.pdf, is_delta: false })
+            }
             Light::Constant(l) => {
                 let (wi, pdf) = match normal {
                     Some(n) => {
@@ -152,8 +173,10 @@ impl Light {
     /// Density per steradian with which [`Light::sample_li`] at `p` (with the
     /// same `normal` argument) returns direction `wi`; 0 for delta lights.
     #[inline]
-    pub fn pdf_li(&self, _p: Vec3, normal: Option<Vec3>, wi: Vec3) -> f32 {
+    pub fn pdf_li(&self, p: Vec3, normal: Option<Vec3>, wi: Vec3) -> f32 {
         match self {
+            Light::Area(a) => a.pdf_li(p, wi),
+            Light::Environment(e) => e.pdf_li(wi),
             Light::Constant(_) => match normal {
                 Some(n) => cosine_hemisphere_pdf(wi.dot(n)),
                 None => uniform_sphere_pdf(),
@@ -166,20 +189,21 @@ impl Light {
     /// directional): no ray can hit them, so they take no MIS.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Constant(_))
+        matches!(self, Light::Point(_) | Light::Spot(_) | Light::Directional(_))
     }
 
     /// True for lights at infinity that escaping rays see.
     #[inline]
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Light::Constant(_))
+        matches!(self, Light::Constant(_) | Light::Environment(_))
     }
 
     /// Radiance seen along a ray that escapes the scene in direction `d`.
     #[inline]
-    pub fn le_escaped(&self, _d: Vec3) -> Rgb {
+    pub fn le_escaped(&self, d: Vec3) -> Rgb {
         match self {
             Light::Constant(l) => l.radiance,
+            Light::Environment(e) => e.le(d),
             _ => Rgb::ZERO,
         }
     }

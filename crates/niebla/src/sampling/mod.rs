@@ -4,9 +4,11 @@
 //! from a hash of `(seed, x, y, s, dimension)`, so an image does not depend on
 //! thread count or tile order (design.md section 1).
 
+mod distribution;
 mod rng;
 mod warps;
 
+pub use distribution::{Distribution1D, Distribution2D};
 pub use rng::{hash_u64, PixelSampler};
 pub use warps::*;
 

@@ -10,9 +10,12 @@ use super::desc::*;
 use super::{RenderSettings, Scene, SceneError, SceneObject};
 use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
+use crate::color::Rgb;
 use crate::geometry::{AxisAlignedBox, Rectangle, Shape, Sphere, Transform};
 use crate::integrator::{IntegratorSettings, SingleSampling};
-use crate::light::{ConstantLight, DirectionalLight, Light, PointLight, SpotLight};
+use crate::light::{
+    AreaLight, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
+};
 use crate::math::{Frame, Vec3};
 use crate::medium::MediumId;
 use crate::phase::{PhaseFunction, Schlick, Tabulated};
@@ -63,6 +66,13 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
         let bsdf = match s.bsdf {
             BsdfDesc::Null => Bsdf::Null,
             BsdfDesc::Diffuse { reflectance } => Bsdf::Diffuse { reflectance: reflectance.to_rgb() },
+            BsdfDesc::Dielectric { int_ior, ext_ior } => Bsdf::dielectric(int_ior, ext_ior),
+            BsdfDesc::Conductor(ConductorDesc::Material(name)) => Bsdf::conductor_preset(name)
+                .ok_or_else(|| err(&format!("{path}.bsdf.material"), format!("unknown conductor \"{name}\"")))?,
+            BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
+                Bsdf::Conductor { eta: eta.to_rgb(), k: k.to_rgb() }
+            }
+            BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => Bsdf::conductor_from_reflectance(r.to_rgb()),
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
@@ -72,6 +82,7 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
             interior,
             exterior,
             bounds_medium: s.interior.is_some() || s.exterior.is_some(),
+            emitter: None,
         });
         explicit_exterior.push(s.exterior.is_some());
     }
@@ -109,6 +120,49 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
                 irradiance: d.irradiance.to_rgb(),
             }),
             LightDesc::Constant(c) => Light::Constant(ConstantLight { radiance: c.radiance.to_rgb() }),
+            LightDesc::Area(a) => {
+                let shape_path = format!("{path}.shape");
+                let area_shape = match &a.shape.geometry {
+                    GeometryDesc::Sphere(d) => {
+                        AreaShape::Sphere(Sphere { center: Vec3::from(d.center), radius: d.radius })
+                    }
+                    GeometryDesc::Rectangle(d) => {
+                        let t = build_transform(&d.to_world).ok_or_else(|| {
+                            err(&format!("{shape_path}.to_world"), "transform is singular (zero scale?)".into())
+                        })?;
+                        AreaShape::Rectangle(Rectangle::new(t))
+                    }
+                    GeometryDesc::Box(_) => {
+                        return Err(err(&shape_path, "an area light is a rectangle or a sphere".into()))
+                    }
+                };
+                let light = AreaLight::new(area_shape, a.radiance.to_rgb(), a.two_sided)
+                    .map_err(|e| err(&shape_path, e.to_string()))?;
+                // The emitter is also a black surface that rays hit.
+                let shape = match &light.shape {
+                    AreaShape::Sphere(s) => Shape::Sphere(*s),
+                    AreaShape::Rectangle(r) => Shape::Rectangle(*r),
+                };
+                objects.push(SceneObject {
+                    shape,
+                    bsdf: Bsdf::Diffuse { reflectance: Rgb::ZERO },
+                    interior: None,
+                    exterior: None,
+                    bounds_medium: false,
+                    emitter: Some(i as u32),
+                });
+                explicit_exterior.push(false);
+                Light::Area(light)
+            }
+            LightDesc::Envmap(e) => {
+                let file = base_dir.join(&e.file);
+                let t = build_transform(&e.to_world)
+                    .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular".into()))?;
+                let rotation = glam::Mat3::from(t.to_world.matrix3);
+                let map = EnvironmentMap::from_exr(&file, e.scale, rotation)
+                    .map_err(|error| err(&format!("{path}.file"), error.to_string()))?;
+                Light::Environment(std::sync::Arc::new(map))
+            }
         });
     }
 

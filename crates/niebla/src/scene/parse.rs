@@ -701,6 +701,32 @@ fn half_gray() -> ColorDesc {
     ColorDesc::Gray(0.5)
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDielectric {
+    #[serde(default = "glass_ior")]
+    int_ior: f32,
+    #[serde(default = "one")]
+    ext_ior: f32,
+}
+
+fn glass_ior() -> f32 {
+    1.5
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConductor {
+    #[serde(default)]
+    material: Option<String>,
+    #[serde(default)]
+    eta: Option<ColorDesc>,
+    #[serde(default)]
+    k: Option<ColorDesc>,
+    #[serde(default)]
+    reflectance: Option<ColorDesc>,
+}
+
 fn parse_bsdf(mut object: Object) -> Result<BsdfDesc, Located> {
     let tag = take_tag(&mut object, "bsdf", BsdfDesc::TYPES, None)?;
     match tag.as_str() {
@@ -708,6 +734,41 @@ fn parse_bsdf(mut object: Object) -> Result<BsdfDesc, Located> {
         "diffuse" => {
             let raw: RawDiffuse = rest(object)?;
             Ok(BsdfDesc::Diffuse { reflectance: raw.reflectance })
+        }
+        "dielectric" => {
+            let raw: RawDielectric = rest(object)?;
+            Ok(BsdfDesc::Dielectric { int_ior: raw.int_ior, ext_ior: raw.ext_ior })
+        }
+        "conductor" => {
+            let raw: RawConductor = rest(object)?;
+            let given = [raw.material.is_some(), raw.eta.is_some() || raw.k.is_some(), raw.reflectance.is_some()];
+            if given.iter().filter(|g| **g).count() != 1 {
+                return Err(Located::new(
+                    "",
+                    "give exactly one of `material` (gold, silver, aluminium, copper), `eta` with `k`, or \
+                     `reflectance`",
+                ));
+            }
+            if let Some(name) = raw.material {
+                let preset = crate::bsdf::conductor_preset(&name).ok_or_else(|| {
+                    Located::new(
+                        "material",
+                        format!(
+                            "unknown conductor material \"{name}\"; expected one of: {}",
+                            crate::bsdf::CONDUCTOR_PRESETS.iter().map(|p| p.name).collect::<Vec<_>>().join(", ")
+                        ),
+                    )
+                })?;
+                return Ok(BsdfDesc::Conductor(ConductorDesc::Material(preset.name)));
+            }
+            if let Some(r) = raw.reflectance {
+                return Ok(BsdfDesc::Conductor(ConductorDesc::Reflectance(r)));
+            }
+            match (raw.eta, raw.k) {
+                (Some(eta), Some(k)) => Ok(BsdfDesc::Conductor(ConductorDesc::Index { eta, k })),
+                (None, _) => Err(Located::new("eta", "missing `eta`: give it together with `k`")),
+                (_, None) => Err(Located::new("k", "missing `k`: give it together with `eta`")),
+            }
         }
         _ => Err(unknown_type("bsdf", &tag, BsdfDesc::TYPES)),
     }
@@ -792,6 +853,24 @@ fn default_cutoff_angle() -> f32 {
     20.0
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawArea {
+    radiance: ColorDesc,
+    #[serde(default)]
+    two_sided: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnvmap {
+    file: String,
+    #[serde(default = "one")]
+    scale: f32,
+    #[serde(default)]
+    to_world: TransformDesc,
+}
+
 fn parse_light(mut object: Object) -> Result<LightDesc, Located> {
     let tag = take_tag(&mut object, "light", LightDesc::TYPES, None)?;
     match tag.as_str() {
@@ -822,6 +901,16 @@ fn parse_light(mut object: Object) -> Result<LightDesc, Located> {
         }
         "directional" => rest(object).map(LightDesc::Directional),
         "constant" => rest(object).map(LightDesc::Constant),
+        "area" => {
+            let shape = take::<ShapeDesc>(&mut object, "shape")?
+                .ok_or_else(|| Located::new("shape", "missing required field `shape`: a rectangle or sphere object"))?;
+            let raw: RawArea = rest(object)?;
+            Ok(LightDesc::Area(AreaLightDesc { shape, radiance: raw.radiance, two_sided: raw.two_sided }))
+        }
+        "envmap" => {
+            let raw: RawEnvmap = rest(object)?;
+            Ok(LightDesc::Envmap(EnvmapLightDesc { file: raw.file, scale: raw.scale, to_world: raw.to_world }))
+        }
         _ => Err(unknown_type("light", &tag, LightDesc::TYPES)),
     }
 }

@@ -25,6 +25,8 @@ pub struct SceneObject {
     pub exterior: Option<MediumId>,
     /// True when the shape bounds a medium (a side has a medium).
     pub bounds_medium: bool,
+    /// Index in [`Scene::lights`] of the area light this shape emits as.
+    pub emitter: Option<u32>,
 }
 
 /// A surface hit with the object it belongs to.
@@ -134,15 +136,40 @@ impl Scene {
         best.map(|(_, id)| id).or(self.ambient_medium)
     }
 
+    /// The object that is the surface of area light `light` (an index into
+    /// [`Scene::lights`]), if any.
+    #[inline]
+    pub fn light_object(&self, light: usize) -> Option<u32> {
+        self.objects.iter().position(|o| o.emitter == Some(light as u32)).map(|i| i as u32)
+    }
+
     /// Transmittance from `p` (inside `medium`) along unit `wi` over `distance`
     /// (may be infinite), crossing index-matched boundaries; zero if an opaque
     /// surface is in the way.
     pub fn transmittance(
         &self,
         p: Vec3,
+        medium: Option<MediumId>,
+        wi: Vec3,
+        distance: f32,
+        method: TransmittanceMethod,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        self.transmittance_ignoring(p, medium, wi, distance, None, method, sampler)
+    }
+
+    /// [`Scene::transmittance`] toward a sampled point of a light whose own
+    /// surface is object `ignore`: that surface cannot occlude a sample of
+    /// itself (rays grazing a sphere light's silhouette would otherwise hit it
+    /// through rounding).
+    #[allow(clippy::too_many_arguments)]
+    pub fn transmittance_ignoring(
+        &self,
+        p: Vec3,
         mut medium: Option<MediumId>,
         wi: Vec3,
         distance: f32,
+        ignore: Option<u32>,
         method: TransmittanceMethod,
         sampler: &mut PixelSampler,
     ) -> Rgb {
@@ -163,6 +190,9 @@ impl Scene {
                 return tr;
             };
             if !self.object(&hit).bsdf.is_null() {
+                if Some(hit.object) == ignore {
+                    return tr;
+                }
                 return Rgb::ZERO;
             }
             // Cross the index-matched boundary: continue from the hit point itself
@@ -176,6 +206,17 @@ impl Scene {
             }
         }
         Rgb::ZERO
+    }
+
+    /// Radiance emitted by the surface of `hit` toward `w_out` (zero unless the
+    /// object is an area light), and the light's index.
+    #[inline]
+    pub fn emitted_radiance(&self, hit: &Hit, w_out: Vec3) -> Option<(Rgb, u32)> {
+        let index = self.object(hit).emitter?;
+        match &self.lights[index as usize] {
+            crate::light::Light::Area(a) => Some((a.le(hit.surface.n, w_out), index)),
+            _ => None,
+        }
     }
 
     /// Radiance of environment lights seen along an escaping direction `d`.

@@ -67,7 +67,7 @@ fn validate_scene(desc: &SceneDesc) -> Check {
         validate_shape(desc, &format!("shapes[{i}]"), shape)?;
     }
     for (i, light) in desc.lights.iter().enumerate() {
-        validate_light(&format!("lights[{i}]"), light)?;
+        validate_light(desc, &format!("lights[{i}]"), light)?;
     }
     if let Some(name) = &desc.ambient_medium {
         medium_exists(desc, "ambient_medium", name)?;
@@ -102,6 +102,15 @@ fn positive(path: &str, x: f32) -> Check {
         Ok(())
     } else {
         fail(path, format!("must be > 0, got {x}"))
+    }
+}
+
+fn below_one(path: &str, x: f32) -> Check {
+    finite(path, x)?;
+    if (0.0..1.0).contains(&x) {
+        Ok(())
+    } else {
+        fail(path, format!("must be in [0, 1), got {x}"))
     }
 }
 
@@ -488,6 +497,16 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
     match &shape.bsdf {
         BsdfDesc::Null => Ok(()),
         BsdfDesc::Diffuse { reflectance } => color(&format!("{base}.bsdf.reflectance"), reflectance, in_unit_interval),
+        BsdfDesc::Dielectric { int_ior, ext_ior } => {
+            positive(&format!("{base}.bsdf.int_ior"), *int_ior)?;
+            positive(&format!("{base}.bsdf.ext_ior"), *ext_ior)
+        }
+        BsdfDesc::Conductor(ConductorDesc::Material(_)) => Ok(()),
+        BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
+            color(&format!("{base}.bsdf.eta"), eta, positive)?;
+            color(&format!("{base}.bsdf.k"), k, non_negative)
+        }
+        BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => color(&format!("{base}.bsdf.reflectance"), r, below_one),
     }
 }
 
@@ -541,7 +560,7 @@ fn validate_transform(base: &str, transform: &TransformDesc) -> Check {
 // Lights
 // ---------------------------------------------------------------------------
 
-fn validate_light(base: &str, light: &LightDesc) -> Check {
+fn validate_light(desc: &SceneDesc, base: &str, light: &LightDesc) -> Check {
     match light {
         LightDesc::Point(p) => {
             vector(&format!("{base}.position"), &p.position)?;
@@ -582,5 +601,26 @@ fn validate_light(base: &str, light: &LightDesc) -> Check {
             color(&format!("{base}.irradiance"), &d.irradiance, non_negative)
         }
         LightDesc::Constant(c) => color(&format!("{base}.radiance"), &c.radiance, non_negative),
+        LightDesc::Area(a) => {
+            let shape = format!("{base}.shape");
+            if matches!(a.shape.geometry, GeometryDesc::Box(_)) {
+                return fail(format!("{shape}.type"), "an area light is a rectangle or a sphere, got box");
+            }
+            if a.shape.interior.is_some() || a.shape.exterior.is_some() || a.shape.bsdf != BsdfDesc::Null {
+                return fail(shape, "an area light's shape takes no `interior`, `exterior` or `bsdf` (it is black)");
+            }
+            validate_shape(desc, &shape, &a.shape)?;
+            color(&format!("{base}.radiance"), &a.radiance, non_negative)
+        }
+        LightDesc::Envmap(e) => {
+            if e.file.is_empty() {
+                return fail(format!("{base}.file"), "expected the path of an EXR file");
+            }
+            finite(&format!("{base}.scale"), e.scale)?;
+            if e.scale < 0.0 {
+                return fail(format!("{base}.scale"), format!("must be >= 0, got {}", e.scale));
+            }
+            validate_transform(&format!("{base}.to_world"), &e.to_world)
+        }
     }
 }

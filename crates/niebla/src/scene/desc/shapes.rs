@@ -83,11 +83,40 @@ pub enum BsdfDesc {
         /// Reflectance (albedo), each channel in [0, 1]; default 0.5.
         reflectance: ColorDesc,
     },
+    /// `"dielectric"`: smooth glass-like interface (Fresnel reflection and
+    /// refraction; absorption belongs to the media on either side).
+    Dielectric {
+        /// Index of refraction inside the shape (`int_ior`, > 0; default 1.5).
+        int_ior: f32,
+        /// Index of refraction outside (`ext_ior`, > 0; default 1).
+        ext_ior: f32,
+    },
+    /// `"conductor"`: smooth metal mirror, given by a named `material`
+    /// ("gold", "silver", "aluminium", "copper" or their symbols), by
+    /// `eta` and `k` (complex index per channel), or by a normal-incidence
+    /// `reflectance`.
+    Conductor(ConductorDesc),
+}
+
+/// How a conductor's complex index of refraction is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ConductorDesc {
+    /// A named preset.
+    Material(&'static str),
+    /// `eta` (> 0) and `k` (>= 0) per channel.
+    Index {
+        /// Real part.
+        eta: ColorDesc,
+        /// Extinction coefficient.
+        k: ColorDesc,
+    },
+    /// Reflectance at normal incidence, in [0, 1) per channel.
+    Reflectance(ColorDesc),
 }
 
 impl BsdfDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["null", "diffuse"];
+    pub const TYPES: &'static [&'static str] = &["null", "diffuse", "dielectric", "conductor"];
 }
 
 /// An object-to-world transform.
@@ -145,11 +174,43 @@ pub enum LightDesc {
     Directional(DirectionalLightDesc),
     /// `"type": "constant"`: uniform environment.
     Constant(ConstantLightDesc),
+    /// `"type": "area"`: an emitting rectangle or sphere.
+    Area(AreaLightDesc),
+    /// `"type": "envmap"`: a lat-long environment map from an EXR file.
+    Envmap(EnvmapLightDesc),
 }
 
 impl LightDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["point", "spot", "directional", "constant"];
+    pub const TYPES: &'static [&'static str] = &["point", "spot", "directional", "constant", "area", "envmap"];
+}
+
+/// An area light: a `rectangle` or `sphere` (the shape syntax of `shapes`,
+/// without media or bsdf) emitting uniform `radiance` (W/(sr m^2)) from its
+/// front (a rectangle's local +z side, a sphere's outside), or from both sides
+/// of a rectangle with `two_sided`. Its surface is black: it absorbs what hits it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AreaLightDesc {
+    /// The emitting shape.
+    pub shape: ShapeDesc,
+    /// Emitted radiance, finite and >= 0.
+    pub radiance: ColorDesc,
+    /// Emit from both sides of a rectangle (default false).
+    pub two_sided: bool,
+}
+
+/// A lat-long environment map (Mitsuba 3's `envmap` mapping: image top is
+/// +y, image center is +z, u grows toward +x): `file` (an EXR of linear RGB
+/// radiance, relative to the scene file), `scale` (>= 0, default 1) and
+/// `to_world` (a rotation; default identity).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvmapLightDesc {
+    /// EXR file.
+    pub file: String,
+    /// Radiance multiplier.
+    pub scale: f32,
+    /// Orientation of the map in the world (rotation only).
+    pub to_world: TransformDesc,
 }
 
 /// An isotropic point light.
