@@ -39,11 +39,16 @@ impl Rng {
     }
 }
 
-/// The generator script: `$NIEBLA_VDB_SCRIPT`, else `shared/vdb/` next to
-/// the repository.
+/// The generator script: `$NIEBLA_VDB_SCRIPT`, else the copy kept with these
+/// tests (`tests/oracle/make_test_vdbs.py`, from the project's shared
+/// reference folder `shared/vdb/`, which it falls back to).
 fn script_path() -> PathBuf {
     if let Ok(p) = std::env::var("NIEBLA_VDB_SCRIPT") {
         return PathBuf::from(p);
+    }
+    let vendored = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/oracle/make_test_vdbs.py");
+    if vendored.exists() {
+        return vendored;
     }
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/vdb/make_test_vdbs.py")
 }
