@@ -99,7 +99,7 @@ impl Integrator for VolPathIntegrator {
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
-                    l += equiangular_ld(scene, &ray, t_end, m, id, hero, beta / r_u.average(), sampler);
+                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / r_u.average(), sampler);
                 }
                 let mut scattered: Option<Ray> = None;
                 let mut terminated = false;
@@ -347,8 +347,8 @@ fn sample_ld(
     if ls.is_delta {
         // A point or spot light seen from a free-flight vertex: the same path can
         // come from equiangular sampling on the segment (`equiangular_ld`).
-        let weight = segment
-            .map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, hero, n_lights).unwrap_or(1.0));
+        let weight =
+            segment.map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, n_lights).unwrap_or(1.0));
         beta * f_hat * t_ray * ls.li * weight / r_l.average()
     } else {
         beta * f_hat * t_ray * ls.li / (r_l + r_u).average()
@@ -364,19 +364,23 @@ struct Segment<'a> {
     medium: &'a Medium,
 }
 
-/// Density (per unit length, hero channel) with which free flight on the
-/// segment produces a real scattering at `t`: `sigma_s(t) T(0, t)`, with the
-/// transmittance exact in homogeneous media and from the majorants in grids
-/// (a deterministic stand-in; MIS weights only need to be consistent).
-fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32, hero: usize) -> f32 {
-    let sigma_s = m.at(ray.at(t)).sigma_s[hero];
-    match m.as_homogeneous() {
-        Some(h) => sigma_s * (-h.sigma_t()[hero] * t).exp(),
-        None => {
-            let profile = majorant_profile(m, ray, 0.0, t_end, m.sigma_t_per_density()[hero]);
-            sigma_s * profile.transmittance(t)
-        }
-    }
+/// Density (per unit length) with which free flight on the segment produces a
+/// real scattering at `t`, averaged over the channels: `avg_c sigma_s,c(t)
+/// T_c(0, t)`, with the transmittance exact in homogeneous media and from the
+/// majorants in grids (a deterministic stand-in; MIS weights only need to be
+/// consistent). The average, not the hero channel's density, is what the
+/// spectral MIS of the free-flight strategy amounts to once the hero is
+/// averaged out, so the two strategies' weights sum to one per channel
+/// (a hero-channel density biased chromatic media by about 0.5%).
+fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32) -> f32 {
+    let sigma_s = m.at(ray.at(t)).sigma_s;
+    let sigma_t = m.sigma_t_per_density();
+    let depth_per_unit_sigma = match m.as_homogeneous() {
+        Some(_) => t,
+        // exp(-D(t)) with D the integral of the majorant density.
+        None => -majorant_profile(m, ray, 0.0, t_end, 1.0).transmittance(t).ln(),
+    };
+    (0..3).map(|c| sigma_s[c] * (-sigma_t[c] * depth_per_unit_sigma).exp()).sum::<f32>() / 3.0
 }
 
 /// Number of point and spot lights (the lights equiangular sampling chooses from).
@@ -388,18 +392,12 @@ fn point_light_count(scene: &Scene) -> usize {
 /// (light chosen with probability 1/N) against equiangular sampling of the
 /// same vertex (point light chosen with probability 1/P); `None` when the
 /// light is not point-like or equiangular sampling cannot produce the vertex.
-fn light_weight_against_equiangular(
-    scene: &Scene,
-    seg: Segment,
-    light: &Light,
-    hero: usize,
-    n_lights: usize,
-) -> Option<f32> {
+fn light_weight_against_equiangular(scene: &Scene, seg: Segment, light: &Light, n_lights: usize) -> Option<f32> {
     let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
         return None;
     };
     let p_eq = e.pdf(seg.t) / point_light_count(scene) as f32;
-    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, hero) / n_lights as f32;
+    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t) / n_lights as f32;
     (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
 }
 
@@ -416,7 +414,6 @@ fn equiangular_ld(
     t_end: f32,
     m: &Medium,
     id: MediumId,
-    hero: usize,
     throughput: Rgb,
     sampler: &mut PixelSampler,
 ) -> Rgb {
@@ -455,7 +452,7 @@ fn equiangular_ld(
     }
     let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
     let p_eq = pdf_eq / count as f32;
-    let p_d = free_flight_scatter_density(m, ray, t_end, t, hero) / scene.lights.len() as f32;
+    let p_d = free_flight_scatter_density(m, ray, t_end, t) / scene.lights.len() as f32;
     let weight = p_eq / (p_eq + p_d);
     throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
 }

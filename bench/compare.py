@@ -1,0 +1,498 @@
+#!/usr/bin/env python3
+"""Speed comparison of niebla against Mitsuba 3 (llvm_ad_rgb, volpath /
+volpathmis) on the scenes of bench/scenes: for each scene, the time each
+renderer needs to reach a relative MSE of 1e-2 against a high-spp
+reference, and their ratio. See bench/README.md.
+
+    python3 bench/compare.py            # full run: 128x128, ~8-10 min on 2 cores
+    python3 bench/compare.py --quick    # ~3 min: 96x96, smaller budgets
+
+It re-runs itself with bench/.venv/bin/python (creating the venv with
+bench/setup.sh when it is missing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+VENV_PY = os.path.join(HERE, ".venv", "bin", "python")
+
+
+def _ensure_venv():
+    try:
+        import mitsuba  # noqa: F401
+        import numpy  # noqa: F401
+        return
+    except ImportError:
+        pass
+    # (The venv's python is a symlink to the system one: compare prefixes, not executables.)
+    if os.path.realpath(sys.prefix) != os.path.realpath(os.path.join(HERE, ".venv")):
+        if not os.path.exists(VENV_PY) or subprocess.run([VENV_PY, "-c", "import mitsuba, numpy"]).returncode:
+            subprocess.run(["bash", os.path.join(HERE, "setup.sh")], check=True)
+        os.execv(VENV_PY, [VENV_PY, os.path.abspath(__file__)] + sys.argv[1:])
+    sys.exit("mitsuba or numpy missing from bench/.venv: run bench/setup.sh")
+
+
+_ensure_venv()
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, HERE)
+import niebla2mitsuba  # noqa: E402
+from volumes import ensure_volumes  # noqa: E402
+
+SCENES = ["fog_spot", "smoke_plume", "dense_cloud", "milk_cube"]
+# Reference budget per scene, as a multiple of --ref-seconds: roughly in
+# proportion to how long the renderers take to reach the target there, so that
+# every reference's own error stays a small fraction of the target.
+REF_WEIGHT = {"fog_spot": 3.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5}
+THREADS = 2
+
+
+# ---------------------------------------------------------------------------
+# Error measure (niebla's Image::relative_mse, crates/niebla/src/film/mod.rs)
+# ---------------------------------------------------------------------------
+
+
+def rel_mse(x: np.ndarray, r: np.ndarray) -> float:
+    """Mean over pixels and channels of (x - r)^2 / (r^2 + eps), eps = (0.01 mean(r))^2."""
+    x = x.astype(np.float64)
+    r = r.astype(np.float64)
+    eps = max((0.01 * r.mean()) ** 2, np.finfo(float).tiny)
+    return float(np.mean((x - r) ** 2 / (r * r + eps)))
+
+
+def time_to_reach(points, target):
+    """Log-log interpolation of (time, error) points (increasing time) at
+    `target`, as niebla's bench does. Returns (time, how): how is 'interp',
+    'first' (already below at the first point: its time, an upper bound) or
+    'extrap' (never reached: extrapolated from the last point assuming
+    error ~ 1/time, the Monte Carlo rate)."""
+    pts = [(t, e) for t, e in points if t > 0 and e > 0]
+    if not pts:
+        return None, "none"
+    for i, (t, e) in enumerate(pts):
+        if e < target:
+            if i == 0:
+                return t, "first"
+            (t0, e0), (t1, e1) = pts[i - 1], pts[i]
+            f = (np.log(target) - np.log(e0)) / (np.log(e1) - np.log(e0))
+            return float(np.exp(np.log(t0) + f * (np.log(t1) - np.log(t0)))), "interp"
+    t, e = pts[-1]
+    return t * e / target, "extrap"
+
+
+# ---------------------------------------------------------------------------
+# Renderers
+# ---------------------------------------------------------------------------
+
+
+def read_exr(path: str) -> np.ndarray:
+    import mitsuba as mi
+
+    bmp = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, srgb_gamma=False)
+    return np.array(bmp, dtype=np.float32)
+
+
+class Niebla:
+    name = "niebla"
+
+    def __init__(self, binary: str, scene_path: str, workdir: str):
+        self.binary, self.scene_path, self.workdir = binary, scene_path, workdir
+
+    def render(self, spp: int, seed: int, tag: str):
+        """Returns (image, seconds, wall seconds). `seconds` is the time niebla
+        reports ("rendered ... in X s"): the render passes and their EXR
+        checkpoints, not process start-up or scene loading/baking."""
+        out = os.path.join(self.workdir, f"niebla_{tag}.exr")
+        cmd = [self.binary, "render", self.scene_path, "--spp", str(spp), "--seed", str(seed),
+               "--threads", str(THREADS), "--quiet", "-o", out]
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        wall = time.perf_counter() - t0
+        if p.returncode:
+            raise RuntimeError(f"{' '.join(cmd)} failed:\n{p.stderr}")
+        m = re.search(r"rendered \S+ at (\d+) spp with \S+ in ([0-9.]+) s", p.stdout)
+        if not m or int(m.group(1)) != spp:
+            raise RuntimeError(f"unexpected niebla output: {p.stdout!r}")
+        return read_exr(out), float(m.group(2)), wall
+
+
+class Mitsuba:
+    name = "mitsuba"
+    MAX_LANES = 1 << 22  # larger renders are split into passes of at most this many samples
+
+    def __init__(self, scene_dict: dict):
+        import drjit as dr
+        import mitsuba as mi
+
+        self.dr, self.mi = dr, mi
+        t0 = time.perf_counter()
+        self.scene = mi.load_dict(scene_dict)
+        self.load_s = time.perf_counter() - t0
+        film = self.scene.sensors()[0].film().size()
+        self.chunk_spp = max(1, self.MAX_LANES // (int(film[0]) * int(film[1])))
+        # Warm-up: JIT-compiles (or loads from Dr.Jit's kernel cache) the
+        # rendering kernel, so the timed renders below exclude compilation.
+        # The kernel does not depend on spp or seed (checked: no recompiles).
+        t0 = time.perf_counter()
+        self._render(1, 999999)
+        self.warmup_s = time.perf_counter() - t0
+
+    def _render(self, spp: int, seed: int):
+        dr, mi = self.dr, self.mi
+        acc, done, k = None, 0, 0
+        while done < spp:
+            n = min(self.chunk_spp, spp - done)
+            img = mi.render(self.scene, spp=n, seed=(seed * 1024 + k) % (1 << 31))
+            dr.eval(img)
+            dr.sync_thread()
+            acc = img * n if acc is None else acc + img * n
+            dr.eval(acc)
+            done += n
+            k += 1
+        dr.sync_thread()
+        return acc / spp
+
+    def render(self, spp: int, seed: int, tag: str):
+        """Returns (image, seconds, seconds): the time of mi.render (plus
+        dr.eval and a sync) after the warm-up render."""
+        t0 = time.perf_counter()
+        img = self._render(spp, seed)
+        t = time.perf_counter() - t0
+        arr = np.array(img, dtype=np.float32)[..., :3]
+        return arr, t, t
+
+
+# ---------------------------------------------------------------------------
+# The comparison
+# ---------------------------------------------------------------------------
+
+
+def prepare_scene(name: str, outdir: str, scale: float) -> tuple[str, dict]:
+    """Writes the scene with absolute data paths (and the resolution scaled by
+    `scale`) to outdir; returns its path and parsed description."""
+    src = os.path.join(HERE, "scenes", name + ".json")
+    with open(src) as f:
+        desc = json.load(f)
+    cam = desc["camera"]
+    cam["width"] = max(8, int(round(cam["width"] * scale)))
+    cam["height"] = max(8, int(round(cam["height"] * scale)))
+    for m in desc.get("media", {}).values():
+        d = m.get("density")
+        if d and "file" in d:
+            d["file"] = os.path.join(HERE, "scenes", d["file"])
+    path = os.path.join(outdir, name + ".json")
+    with open(path, "w") as f:
+        json.dump(desc, f, indent=1)
+    return path, desc
+
+
+def reference(renderer, spp: int, seed0: int, log):
+    """Two independent halves (spp/2 each); returns (mean, half a, half b, seconds)."""
+    half = max(1, spp // 2)
+    a, ta, _ = renderer.render(half, seed0, "ref_a")
+    b, tb, _ = renderer.render(half, seed0 + 1, "ref_b")
+    log(f"    {renderer.name} reference: {2 * half} spp in {ta + tb:.1f} s")
+    return 0.5 * (a + b), a, b, ta + tb
+
+
+def ref_noise(a: np.ndarray, b: np.ndarray) -> float:
+    """Relative MSE of the mean of two independent halves against the truth,
+    estimated from their difference: E|a-b|^2 = 2 var(half) = 4 var(mean)."""
+    return _rel_mse_den(a - b, 0.5 * (a + b)) / 4.0
+
+
+def _rel_mse_den(diff: np.ndarray, r: np.ndarray) -> float:
+    diff = diff.astype(np.float64)
+    r = r.astype(np.float64)
+    eps = max((0.01 * r.mean()) ** 2, np.finfo(float).tiny)
+    return float(np.mean(diff**2 / (r * r + eps)))
+
+
+def block_mean(img: np.ndarray, k: int) -> np.ndarray:
+    h, w = img.shape[0] // k * k, img.shape[1] // k * k
+    x = img[:h, :w].astype(np.float64)
+    return x.reshape(h // k, k, w // k, k, -1).mean(axis=(1, 3))
+
+
+def mean_stderr(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Standard error (per channel) of the image mean of (a + b) / 2, from two
+    independent halves: each pixel's variance of the mean is ~ (a - b)^2 / 4."""
+    d = (a.astype(np.float64) - b.astype(np.float64)) ** 2 / 4.0
+    return np.sqrt(d.sum(axis=(0, 1))) / (a.shape[0] * a.shape[1])
+
+
+def agreement(n_ref, m_ref, n_noise, m_noise, block: int, n_halves, m_halves):
+    """How far the two references are apart, beyond their noise."""
+    n64, m64 = n_ref.astype(np.float64), m_ref.astype(np.float64)
+    mean_n, mean_m = n64.mean(axis=(0, 1)), m64.mean(axis=(0, 1))
+    se = np.sqrt(mean_stderr(*n_halves) ** 2 + mean_stderr(*m_halves) ** 2)
+    e = rel_mse(m_ref, n_ref)
+    bn, bm = block_mean(n64, block), block_mean(m64, block)
+    floor = 0.01 * bn.mean()
+    rel = (bm - bn) / (np.abs(bn) + floor)  # signed, per block and channel
+    lum_rel = rel.mean(axis=2)
+    absrel = np.abs(rel)
+    return {
+        "mean_rgb_niebla": mean_n.tolist(),
+        "mean_rgb_mitsuba": mean_m.tolist(),
+        "mean_rel_diff_rgb": ((mean_m - mean_n) / mean_n).tolist(),
+        "mean_rel_diff_stderr_rgb": (se / mean_n).tolist(),
+        "mean_diff_z_rgb": ((mean_m - mean_n) / se).tolist(),
+        "rel_mse": e,
+        "rel_mse_expected_from_noise": n_noise + m_noise,
+        "rel_mse_excess": e - (n_noise + m_noise),
+        "block": block,
+        "block_rel_diff_mean": float(rel.mean()),
+        "block_abs_rel_diff_median": float(np.median(absrel)),
+        "block_abs_rel_diff_p90": float(np.percentile(absrel, 90)),
+        "block_abs_rel_diff_p99": float(np.percentile(absrel, 99)),
+        "block_abs_rel_diff_max": float(absrel.max()),
+        "_lum_rel_map": lum_rel,
+    }
+
+
+def write_png(path: str, img: np.ndarray, exposure: float = 0.0):
+    import mitsuba as mi
+
+    mi.util.write_bitmap(path, (img * 2.0**exposure).astype(np.float32), write_async=False)
+
+
+def diff_png(path: str, lum_rel: np.ndarray, scale: float = 0.1):
+    """Signed relative difference map: red where Mitsuba is brighter, blue
+    where niebla is; full saturation at +-scale."""
+    t = np.clip(lum_rel / scale, -1, 1)
+    rgb = np.stack([np.clip(t, 0, 1), np.zeros_like(t), np.clip(-t, 0, 1)], axis=-1)
+    rgb = np.kron(rgb, np.ones((4, 4, 1)))
+    import mitsuba as mi
+
+    mi.Bitmap(rgb.astype(np.float32)).convert(srgb_gamma=True, component_format=mi.Struct.Type.UInt8).write(path)
+
+
+def sweep(renderer, reference_img, noise, target, cap_s, max_spp, seed, log, other_ref=None, other_noise=0.0):
+    """Renders at 1, 2, 4, ... spp until the (noise-corrected) error is below
+    the target or the next render (predicted 2.2x the last) would not fit in
+    the time cap."""
+    rows = []
+    spp, spent, last_t = 1, 0.0, 0.0
+    while spp <= max_spp:
+        # Predict the next render time from the last one (doubling spp).
+        if rows and spent + 2.2 * last_t > cap_s:
+            break
+        img, t, wall = renderer.render(spp, seed, f"sweep_{spp}")
+        spent += t
+        last_t = t
+        raw = rel_mse(img, reference_img)
+        row = {"spp": spp, "seconds": t, "wall_seconds": wall, "rel_mse_raw": raw, "rel_mse": max(raw - noise, 1e-12)}
+        if other_ref is not None:
+            raw2 = rel_mse(img, other_ref)
+            row.update(rel_mse_own_raw=raw2, rel_mse_own=max(raw2 - other_noise, 1e-12))
+        rows.append(row)
+        log(f"    {renderer.name:8s} {spp:5d} spp {t:8.3f} s  rel MSE {row['rel_mse']:.3e}"
+            + (f" (vs own ref {row['rel_mse_own']:.3e})" if other_ref is not None else ""))
+        done = row["rel_mse"] < target
+        if other_ref is not None:
+            done = done and row["rel_mse_own"] < target
+        if done:
+            break
+        spp *= 2
+    return rows
+
+
+def versions(binary: str, label: str | None) -> dict:
+    import drjit as dr
+    import mitsuba as mi
+
+    v = {}
+    v["niebla"] = subprocess.run([binary, "--version"], capture_output=True, text=True).stdout.strip()
+    if label:
+        v["niebla_build"] = label
+    elif os.path.realpath(binary) == os.path.realpath(os.path.join(ROOT, "target", "release", "niebla")):
+        g = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True, text=True)
+        v["niebla_build"] = f"working tree {g.stdout.strip()} (target/release; may be older than the tree)"
+    else:
+        v["niebla_build"] = "external binary (pass --niebla-label to record its revision)"
+    v["niebla_binary"] = binary
+    v["mitsuba"] = mi.__version__
+    v["drjit"] = dr.__version__
+    v["variant"] = mi.variant()
+    v["llvm"] = next((l.split()[-1] for l in open("/proc/self/maps") if "libLLVM" in l), "?")
+    v["python"] = platform.python_version()
+    try:
+        cpu = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name"))
+    except (OSError, StopIteration):
+        cpu = platform.processor()
+    v["cpu"] = f"{cpu}, {os.cpu_count()} logical cores"
+    return v
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="96x96 and smaller budgets (~3 min)")
+    ap.add_argument("--scale", type=float, default=None,
+                    help="resolution relative to the scene files' 256x256 (default 0.5 = 128x128, quick 0.375 = 96x96)")
+    ap.add_argument("--scenes", nargs="+", default=SCENES, choices=SCENES)
+    ap.add_argument("--niebla", default=os.path.join(ROOT, "target", "release", "niebla"),
+                    help="niebla binary (default target/release/niebla; built if missing)")
+    ap.add_argument("--niebla-label", default=None, help="free text recorded as the niebla build (e.g. its git revision)")
+    ap.add_argument("--mitsuba-integrator", default="auto", choices=["auto", "volpath", "volpathmis"],
+                    help="auto: volpathmis for chromatic media, else volpath")
+    ap.add_argument("--target", type=float, default=1e-2, help="relative MSE to reach")
+    ap.add_argument("--ref-seconds", type=float, default=None,
+                    help="reference budget per renderer, times the scene's REF_WEIGHT (default 40, quick 12)")
+    ap.add_argument("--sweep-seconds", type=float, default=None,
+                    help="time cap of each renderer's spp sweep per scene (default 40, quick 10)")
+    ap.add_argument("--out", default=os.path.join(HERE, "out"))
+    args = ap.parse_args()
+
+    scale = args.scale or (0.375 if args.quick else 0.5)
+    ref_s = args.ref_seconds or (12.0 if args.quick else 40.0)
+    sweep_s = args.sweep_seconds or (10.0 if args.quick else 40.0)
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant("llvm_ad_rgb")
+    mi.set_log_level(mi.LogLevel.Warn)
+    dr.set_thread_count(THREADS)
+
+    if not os.path.exists(args.niebla):
+        print("building niebla (cargo build --release -p niebla-cli)", flush=True)
+        subprocess.run(["cargo", "build", "--release", "-p", "niebla-cli"], cwd=ROOT, check=True)
+    binary = os.path.abspath(args.niebla)
+
+    os.makedirs(args.out, exist_ok=True)
+    ensure_volumes()
+    ver = versions(binary, args.niebla_label)
+    print("versions:", json.dumps(ver, indent=1), flush=True)
+    print(f"threads: niebla --threads {THREADS}, Dr.Jit thread count {dr.thread_count()}; "
+          f"{'quick' if args.quick else 'full'} mode: resolution x{scale}, reference ~{ref_s:.0f} s "
+          f"per renderer, sweep cap {sweep_s:.0f} s", flush=True)
+
+    def log(s):
+        print(s, flush=True)
+
+    results = []
+    t_start = time.perf_counter()
+    for name in args.scenes:
+        sdir = os.path.join(args.out, "quick" if args.quick else "full", name)
+        os.makedirs(sdir, exist_ok=True)
+        path, desc = prepare_scene(name, sdir, scale)
+        w, h = desc["camera"]["width"], desc["camera"]["height"]
+        load0 = os.getloadavg()[0]
+        log(f"\n== {name} ({w}x{h}), load average {load0:.2f}")
+
+        nb = Niebla(binary, path, sdir)
+        mdict = niebla2mitsuba.convert(desc, os.path.join(HERE, "scenes"), spp=1, integrator=args.mitsuba_integrator)
+        mitsuba_integrator = mdict["integrator"]["type"]
+        ms = Mitsuba(mdict)
+        log(f"    mitsuba {mitsuba_integrator} max_depth {mdict['integrator']['max_depth']}: "
+            f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
+
+        # Throughput probes (4 spp) size the references to the time budget.
+        _, tn, _ = nb.render(4, 7, "probe")
+        _, tm, _ = ms.render(4, 7, "probe")
+        budget = ref_s * REF_WEIGHT[name]
+        spp_n = int(max(8, min(1 << 16, budget / (tn / 4)))) // 2 * 2
+        spp_m = int(max(8, min(1 << 16, budget / (tm / 4)))) // 2 * 2
+
+        n_ref, na, nbb, n_ref_t = reference(nb, spp_n, 1001, log)
+        m_ref, ma, mb, m_ref_t = reference(ms, spp_m, 2001, log)
+        n_noise, m_noise = ref_noise(na, nbb), ref_noise(ma, mb)
+        agree = agreement(n_ref, m_ref, n_noise, m_noise, max(4, w // 32), (na, nbb), (ma, mb))
+        lum_rel = agree.pop("_lum_rel_map")
+        write_png(os.path.join(sdir, "reference_niebla.png"), n_ref)
+        write_png(os.path.join(sdir, "reference_mitsuba.png"), m_ref)
+        diff_png(os.path.join(sdir, "reference_rel_diff.png"), lum_rel)
+        log(f"    reference noise (rel MSE): niebla {n_noise:.2e} ({spp_n} spp), mitsuba {m_noise:.2e} ({spp_m} spp)")
+        if n_noise > 0.25 * args.target:
+            log(f"    warning: the niebla reference's own error is {n_noise / args.target:.0%} of the target; "
+                "the correction below is large (raise --ref-seconds)")
+        log("    references: mean rel diff (mitsuba-niebla)/niebla R G B = "
+            + " ".join(f"{x:+.4f}" for x in agree["mean_rel_diff_rgb"])
+            + " (+-" + " ".join(f"{x:.4f}" for x in agree["mean_rel_diff_stderr_rgb"]) + " std. error, z "
+            + " ".join(f"{x:+.1f}" for x in agree["mean_diff_z_rgb"]) + ")"
+            + f"; rel MSE {agree['rel_mse']:.2e} (noise alone ~{agree['rel_mse_expected_from_noise']:.2e})")
+        log(f"    {agree['block']}x{agree['block']}-pixel blocks, |rel diff|: median {agree['block_abs_rel_diff_median']:.4f}, "
+            f"p90 {agree['block_abs_rel_diff_p90']:.4f}, p99 {agree['block_abs_rel_diff_p99']:.4f}, "
+            f"max {agree['block_abs_rel_diff_max']:.4f}; signed mean {agree['block_rel_diff_mean']:+.4f}")
+
+        # Sweeps: both renderers against the niebla reference (noise-corrected);
+        # Mitsuba also against its own reference.
+        n_rows = sweep(nb, n_ref, n_noise, args.target, sweep_s, 1 << 14, 1, log)
+        m_rows = sweep(ms, n_ref, n_noise, args.target, sweep_s, 1 << 14, 1, log,
+                       other_ref=m_ref, other_noise=m_noise)
+        tn_, how_n = time_to_reach([(r["seconds"], r["rel_mse"]) for r in n_rows], args.target)
+        tm_, how_m = time_to_reach([(r["seconds"], r["rel_mse"]) for r in m_rows], args.target)
+        tmo, how_mo = time_to_reach([(r["seconds"], r["rel_mse_own"]) for r in m_rows], args.target)
+        last_n, last_m = n_rows[-1], m_rows[-1]
+        res = {
+            "scene": name,
+            "width": w,
+            "height": h,
+            "max_depth_niebla": desc["render"]["integrator"]["max_depth"],
+            "mitsuba_integrator": mitsuba_integrator,
+            "mitsuba_max_depth": mdict["integrator"]["max_depth"],
+            "niebla_time": tn_, "niebla_how": how_n,
+            "mitsuba_time": tm_, "mitsuba_how": how_m,
+            "mitsuba_time_own_ref": tmo, "mitsuba_how_own_ref": how_mo,
+            "ratio": (tm_ / tn_) if tn_ and tm_ else None,
+            "ratio_own_ref": (tmo / tn_) if tn_ and tmo else None,
+            "niebla_msamples_s": w * h * last_n["spp"] / last_n["seconds"] / 1e6,
+            "mitsuba_msamples_s": w * h * last_m["spp"] / last_m["seconds"] / 1e6,
+            "reference": {"niebla_spp": spp_n, "niebla_seconds": n_ref_t, "niebla_noise": n_noise,
+                          "mitsuba_spp": spp_m, "mitsuba_seconds": m_ref_t, "mitsuba_noise": m_noise},
+            "agreement": agree,
+            "niebla_sweep": n_rows,
+            "mitsuba_sweep": m_rows,
+            "mitsuba_warmup_s": ms.warmup_s,
+            "load_average": [load0, os.getloadavg()[0]],
+        }
+        results.append(res)
+        del ms
+
+    total = time.perf_counter() - t_start
+    mark = {"interp": "", "first": "<=", "extrap": "~", "none": "?"}
+
+    def fmt_t(t, how):
+        return "n/a" if t is None else f"{mark[how]}{t:.3g} s"
+
+    print(f"\nTime to relative MSE {args.target:g} (both against the niebla reference, "
+          f"reference noise subtracted); {THREADS} threads each; total {total / 60:.1f} min\n")
+    hdr = (f"{'scene':12s} {'res':>7s} {'niebla':>10s} {'mitsuba':>10s} {'ratio M/n':>9s} "
+           f"{'mitsuba*':>10s} {'ratio*':>7s} {'niebla Ms/s':>11s} {'mitsuba Ms/s':>12s} {'mitsuba integr.':>15s} "
+           f"{'ref diff':>8s}")
+    print(hdr)
+    print("-" * len(hdr))
+    for r in results:
+        ratio = "n/a" if r["ratio"] is None else f"{r['ratio']:.2f}"
+        ratio2 = "n/a" if r["ratio_own_ref"] is None else f"{r['ratio_own_ref']:.2f}"
+        diff = np.mean(r["agreement"]["mean_rel_diff_rgb"])
+        print(f"{r['scene']:12s} {r['width']}x{r['height']:<3d} {fmt_t(r['niebla_time'], r['niebla_how']):>10s} "
+              f"{fmt_t(r['mitsuba_time'], r['mitsuba_how']):>10s} {ratio:>9s} "
+              f"{fmt_t(r['mitsuba_time_own_ref'], r['mitsuba_how_own_ref']):>10s} {ratio2:>7s} "
+              f"{r['niebla_msamples_s']:11.3f} {r['mitsuba_msamples_s']:12.3f} {r['mitsuba_integrator']:>15s} "
+              f"{diff:+8.4f}")
+    print("\nmitsuba*: Mitsuba against its own reference. '~': not reached within the sweep cap, extrapolated "
+          "as error ~ 1/time; '<=': already reached at 1 spp. ref diff: mean relative difference of the two "
+          "references' image means, (mitsuba - niebla) / niebla, averaged over R, G, B.")
+    summary = {"versions": ver, "quick": args.quick, "target": args.target, "threads": THREADS,
+               "total_seconds": total, "results": results}
+    out_json = os.path.join(args.out, "results_quick.json" if args.quick else "results.json")
+    with open(out_json, "w") as f:
+        json.dump(summary, f, indent=1)
+    print(f"details: {out_json}; images under {args.out}/{'quick' if args.quick else 'full'}/<scene>/")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,320 @@
+"""Convert a niebla scene file (JSON, version 1) into a Mitsuba 3 scene dict.
+
+Only the subset the benchmark scenes use is supported, and anything else is
+an error rather than a silent approximation:
+
+- camera: `perspective` (position, target, up, fov_y, width, height) ->
+  `perspective` with `fov_axis: 'y'`, `look_at`, an `hdrfilm` with a box
+  reconstruction filter (niebla's pixel filter) and an `independent` sampler;
+- integrator: niebla `volpath` with `max_depth` N (N scattering events, surface
+  or medium) -> Mitsuba `volpath` or `volpathmis` with `max_depth` N + 1
+  (Mitsuba counts path segments: 1 = directly visible emitters only);
+- media: `homogeneous` -> `homogeneous`; `grid` with an `npy`/`vol` density ->
+  `heterogeneous` whose `sigma_t` is a `gridvolume` read from the `.vol`
+  file with the same voxels (the `.npy` next to it is what niebla reads),
+  trilinear, placed by an explicit `to_world` (Mitsuba ignores the bbox stored
+  in a `.vol` unless `use_grid_bbox` is set). Coefficients are passed as
+  `sigma_t` and `albedo` (Mitsuba's form). `has_spectral_extinction` is set
+  from the data (false for gray media, as a Mitsuba user would);
+- phase: `isotropic`, `hg` (same sign convention: g > 0 forward);
+- shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere`, `rectangle` (both
+  renderers use [-1,1]^2 in local xy with normal +z) with niebla's
+  `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
+  `null`, `diffuse` -> `diffuse`; `interior`/`exterior` media by reference;
+- lights: `point`, `spot` (look_at from position to target), `directional`,
+  `constant`: the same parameters, since niebla follows Mitsuba's radiometry;
+- the camera's medium: niebla finds it (innermost closed shape with an
+  interior containing the camera, else `ambient_medium`); Mitsuba needs it on
+  the sensor, so it is computed the same way here.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+
+import numpy as np
+
+
+class Unsupported(ValueError):
+    pass
+
+
+def _color(v):
+    if isinstance(v, (int, float)):
+        return [float(v)] * 3
+    if isinstance(v, list) and len(v) == 3:
+        return [float(x) for x in v]
+    raise Unsupported(f"not a color: {v!r}")
+
+
+def _is_gray(c):
+    return c[0] == c[1] == c[2]
+
+
+def _spectrum(c):
+    c = _color(c)
+    if _is_gray(c):
+        return c[0]
+    return {"type": "rgb", "value": c}
+
+
+def niebla_transform(t) -> np.ndarray:
+    """niebla's `to_world`: scale, then rotate about x, y, z (degrees, world
+    axes), then translate; or a row-major 4x4 `matrix`."""
+    if t is None:
+        return np.eye(4)
+    if "matrix" in t:
+        return np.array(t["matrix"], dtype=float)
+    s = t.get("scale", 1.0)
+    s = [s] * 3 if isinstance(s, (int, float)) else s
+    m = np.diag([s[0], s[1], s[2], 1.0])
+
+    def rot(axis, deg):
+        a = math.radians(deg)
+        c, sn = math.cos(a), math.sin(a)
+        r = np.eye(4)
+        i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
+        r[i, i], r[i, j], r[j, i], r[j, j] = c, -sn, sn, c
+        return r
+
+    for axis in ("x", "y", "z"):
+        deg = t.get("rotate_" + axis, 0.0)
+        if deg:
+            m = rot(axis, deg) @ m
+    tr = np.eye(4)
+    tr[:3, 3] = t.get("translate", [0.0, 0.0, 0.0])
+    return tr @ m
+
+
+def _box_matrix(bmin, bmax):
+    bmin, bmax = np.array(bmin, float), np.array(bmax, float)
+    m = np.diag([*((bmax - bmin) / 2), 1.0])
+    m[:3, 3] = (bmax + bmin) / 2
+    return m
+
+
+def _unit_box_matrix(bmin, bmax):
+    """Maps [0,1]^3 onto the box (a gridvolume's local space)."""
+    bmin, bmax = np.array(bmin, float), np.array(bmax, float)
+    m = np.diag([*(bmax - bmin), 1.0])
+    m[:3, 3] = bmin
+    return m
+
+
+def _phase(p):
+    p = p or {"type": "isotropic"}
+    if p["type"] == "isotropic":
+        return {"type": "isotropic"}
+    if p["type"] == "hg":
+        return {"type": "hg", "g": float(p["g"])}
+    raise Unsupported(f"phase function {p['type']!r}")
+
+
+def _coefficients(m):
+    """(sigma_t, albedo) as RGB lists, with `scale` applied to sigma_t."""
+    scale = float(m.get("scale", 1.0))
+    if "sigma_t" in m:
+        st, al = _color(m["sigma_t"]), _color(m.get("albedo", 1.0))
+    else:
+        sa, ss = _color(m["sigma_a"]), _color(m["sigma_s"])
+        st = [a + s for a, s in zip(sa, ss)]
+        al = [s / t if t > 0 else 0.0 for s, t in zip(ss, st)]
+    return [x * scale for x in st], al
+
+
+def _medium(mi, name, m, scene_dir):
+    kind = m.get("type", "grid" if "density" in m else "homogeneous")
+    st, al = _coefficients(m)
+    if m.get("emission"):
+        raise Unsupported(f"media.{name}: emission")
+    out = {
+        "phase": _phase(m.get("phase")),
+        "albedo": _spectrum(al),
+        "has_spectral_extinction": not _is_gray(st),
+    }
+    if kind == "homogeneous":
+        # Mitsuba reads an `rgb` value as a reflectance in [0, 1]: pass the
+        # extinction's color normalized to a maximum of 1 and its maximum as
+        # `scale` (which multiplies sigma_t only).
+        top = max(st)
+        out.update(type="homogeneous", sigma_t=_spectrum([x / top for x in st]) if top > 0 else 0.0, scale=top)
+        return out
+    if kind != "grid":
+        raise Unsupported(f"media.{name}: type {kind!r}")
+    if m.get("to_world"):
+        raise Unsupported(f"media.{name}: to_world on a grid medium")
+    d = m["density"]
+    if d["type"] == "npy":
+        # The .vol with the same stem holds the same voxels (volumes.py writes both).
+        vol = os.path.splitext(os.path.join(scene_dir, d["file"]))[0] + ".vol"
+        bounds = d["bounds"]
+    elif d["type"] == "vol":
+        vol = os.path.join(scene_dir, d["file"])
+        bounds = None
+    else:
+        raise Unsupported(f"media.{name}: density type {d['type']!r}")
+    if not os.path.exists(vol):
+        raise Unsupported(f"media.{name}: {vol} missing (run bench/volumes.py)")
+    from volumes import read_vol
+
+    grid, bmin, bmax = read_vol(vol)
+    if bounds is not None:
+        assert np.allclose(bmin, bounds["min"]) and np.allclose(bmax, bounds["max"]), (vol, bounds)
+        npy = os.path.join(scene_dir, d["file"])
+        if os.path.exists(npy):
+            assert np.array_equal(np.load(npy), grid), f"{npy} and {vol} differ"
+    # sigma_t(p) = sigma_t * density(p): the density grid times a constant
+    # (scale) when gray; Mitsuba's `scale` multiplies sigma_t.
+    if _is_gray(st):
+        sigma_t = {
+            "type": "gridvolume",
+            "filename": vol,
+            "filter_type": "trilinear",
+            "to_world": mi.ScalarTransform4f(_unit_box_matrix(bmin, bmax).tolist()),
+        }
+        out.update(type="heterogeneous", sigma_t=sigma_t, scale=st[0])
+        return out
+    raise Unsupported(f"media.{name}: chromatic sigma_t with a grid density")
+
+
+def _inside(shape, p):
+    t = shape["type"]
+    if t == "box":
+        return all(lo < x < hi for lo, x, hi in zip(shape["min"], p, shape["max"]))
+    if t == "sphere":
+        return float(np.linalg.norm(np.subtract(p, shape["center"]))) < shape["radius"]
+    return False
+
+
+def _volume_of(shape):
+    if shape["type"] == "box":
+        return float(np.prod(np.subtract(shape["max"], shape["min"])))
+    return 4 / 3 * math.pi * shape["radius"] ** 3
+
+
+def camera_medium(desc):
+    """niebla's rule: innermost closed shape with an interior containing the
+    camera, else the ambient medium, else vacuum."""
+    pos = desc["camera"]["position"]
+    best = None
+    for s in desc.get("shapes", []):
+        if s.get("interior") and _inside(s, pos):
+            if best is None or _volume_of(s) < _volume_of(best):
+                best = s
+    if best is not None:
+        return best["interior"]
+    return desc.get("ambient_medium")
+
+
+def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto", seed: int = 0) -> dict:
+    """The Mitsuba 3 scene dict of niebla scene `desc` (already parsed JSON).
+    `integrator`: 'volpath', 'volpathmis' or 'auto' (volpathmis when a medium
+    has a chromatic extinction, where Mitsuba's docs recommend it)."""
+    import mitsuba as mi
+
+    if desc.get("version") != 1:
+        raise Unsupported("scene version must be 1")
+    if desc.get("ambient_medium"):
+        # Mitsuba has no medium filling the world; a camera medium alone
+        # would not fill rays that leave and re-enter.
+        raise Unsupported("ambient_medium (put the medium in a box instead)")
+    out = {"type": "scene"}
+
+    media = {}
+    for name, m in desc.get("media", {}).items():
+        media[name] = _medium(mi, name, m, scene_dir)
+        out["medium_" + name] = dict(media[name], id="medium_" + name)
+
+    def ref(name):
+        return {"type": "ref", "id": "medium_" + name}
+
+    r = desc.get("render", {})
+    integ = r.get("integrator", {"type": "single"})
+    if integ.get("type") != "volpath":
+        raise Unsupported(f"integrator {integ.get('type')!r}: only volpath has a Mitsuba counterpart")
+    max_depth = int(integ.get("max_depth", 1024))
+    if integrator == "auto":
+        chromatic = any(m["has_spectral_extinction"] for m in media.values())
+        integrator = "volpathmis" if chromatic else "volpath"
+    out["integrator"] = {"type": integrator, "max_depth": max_depth + 1}
+
+    cam = desc["camera"]
+    if cam.get("type", "perspective") != "perspective":
+        raise Unsupported("camera type")
+    sensor = {
+        "type": "perspective",
+        "fov": float(cam.get("fov_y", 40.0)),
+        "fov_axis": "y",
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=cam["position"], target=cam["target"], up=cam.get("up", [0, 1, 0])
+        ),
+        "film": {
+            "type": "hdrfilm",
+            "width": int(cam["width"]),
+            "height": int(cam["height"]),
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+        },
+        "sampler": {"type": "independent", "sample_count": int(spp), "seed": int(seed)},
+    }
+    cm = camera_medium(desc)
+    if cm:
+        sensor["medium"] = ref(cm)
+    out["sensor"] = sensor
+
+    for i, s in enumerate(desc.get("shapes", [])):
+        t = s["type"]
+        if t == "box":
+            d = {"type": "cube", "to_world": mi.ScalarTransform4f(_box_matrix(s["min"], s["max"]).tolist())}
+        elif t == "sphere":
+            d = {"type": "sphere", "center": s["center"], "radius": float(s["radius"])}
+        elif t == "rectangle":
+            d = {"type": "rectangle", "to_world": mi.ScalarTransform4f(niebla_transform(s.get("to_world")).tolist())}
+        else:
+            raise Unsupported(f"shapes[{i}]: type {t!r}")
+        b = s.get("bsdf", {"type": "null"})
+        if b["type"] == "null":
+            d["bsdf"] = {"type": "null"}
+        elif b["type"] == "diffuse":
+            d["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": _color(b.get("reflectance", 0.5))}}
+        else:
+            raise Unsupported(f"shapes[{i}]: bsdf {b['type']!r}")
+        if s.get("interior"):
+            d["interior"] = ref(s["interior"])
+        if s.get("exterior"):
+            d["exterior"] = ref(s["exterior"])
+        out[f"shape_{i}"] = d
+
+    for i, l in enumerate(desc.get("lights", [])):
+        t = l["type"]
+        if t == "point":
+            d = {"type": "point", "position": l["position"], "intensity": {"type": "rgb", "value": _color(l["intensity"])}}
+        elif t == "spot":
+            pos = np.array(l["position"], float)
+            target = np.array(l["target"], float) if "target" in l else pos + np.array(l["direction"], float)
+            axis = target - pos
+            up = np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.9 * np.linalg.norm(axis) else np.array([1.0, 0.0, 0.0])
+            cutoff = float(l.get("cutoff_angle", 20.0))
+            d = {
+                "type": "spot",
+                "to_world": mi.ScalarTransform4f().look_at(origin=pos.tolist(), target=target.tolist(), up=up.tolist()),
+                "intensity": {"type": "rgb", "value": _color(l["intensity"])},
+                "cutoff_angle": cutoff,
+                "beam_width": float(l.get("beam_width", 0.75 * cutoff)),
+            }
+        elif t == "directional":
+            d = {"type": "directional", "direction": l["direction"], "irradiance": {"type": "rgb", "value": _color(l["irradiance"])}}
+        elif t == "constant":
+            d = {"type": "constant", "radiance": {"type": "rgb", "value": _color(l["radiance"])}}
+        else:
+            raise Unsupported(f"lights[{i}]: type {t!r}")
+        out[f"light_{i}"] = d
+    return out
+
+
+def load(path: str, **kw) -> dict:
+    with open(path) as f:
+        desc = json.load(f)
+    return convert(desc, os.path.dirname(os.path.abspath(path)), **kw)
