@@ -17,5 +17,51 @@ if ! /usr/bin/python3 -c "import openvdb" 2>/dev/null && ! /usr/bin/python3 -c "
   fi
 fi
 
+# The report of `niebla compare` is opened in headless Chromium
+# (crates/niebla-cli/tests/compare_report.rs; skipped there without it).
+if [ ! -x /usr/bin/chromium ]; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    echo "installing chromium (opens the compare report in a headless browser)"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+  else
+    echo "warning: /usr/bin/chromium is missing and cannot be installed here; the compare report is not opened in a browser" >&2
+  fi
+fi
+
 cargo test --workspace --all-targets
 cargo test --workspace --doc
+
+# The Python package (crates/niebla-py): an abi3 wheel built by maturin in a
+# virtual environment of its own (.venv-py, reused by later runs), installed
+# there and tested with pytest, against the release build of `niebla` for
+# the tests that compare with the command line.
+venv=.venv-py
+if [ ! -x "$venv/bin/python" ]; then
+  if ! python3 -m venv "$venv" >/dev/null 2>&1; then
+    rm -rf "$venv"
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+      echo "installing python3-venv (the Python tests run in a virtual environment)"
+      apt-get update -qq
+      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
+      python3 -m venv "$venv"
+    else
+      echo "error: python3 -m venv does not work here (install python3-venv)" >&2
+      exit 1
+    fi
+  fi
+fi
+"$venv/bin/python" -m pip install -q "maturin>=1.5,<2" numpy pytest
+cargo build --release -p niebla-cli
+rm -rf target/py-wheels
+"$venv/bin/maturin" build --release -m crates/niebla-py/Cargo.toml -o target/py-wheels
+"$venv/bin/python" -m pip install -q --force-reinstall --no-deps target/py-wheels/niebla-*.whl
+status=0
+NIEBLA_BIN="$PWD/target/release/niebla" "$venv/bin/python" -m pytest -q crates/niebla-py/tests || status=$?
+if [ "$status" = 5 ]; then
+  echo "error: pytest collected no Python tests" >&2
+  exit 1
+elif [ "$status" != 0 ]; then
+  echo "error: the Python tests failed (pytest exit status $status)" >&2
+  exit "$status"
+fi

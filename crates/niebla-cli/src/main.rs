@@ -1,7 +1,11 @@
 //! The `niebla` command: render scenes, describe them, and measure the renderer.
 
 mod bench;
+mod bench_interactive;
+mod bench_photons;
 mod bench_trackers;
+mod compare_cmd;
+mod preview_cmd;
 mod render_cmd;
 
 use std::path::PathBuf;
@@ -22,11 +26,16 @@ struct Cli {
 enum Command {
     /// Render a scene file (or the built-in default scene) to EXR and/or PNG.
     Render(render_cmd::RenderArgs),
+    /// Render a scene with several integrators under one time budget and write an HTML report.
+    Compare(compare_cmd::CompareArgs),
     /// Print what a scene holds: camera, media, shapes, lights, render settings.
     Info {
         /// Scene file (JSON, version 1). Without it, describes the built-in default scene.
         scene: Option<PathBuf>,
     },
+    /// Render frames repeatedly with an interactive method, report frames/s,
+    /// and re-render when the scene file changes.
+    Preview(preview_cmd::PreviewArgs),
     /// Measure the renderer and print figures.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -40,15 +49,23 @@ enum BenchCommand {
     /// Variance x time of the transmittance estimators on a grid medium, with
     /// the majorant grid and with one global majorant.
     Trackers(bench_trackers::TrackerBenchArgs),
+    /// Frames/s, precomputation and error against volpath of the interactive methods.
+    Interactive(bench_interactive::InteractiveBenchArgs),
+    /// Photons traced/s, gather queries/s, time of photon, ppm and volpath to a relative MSE of 1e-2.
+    Photons(bench_photons::PhotonBenchArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
+        Command::Compare(args) => compare_cmd::run(&args),
         Command::Info { scene } => render_cmd::info(scene.as_deref()),
         Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
         Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),
+        Command::Preview(args) => preview_cmd::run(&args),
+        Command::Bench(BenchCommand::Interactive(args)) => bench_interactive::run(&args),
+        Command::Bench(BenchCommand::Photons(args)) => bench_photons::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,10 +6,11 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use niebla::film::write_image;
+use niebla::film::{read_checkpoint, render_memory, scene_hash, write_checkpoint, write_image, CheckpointInfo};
 use niebla::integrator::{IntegratorSettings, SingleSampling};
-use niebla::progressive::{render_progressive, Budget, PassInfo};
-use niebla::scene::{build_scene, load_scene, parse_scene_str, BuiltScene, DEFAULT_SCENE};
+use niebla::limits::{default_memory_limit, format_bytes, parse_memory_size};
+use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo};
+use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
 use niebla::tracking::TransmittanceMethod;
 
 /// Options of `niebla render`.
@@ -55,6 +56,17 @@ pub struct RenderArgs {
     /// Do not draw a progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Most memory the render may take for its image, grids and files, e.g.
+    /// 8G, 512M (binary units); a scene needing more is refused before
+    /// anything large is allocated. Default: half of the machine's memory.
+    #[arg(long, value_parser = parse_memory_size)]
+    pub max_memory: Option<u64>,
+    /// Continue the progressive render whose EXR checkpoint (an output of an
+    /// earlier `niebla render`, rewritten after every pass) is given, up to
+    /// --spp samples in all: same scene, integrator and seed required, and
+    /// the result is bit-identical to a render that was never stopped.
+    #[arg(long, value_name = "CHECKPOINT.exr")]
+    pub resume: Option<PathBuf>,
 }
 
 /// Integrators selectable on the command line.
@@ -66,6 +78,14 @@ pub enum IntegratorName {
     Single,
     /// Volumetric path tracing (multiple scattering, unbiased).
     Volpath,
+    /// Closed-form single scattering (Sun et al. 2005) in homogeneous media.
+    Analytic,
+    /// Single + approximate multiple scattering (Hegeman et al. 2005), interactive.
+    Hegeman,
+    /// Volumetric photon mapping (one photon map per render).
+    Photon,
+    /// Progressive photon mapping (converges to volpath).
+    Ppm,
 }
 
 /// Scattering-point sampling of `single`.
@@ -79,23 +99,58 @@ pub enum SamplingName {
     Mis,
 }
 
-/// Load the scene named on the command line, or the built-in default.
+/// Load the scene named on the command line, or the built-in default, within
+/// the default memory limit.
 pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
-    match scene {
+    load_limited(scene, default_memory_limit()).map(|l| (l.built, l.stem))
+}
+
+/// A scene loaded for rendering.
+pub struct LoadedScene {
+    /// The built scene and its render settings.
+    pub built: BuiltScene,
+    /// Output file stem: the scene file's, or `niebla`.
+    pub stem: String,
+    /// [`scene_hash`] of the scene text (recorded in checkpoints).
+    pub hash: String,
+}
+
+/// Load the scene (or the built-in default), refusing before allocating
+/// anything large an image whose render buffers, or grids and files, would
+/// take more than `max_memory` bytes together.
+pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, String> {
+    let (text, source, base, stem) = match scene {
         Some(path) => {
             if !path.exists() {
                 return Err(format!("{}: scene file not found", path.display()));
             }
-            let built = load_scene(path).map_err(|e| e.to_string())?;
+            let source = path.display().to_string();
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{source}: cannot read scene file: {e}"))?;
+            let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
             let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
-            Ok((built, stem))
+            (text, source, base, stem)
         }
-        None => {
-            let desc = parse_scene_str(DEFAULT_SCENE, "<default scene>").map_err(|e| e.to_string())?;
-            let built = build_scene(&desc, "<default scene>", Path::new(".")).map_err(|e| e.to_string())?;
-            Ok((built, "niebla".into()))
-        }
+        None => (DEFAULT_SCENE.to_string(), "<default scene>".to_string(), PathBuf::from("."), "niebla".to_string()),
+    };
+    let desc = parse_scene_str(&text, &source).map_err(|e| e.to_string())?;
+    let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
+    let image_bytes = render_memory(camera.width, camera.height);
+    if image_bytes > max_memory {
+        return Err(format!(
+            "{source}: camera.width, camera.height: rendering {} x {} pixels would need about {} for the image and \
+             its output buffers, over the memory limit of {} (lower the resolution or raise --max-memory)",
+            camera.width,
+            camera.height,
+            format_bytes(image_bytes),
+            format_bytes(max_memory)
+        ));
     }
+    let options = BuildOptions { max_memory: max_memory - image_bytes };
+    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|e| {
+        let hint = if e.message.contains("memory limit") { " (raise it with --max-memory)" } else { "" };
+        format!("{e}{hint}")
+    })?;
+    Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
 }
 
 /// Apply command-line overrides to the scene's integrator settings.
@@ -118,6 +173,17 @@ pub fn override_integrator(
             sampling: SingleSampling::March,
             transmittance: TransmittanceMethod::Analytic,
         },
+        (Some(IntegratorName::Analytic), _) => IntegratorSettings::Analytic,
+        (Some(IntegratorName::Hegeman), s @ IntegratorSettings::Hegeman(_)) => s,
+        (Some(IntegratorName::Hegeman), _) => {
+            IntegratorSettings::Hegeman(niebla::integrator::HegemanSettings::default())
+        }
+        (Some(IntegratorName::Photon), s @ IntegratorSettings::Photon(_)) => s,
+        (Some(IntegratorName::Photon), _) => {
+            IntegratorSettings::Photon(niebla::integrator::photon::PhotonSettings::photon())
+        }
+        (Some(IntegratorName::Ppm), s @ IntegratorSettings::Ppm(_)) => s,
+        (Some(IntegratorName::Ppm), _) => IntegratorSettings::Ppm(Default::default()),
         (Some(IntegratorName::Emission), _) => {
             IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic }
         }
@@ -145,7 +211,8 @@ pub fn override_integrator(
 
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), String> {
-    let (built, stem) = load(args.scene.as_deref())?;
+    let max_memory = args.max_memory.unwrap_or_else(default_memory_limit);
+    let LoadedScene { built, stem, hash } = load_limited(args.scene.as_deref(), max_memory)?;
     let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
@@ -185,7 +252,16 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
 
     let scene = &built.scene;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
-    let seed = args.seed.unwrap_or(built.settings.seed);
+    let (start_acc, seed) = match &args.resume {
+        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.unwrap_or(built.settings.seed)),
+        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed)?,
+    };
+    if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
+        if start_acc.spp >= u64::from(target) {
+            println!("{}: already has {} spp (>= --spp {target}); nothing to render", path.display(), start_acc.spp);
+            return Ok(());
+        }
+    }
     let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
     let template = match budget {
         Budget::Samples(_) => {
@@ -199,28 +275,35 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     };
     bar.set_style(ProgressStyle::with_template(template).map_err(|e| e.to_string())?);
     let start = Instant::now();
-    let samples_before_pass = AtomicU64::new(0);
+    let samples_before_pass = AtomicU64::new(start_acc.spp * pixels);
     let progress = |done: u64, _total: u64| match budget {
         Budget::Samples(_) => bar.set_position(samples_before_pass.load(Ordering::Relaxed) + done),
         Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
     };
     // After every pass, checkpoint the outputs (each written to a temporary
     // file and renamed), so a long render stopped at any time leaves a usable image.
+    // EXR outputs are checkpoints: their header records the samples so far,
+    // the seed, the scene's hash and the integrator, for --resume.
     let mut write_error: Option<String> = None;
-    let mut spp_done = 0u64;
+    let mut spp_done = start_acc.spp;
     let on_pass = |image: &niebla::film::Image, info: PassInfo| {
         samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
         spp_done = info.spp;
         bar.set_message(format!("({} spp)", info.spp));
+        let checkpoint =
+            CheckpointInfo { spp: info.spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
         for out in &outputs {
-            if let Err(e) = write_image(image, out, exposure) {
+            let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+            let written =
+                if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) };
+            if let Err(e) = written {
                 write_error = Some(e.to_string());
                 return false;
             }
         }
         true
     };
-    render_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, on_pass)
+    resume_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, start_acc, on_pass)
         .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
     if let Some(e) = write_error {
@@ -239,6 +322,44 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         names.join(", ")
     );
     Ok(())
+}
+
+/// The accumulator and seed to continue the checkpoint at `path` with,
+/// after checking that it was rendered from this scene text, with these
+/// integrator settings, at this image size (and with `seed` if one is given).
+fn resume_state(
+    path: &Path,
+    scene: &niebla::scene::Scene,
+    hash: &str,
+    integrator: &IntegratorSettings,
+    seed: Option<u64>,
+) -> Result<(Accumulator, u64), String> {
+    let (image, info) = read_checkpoint(path).map_err(|e| format!("--resume: {e}"))?;
+    let at = path.display();
+    if info.scene_hash != hash {
+        return Err(format!(
+            "--resume: {at} was rendered from another scene (scene hash {}, this scene's {hash})",
+            info.scene_hash
+        ));
+    }
+    let settings = format!("{integrator:?}");
+    if info.integrator != settings {
+        return Err(format!("--resume: {at} was rendered with {}, not {settings}", info.integrator));
+    }
+    if let Some(s) = seed.filter(|&s| s != info.seed) {
+        return Err(format!("--resume: {at} was rendered with seed {}, not --seed {s}", info.seed));
+    }
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    if (image.width, image.height) != (w, h) {
+        return Err(format!(
+            "--resume: {at} is {} x {} pixels, the scene's camera {w} x {h}",
+            image.width, image.height
+        ));
+    }
+    if info.spp == 0 || image.pixels.iter().any(|p| !p.is_finite()) {
+        return Err(format!("--resume: {at} holds no samples or non-finite pixels; start a new render"));
+    }
+    Ok((Accumulator::from_mean(image, info.spp), info.seed))
 }
 
 /// `niebla info`.

@@ -84,6 +84,18 @@ pub enum VolumeError {
         /// What is inconsistent.
         what: String,
     },
+    /// Reading a file would take more memory than the caller allowed.
+    #[error("{path}: {what} would need about {}, over the memory limit of {}", size_text(*bytes), size_text(*limit))]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// What would be allocated, e.g. `grid "density": 70000 leaves`.
+        what: String,
+        /// Estimated bytes.
+        bytes: u64,
+        /// The limit in bytes.
+        limit: u64,
+    },
     /// A parameter of a procedural generator is out of its range.
     #[error("invalid parameter {parameter} = {value}: expected {expected}")]
     InvalidParameter {
@@ -100,5 +112,14 @@ impl VolumeError {
     /// Shorthand for [`VolumeError::InvalidGrid`].
     pub(crate) fn invalid(what: impl Into<String>) -> Self {
         VolumeError::InvalidGrid { what: what.into() }
+    }
+}
+
+/// A byte count in KiB (below 1 MiB) or MiB, for messages.
+fn size_text(bytes: u64) -> String {
+    if bytes < 1 << 20 {
+        format!("{} KiB", bytes.div_ceil(1 << 10))
+    } else {
+        format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
     }
 }

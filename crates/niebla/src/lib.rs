@@ -17,6 +17,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod limits;
 pub mod math;
 pub mod medium;
 pub mod phase;

@@ -64,6 +64,14 @@ pub fn render(
         IntegratorSettings::VolPath { max_depth } => {
             render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
         }
+        IntegratorSettings::Photon(p) => crate::integrator::photon::render_photon(scene, &p, options, progress, cancel),
+        IntegratorSettings::Ppm(p) => crate::integrator::photon::render_ppm(scene, &p, options, progress, cancel),
+        IntegratorSettings::Analytic => {
+            render_with(scene, &crate::integrator::AnalyticIntegrator::new(), options, progress, cancel)
+        }
+        IntegratorSettings::Hegeman(h) => {
+            render_with(scene, &crate::integrator::HegemanIntegrator::new(scene, h), options, progress, cancel)
+        }
     }
 }
 
@@ -153,5 +161,8 @@ pub fn render_pixel<I: Integrator>(scene: &Scene, integrator: &I, options: &Rend
         }
     }
     let n = options.spp.max(1) as f64;
-    Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
+    // A mean beyond f32's range would be infinite: dropped like the samples.
+    let mean = sum.map(|s| Some((s / n) as f32).filter(|m| m.is_finite()).unwrap_or(0.0));
+    debug_assert!(mean == sum.map(|s| (s / n) as f32), "pixel ({x}, {y}) mean {sum:?} / {n} overflows f32");
+    Rgb::new(mean[0], mean[1], mean[2])
 }

@@ -471,12 +471,11 @@ fn unknown_types_list_the_valid_ones() {
         "media.smoke.phase.type",
         r#"unknown phase function type "mie"; expected one of: isotropic, hg,"#,
     );
-    let text = edit(r#""type": "single""#, r#""type": "photon""#);
-    assert_error(
-        &text,
-        "render.integrator.type",
-        r#"unknown integrator type "photon"; expected one of: single, emission, volpath"#,
-    );
+    let text = edit(r#""type": "single""#, r#""type": "bidirectional""#);
+    let err = assert_error(&text, "render.integrator.type", r#"unknown integrator type "bidirectional"; expected one of: "#);
+    for name in niebla::scene::IntegratorDesc::TYPES {
+        assert!(err.message.contains(name), "{err} does not list {name}");
+    }
     let text = edit(r#""type": "homogeneous""#, r#""type": "foam""#);
     assert_error(&text, "media.smoke.type", r#"unknown medium type "foam"; expected one of: homogeneous, grid"#);
     let text = edit(r#""type": "diffuse""#, r#""type": "plastic""#);

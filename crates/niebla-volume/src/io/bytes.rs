@@ -27,6 +27,11 @@ impl<'a> ByteReader<'a> {
         self.pos
     }
 
+    /// The file named in errors.
+    pub(crate) fn path(&self) -> &'a Path {
+        self.path
+    }
+
     /// Bytes left before the end of the readable data.
     pub(crate) fn remaining(&self) -> usize {
         self.data.len().saturating_sub(self.pos)

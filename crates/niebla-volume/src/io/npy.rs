@@ -28,8 +28,14 @@ pub fn read_npy(path: impl AsRef<Path>) -> Result<DenseVolume, VolumeError> {
     parse_npy(&data, path)
 }
 
-/// Parses `.npy` bytes; `path` is used in error messages.
-pub(crate) fn parse_npy(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeError> {
+/// Parses `.npy` bytes already in memory; `path` is only used in error
+/// messages.
+///
+/// ```
+/// let err = niebla_volume::parse_npy(b"\x93NUMPY\x01", std::path::Path::new("x.npy")).unwrap_err();
+/// assert!(err.to_string().starts_with("x.npy: file ends early"));
+/// ```
+pub fn parse_npy(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeError> {
     if !data.starts_with(MAGIC) {
         return Err(VolumeError::WrongFormat {
             path: path.to_path_buf(),

@@ -25,8 +25,14 @@ pub fn read_vol(path: impl AsRef<Path>) -> Result<DenseVolume, VolumeError> {
     parse_vol(&data, path)
 }
 
-/// Parses `.vol` bytes; `path` is used in error messages.
-pub(crate) fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeError> {
+/// Parses `.vol` bytes already in memory; `path` is only used in error
+/// messages.
+///
+/// ```
+/// let err = niebla_volume::parse_vol(b"VOL\x03", std::path::Path::new("x.vol")).unwrap_err();
+/// assert!(err.to_string().starts_with("x.vol: file ends early"));
+/// ```
+pub fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeError> {
     if data.len() < 4 || &data[..3] != b"VOL" {
         return Err(VolumeError::WrongFormat {
             path: path.to_path_buf(),
@@ -57,11 +63,13 @@ pub(crate) fn parse_vol(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeE
         *v = r.f32("bounding box")?;
     }
     let dims = dims.map(|n| n as usize);
-    let count = (dims[0] as u64) * (dims[1] as u64) * (dims[2] as u64) * channels as u64;
-    let expected = count * 4;
-    if expected > r.remaining() as u64 {
-        return Err(r.truncated(&format!("{count} float32 values ({}x{}x{}x{channels})", dims[0], dims[1], dims[2])));
-    }
+    // Checked: three resolutions up to 2^31 overflow a u64 (found by fuzzing).
+    let count = dims.iter().chain([&(channels as usize)]).try_fold(1u64, |acc, &n| acc.checked_mul(n as u64));
+    let expected = count.and_then(|c| c.checked_mul(4)).filter(|&b| b <= r.remaining() as u64);
+    let Some(expected) = expected else {
+        let values = count.map_or_else(|| "more than 2^64".to_string(), |c| c.to_string());
+        return Err(r.truncated(&format!("{values} float32 values ({}x{}x{}x{channels})", dims[0], dims[1], dims[2])));
+    };
     let values: Vec<f32> = r
         .bytes(expected as usize, "values")?
         .chunks_exact(4)

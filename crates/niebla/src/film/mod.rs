@@ -1,13 +1,34 @@
 //! Images and their files: linear float RGB in memory; EXR (linear float32,
 //! unclamped) and PNG (exposure, sRGB curve, 8-bit) on disk. Files are written
 //! to a temporary file in the target folder and renamed into place, so a
-//! failed or killed run never leaves a half-written image.
+//! failed or killed run never leaves a half-written image. A checkpoint is
+//! an EXR whose header also records how it was rendered (samples per pixel
+//! so far, seed, scene hash, integrator), so that a killed progressive
+//! render can be continued exactly (`checkpoint.rs`).
 
+mod checkpoint;
 mod output;
 
-pub use output::{write_atomically, write_exr, write_image, write_png, OutputError};
+pub use checkpoint::{read_checkpoint, scene_hash, write_checkpoint, CheckpointError, CheckpointInfo};
+pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
 
 use crate::color::Rgb;
+
+/// Bytes per pixel a progressive render holds at once: the accumulated
+/// mean, the pass image and its tiles, the final copy (f32 RGB, 12 bytes
+/// each), the EXR's uncompressed and compressed buffers (24) and the PNG's
+/// (6), rounded up.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 80;
+
+/// Memory a progressive render of a `width` x `height` image needs for its
+/// images and output buffers ([`RENDER_BYTES_PER_PIXEL`] per pixel).
+///
+/// ```
+/// assert_eq!(niebla::film::render_memory(1920, 1080), 1920 * 1080 * 80);
+/// ```
+pub fn render_memory(width: u32, height: u32) -> u64 {
+    u64::from(width) * u64::from(height) * RENDER_BYTES_PER_PIXEL
+}
 
 /// A linear RGB image, row 0 at the top, `pixels[y * width + x]`.
 #[derive(Clone, Debug, PartialEq)]

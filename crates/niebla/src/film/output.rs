@@ -57,13 +57,28 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 /// Encode `image` as an OpenEXR file (linear RGB, float32, unclamped, ZIP
 /// compressed) and write it atomically.
 pub fn write_exr(image: &Image, path: &Path) -> Result<(), OutputError> {
+    write_exr_with_attributes(image, path, &[])
+}
+
+/// [`write_exr`] with extra text attributes `(name, value)` in the layer
+/// header (read back with [`super::read_checkpoint`] or any EXR tool).
+/// The pixels are stored exactly (float32, lossless ZIP).
+pub fn write_exr_with_attributes(image: &Image, path: &Path, attributes: &[(&str, String)]) -> Result<(), OutputError> {
     use exr::prelude::*;
+    let encode = |message: String| OutputError::Encode { path: path.to_path_buf(), message };
     let (w, h) = (image.width as usize, image.height as usize);
     let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
         let p = image.pixels[pos.y() * w + pos.x()];
         (p[0], p[1], p[2])
     });
-    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
+    let mut layer_attributes = LayerAttributes::default();
+    for (name, value) in attributes {
+        let name = Text::new_or_none(name).ok_or_else(|| encode(format!("attribute name {name:?} is not ASCII")))?;
+        let value =
+            Text::new_or_none(value).ok_or_else(|| encode(format!("attribute value {value:?} is not ASCII")))?;
+        layer_attributes.other.insert(name, AttributeValue::Text(value));
+    }
+    let layer = Layer::new((w, h), layer_attributes, Encoding::SMALL_LOSSLESS, channels);
     let mut bytes = Vec::new();
     exr::image::Image::from_layer(layer)
         .write()
@@ -100,5 +115,27 @@ pub fn write_image(image: &Image, path: &Path, exposure: f32) -> Result<(), Outp
         Some("exr") => write_exr(image, path),
         Some("png") => write_png(image, path, exposure),
         _ => Err(OutputError::UnsupportedExtension { path: path.to_path_buf() }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_write_leaves_neither_temporary_nor_partial_file() {
+        let dir = std::env::temp_dir().join(format!("niebla_output_test_{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("taken.exr")).unwrap();
+        // Renaming a file over a folder fails after the temporary is written.
+        let err = write_atomically(&dir.join("taken.exr"), b"bytes").unwrap_err();
+        assert!(matches!(err, OutputError::Io { .. }), "{err}");
+        let names: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, ["taken.exr"]);
+        // A successful write replaces the file whole.
+        let path = dir.join("image.png");
+        write_atomically(&path, b"old").unwrap();
+        write_atomically(&path, b"new contents").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"new contents");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -3,17 +3,23 @@
 //! [`IntegratorSettings`]) and the render loop is monomorphized over the chosen
 //! type, so the per-sample path has no virtual call.
 
+mod analytic;
 mod camera_ray;
 mod direct;
 mod emission;
 mod equiangular;
+pub mod hegeman;
+pub mod photon;
 mod single;
 mod volpath;
 
+pub use analytic::airlight::{airlight_integral, airlight_table, AirlightTable};
+pub use analytic::AnalyticIntegrator;
 pub(crate) use camera_ray::trace_camera_ray;
 pub use camera_ray::SegmentRadiance;
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
 pub use emission::EmissionIntegrator;
+pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use single::{SingleIntegrator, SingleSampling};
 pub use volpath::VolPathIntegrator;
 
@@ -56,6 +62,19 @@ pub enum IntegratorSettings {
         /// Largest number of scattering events on a path.
         max_depth: u32,
     },
+    /// Closed-form single scattering (Sun et al. 2005) in homogeneous media
+    /// from point and spot lights; surfaces lit directly.
+    Analytic,
+    /// Single scattering plus the blurred multiple-scattering approximation
+    /// of Hegeman et al. 2005 (reconstructed), with per-light precomputed
+    /// volumes; interactive.
+    Hegeman(hegeman::HegemanSettings),
+    /// Volumetric photon mapping (Jensen and Christensen 1998): one photon
+    /// map per render, single scattering by shadow rays.
+    Photon(photon::PhotonSettings),
+    /// Progressive photon mapping (Knaus and Zwicker 2011): one photon map
+    /// and a smaller radius per sample index; converges to `volpath`.
+    Ppm(photon::PpmSettings),
 }
 
 impl IntegratorSettings {
@@ -65,11 +84,15 @@ impl IntegratorSettings {
             IntegratorSettings::Emission { .. } => "emission",
             IntegratorSettings::Single { .. } => "single",
             IntegratorSettings::VolPath { .. } => "volpath",
+            IntegratorSettings::Analytic => "analytic",
+            IntegratorSettings::Hegeman(_) => "hegeman",
+            IntegratorSettings::Photon(_) => "photon",
+            IntegratorSettings::Ppm(_) => "ppm",
         }
     }
 
     /// Names of all integrators that can be selected.
-    pub const NAMES: &'static [&'static str] = &["emission", "single", "volpath"];
+    pub const NAMES: &'static [&'static str] = &["emission", "single", "volpath", "analytic", "photon", "ppm", "hegeman"];
 
     /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
     pub const DEFAULT_MAX_DEPTH: u32 = 1024;

@@ -30,10 +30,53 @@ pub struct BuiltScene {
     pub settings: RenderSettings,
 }
 
+/// Limits of a scene build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Bytes the scene's large buffers (grids and their majorants, files
+    /// read into memory, VDB trees, environment maps) may take together;
+    /// a source whose declared size would exceed what is left is refused
+    /// before it is allocated, with an error naming its field and the
+    /// estimated size. Default: half of the machine's memory
+    /// ([`crate::limits::default_memory_limit`]).
+    pub max_memory: u64,
+}
+
+impl Default for BuildOptions {
+    fn default() -> BuildOptions {
+        BuildOptions { max_memory: crate::limits::default_memory_limit() }
+    }
+}
+
 /// Build a validated description. `source` names the file in messages;
-/// `base_dir` resolves relative paths (phase tables, later grids).
+/// `base_dir` resolves relative paths (phase tables, grids, environment
+/// maps). Uses the default [`BuildOptions`].
 pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<BuiltScene, SceneError> {
+    build_scene_with_options(desc, source, base_dir, &BuildOptions::default())
+}
+
+/// [`build_scene`] within the limits of `options`.
+///
+/// ```
+/// use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions};
+/// let text = r#"{"version": 1,
+///     "camera": {"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 8, "height": 8},
+///     "media": {"cloud": {"type": "grid", "sigma_t": 1, "albedo": 0.9,
+///         "density": {"type": "procedural", "shape": "cloud", "resolution": 512}}}}"#;
+/// let desc = parse_scene_str(text, "cloud.json").unwrap();
+/// let err = build_scene_with_options(&desc, "cloud.json", ".".as_ref(), &BuildOptions { max_memory: 64 << 20 })
+///     .unwrap_err();
+/// assert_eq!(err.path, "media.cloud.density.resolution");
+/// assert!(err.message.contains("512 MiB"), "{err}");
+/// ```
+pub fn build_scene_with_options(
+    desc: &SceneDesc,
+    source: &str,
+    base_dir: &Path,
+    options: &BuildOptions,
+) -> Result<BuiltScene, SceneError> {
     let err = |path: &str, message: String| SceneError::new(source, path, message);
+    let mut budget = crate::limits::MemoryBudget::new(options.max_memory);
 
     // Media, in name order (BTreeMap), so ids are stable.
     let mut media = Vec::new();
@@ -41,7 +84,7 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
     for (name, m) in &desc.media {
         let path = format!("media.{name}");
         let phase = build_phase(m.phase(), &format!("{path}.phase"), source, base_dir)?;
-        let medium = super::build_medium::build_medium(m, &path, source, base_dir, phase)?;
+        let medium = super::build_medium::build_medium(m, &path, source, base_dir, phase, &mut budget)?;
         media.push(medium);
         medium_names.push(name.clone());
     }
@@ -159,6 +202,7 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
                 let t = build_transform(&e.to_world)
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular".into()))?;
                 let rotation = glam::Mat3::from(t.to_world.matrix3);
+                charge_envmap(&file, &mut budget).map_err(|message| err(&format!("{path}.file"), message))?;
                 let map = EnvironmentMap::from_exr(&file, e.scale, rotation)
                     .map_err(|error| err(&format!("{path}.file"), error.to_string()))?;
                 Light::Environment(std::sync::Arc::new(map))
@@ -249,6 +293,22 @@ fn assign_enclosing_exteriors(scene: &mut Scene, explicit: &[bool]) {
     }
 }
 
+/// Bytes per texel an environment map takes: its RGB texels and the
+/// marginal and conditional distributions that sample it.
+const ENVMAP_BYTES_PER_TEXEL: u64 = 12 + 2 * 8;
+
+/// Charges an environment map's declared size (read from the EXR header)
+/// before its pixels are read. Unreadable headers are left to the reader,
+/// which reports them.
+fn charge_envmap(file: &Path, budget: &mut crate::limits::MemoryBudget) -> Result<(), String> {
+    let Ok(meta) = exr::meta::MetaData::read_from_file(file, false) else { return Ok(()) };
+    let Some(header) = meta.headers.first() else { return Ok(()) };
+    let (w, h) = (header.layer_size.width() as u64, header.layer_size.height() as u64);
+    budget
+        .charge(w.saturating_mul(h).saturating_mul(ENVMAP_BYTES_PER_TEXEL))
+        .map_err(|why| format!("{}: the {w} x {h} environment map {why}", file.display()))
+}
+
 /// Integrator settings from the file's description.
 pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
     let step = |m: &MarchStepDesc| match *m {
@@ -278,6 +338,14 @@ pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
             transmittance: transmittance(&e.transmittance, step(&e.march)),
         },
         IntegratorDesc::VolPath(v) => IntegratorSettings::VolPath { max_depth: v.max_depth },
+        IntegratorDesc::Analytic => IntegratorSettings::Analytic,
+        IntegratorDesc::Hegeman(h) => IntegratorSettings::Hegeman(crate::integrator::HegemanSettings {
+            multiple_scattering: h.multiple_scattering,
+            resolution: h.resolution,
+            step_cells: h.step_cells,
+        }),
+        IntegratorDesc::Photon(p) => crate::integrator::photon::settings_from_desc(p, false),
+        IntegratorDesc::Ppm(p) => crate::integrator::photon::settings_from_desc(p, true),
     }
 }
 

@@ -23,6 +23,7 @@ use super::build_transform;
 use super::desc::*;
 use super::SceneError;
 use crate::color::{BlackbodyTable, Rgb};
+use crate::limits::{format_bytes, MemoryBudget};
 use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, HomogeneousMedium, Medium};
 use crate::phase::PhaseFunction;
 
@@ -38,12 +39,16 @@ pub const DEFAULT_DENSE_MAJORANT_RESOLUTION: usize = 16;
 /// caller. Errors name the JSON path of the source at fault (`.file` for
 /// unreadable files and bad values in them, `.grid` for a VDB grid that is
 /// not in its file) and, through the volume crate's message, the file.
+/// Grids, majorant grids and files read are charged to `budget` before they
+/// are allocated; what does not fit is an error at the field that asked
+/// for it.
 pub(crate) fn build_medium(
     desc: &MediumDesc,
     path: &str,
     source: &str,
     base_dir: &Path,
     phase: PhaseFunction,
+    budget: &mut MemoryBudget,
 ) -> Result<Medium, SceneError> {
     match desc {
         MediumDesc::Homogeneous(h) => {
@@ -52,8 +57,11 @@ pub(crate) fn build_medium(
             Ok(Medium::Homogeneous(HomogeneousMedium { sigma_a, sigma_s, l_ve, phase }))
         }
         MediumDesc::Grid(g) => {
-            let mut loader = Loader { source, base_dir, vdb_files: Vec::new() };
-            build_grid_medium(g, path, &mut loader, phase).map(Medium::Grid)
+            let mut loader = Loader { source, base_dir, vdb_files: Vec::new(), vdb_file_bytes: 0, budget };
+            let medium = build_grid_medium(g, path, &mut loader, phase).map(Medium::Grid);
+            // The files are dropped here; their bytes no longer count.
+            loader.budget.used = loader.budget.used.saturating_sub(loader.vdb_file_bytes);
+            medium
         }
     }
 }
@@ -79,6 +87,12 @@ fn build_grid_medium(
 
     // Majorant and minorant grids (the same cells), in the density grid's
     // space; the minorant is residual ratio tracking's control density.
+    let majorant_path = format!("{path}.majorant_resolution");
+    let charge_cells = |loader: &mut Loader, cells: usize| {
+        // Two grids (majorant and minorant) of one f32 per cell.
+        let bytes = (cells as u64).saturating_mul(2 * 4);
+        loader.charge(&majorant_path, bytes, &format!("the majorant and minorant grids of {cells} cells"))
+    };
     let (majorant, minorant) = match &density {
         DensityGrid::Dense(g) => {
             let res = match desc.majorant_resolution {
@@ -86,6 +100,7 @@ fn build_grid_medium(
                 // More cells than voxels bound nothing tighter.
                 None => g.dims().map(|n| n.min(DEFAULT_DENSE_MAJORANT_RESOLUTION)),
             };
+            charge_cells(loader, res.iter().product())?;
             (MajorantGrid::from_dense(g, res), MajorantGrid::minorant_from_dense(g, res))
         }
         DensityGrid::Sparse(g) => {
@@ -94,6 +109,7 @@ fn build_grid_medium(
             let max_cells = desc
                 .majorant_resolution
                 .map_or(MajorantGrid::DEFAULT_MAX_CELLS, |r| r.dims().iter().map(|&n| n as usize).product());
+            charge_cells(loader, max_cells)?;
             (MajorantGrid::from_sparse(g, max_cells), MajorantGrid::minorant_from_sparse(g, max_cells))
         }
     };
@@ -143,11 +159,40 @@ struct Loader<'a> {
     source: &'a str,
     base_dir: &'a Path,
     vdb_files: Vec<(PathBuf, VdbFile)>,
+    /// Bytes of the files in `vdb_files`, charged while they are held.
+    vdb_file_bytes: u64,
+    budget: &'a mut MemoryBudget,
 }
 
 impl Loader<'_> {
     fn error(&self, path: &str, message: String) -> SceneError {
         SceneError::new(self.source, path, message)
+    }
+
+    /// Charges `bytes` for `what` to the budget, or an error at `path`.
+    fn charge(&mut self, path: &str, bytes: u64, what: &str) -> Result<(), SceneError> {
+        self.budget.charge(bytes).map_err(|why| self.error(path, format!("{what} {why}")))
+    }
+
+    /// Checks that `file` is a regular file whose bytes, read into memory
+    /// and decoded into at most as many bytes of values, fit in what is left
+    /// of the budget; returns its length. (Devices and pipes are refused:
+    /// `/dev/zero` would never end.)
+    fn check_file(&self, at: &str, file: &Path, copies: u64) -> Result<u64, SceneError> {
+        let meta =
+            std::fs::metadata(file).map_err(|e| self.error(at, format!("{}: cannot read: {e}", file.display())))?;
+        if !meta.is_file() {
+            return Err(self.error(at, format!("{}: not a regular file", file.display())));
+        }
+        let bytes = meta.len().saturating_mul(copies);
+        if bytes > self.budget.left() {
+            let mut probe = *self.budget;
+            let why = probe.charge(bytes).unwrap_err();
+            return Err(
+                self.error(at, format!("{}: reading the {} file {why}", file.display(), format_bytes(meta.len())))
+            );
+        }
+        Ok(meta.len())
     }
 
     /// A volume crate error at `{field}.file` (its message names the file).
@@ -196,16 +241,26 @@ impl Loader<'_> {
     /// Loads and checks one field source.
     fn load(&mut self, field: &str, desc: &DensitySourceDesc, kind: FieldKind) -> Result<DensityGrid, SceneError> {
         let file_path = format!("{field}.file");
-        let dense = |g: Result<DenseGrid, VolumeError>, at: &str| g.map_err(|e| self.error(at, e.to_string()));
+        let noun = kind.noun();
         let grid = match desc {
             DensitySourceDesc::Constant { value, bounds } => {
-                dense(DenseGrid::new([1, 1, 1], vec![*value], bounds.min, bounds.max), field)?
+                DenseGrid::new([1, 1, 1], vec![*value], bounds.min, bounds.max)
+                    .map_err(|e| self.error(field, e.to_string()))?
             }
             DensitySourceDesc::Grid(g) => {
-                dense(DenseGrid::new(g.dims.map(|n| n as usize), g.data.clone(), g.bounds.min, g.bounds.max), field)?
+                let voxels = g.dims.iter().fold(1u64, |a, &n| a.saturating_mul(u64::from(n)));
+                let [nx, ny, nz] = g.dims;
+                self.charge(
+                    &format!("{field}.dims"),
+                    voxels.saturating_mul(4),
+                    &format!("the {nx} x {ny} x {nz} {noun} grid"),
+                )?;
+                DenseGrid::new(g.dims.map(|n| n as usize), g.data.clone(), g.bounds.min, g.bounds.max)
+                    .map_err(|e| self.error(field, e.to_string()))?
             }
             DensitySourceDesc::Npy { file, bounds } => {
                 let full = self.base_dir.join(file);
+                self.check_file(&file_path, &full, 2)?;
                 let volume = read_npy(&full)
                     .and_then(|v| v.with_bounds(bounds.min, bounds.max))
                     .map_err(|e| self.file_error(field, e))?;
@@ -213,6 +268,7 @@ impl Loader<'_> {
             }
             DensitySourceDesc::Vol { file } => {
                 let full = self.base_dir.join(file);
+                self.check_file(&file_path, &full, 2)?;
                 let volume = read_vol(&full).map_err(|e| self.file_error(field, e))?;
                 self.scalar(&file_path, &full, volume, kind)?
             }
@@ -224,9 +280,17 @@ impl Loader<'_> {
                 return Ok(DensityGrid::Sparse(Arc::new(sparse)));
             }
             DensitySourceDesc::Procedural(p) => {
-                build_procedural(p).map_err(|e| self.error(field, format!("procedural {}: {e}", kind.noun())))?
+                let [nx, ny, nz] = p.resolution.dims();
+                let voxels = [nx, ny, nz].iter().fold(1u64, |a, &n| a.saturating_mul(u64::from(n)));
+                let what = format!("the procedural {noun} of {nx} x {ny} x {nz} voxels");
+                self.charge(&format!("{field}.resolution"), voxels.saturating_mul(4), &what)?;
+                build_procedural(p).map_err(|e| self.error(field, format!("procedural {noun}: {e}")))?
             }
         };
+        if desc.file().is_some() {
+            let [nx, ny, nz] = grid.dims();
+            self.charge(&file_path, grid.storage().len() as u64 * 4, &format!("the {nx} x {ny} x {nz} {noun} grid"))?;
+        }
         check_dense(&grid, kind).map_err(|what| {
             let at = desc.file().map_or(field, |_| file_path.as_str());
             let label = desc
@@ -260,12 +324,22 @@ impl Loader<'_> {
         let index = match self.vdb_files.iter().position(|(p, _)| p == file) {
             Some(i) => i,
             None => {
+                let at = format!("{field}.file");
+                let len = self.check_file(&at, file, 1)?;
+                self.charge(&at, len, &format!("{}: reading the file", file.display()))?;
+                self.vdb_file_bytes += len;
                 let opened = VdbFile::open(file).map_err(|e| self.file_error(field, e))?;
                 self.vdb_files.push((file.to_path_buf(), opened));
                 self.vdb_files.len() - 1
             }
         };
-        self.vdb_files[index].1.read_float_grid(grid).map_err(|e| self.file_error(field, e))
+        let left = self.budget.left();
+        let sparse =
+            self.vdb_files[index].1.read_float_grid_limited(grid, left).map_err(|e| self.file_error(field, e))?;
+        let bytes = sparse.leaf_count() as u64 * std::mem::size_of::<Leaf>() as u64
+            + sparse.tiles().len() as u64 * std::mem::size_of::<niebla_volume::Tile>() as u64;
+        self.charge(&format!("{field}.file"), bytes, &format!("grid {grid:?}"))?;
+        Ok(sparse)
     }
 }
 

@@ -283,6 +283,23 @@ mod tests {
     }
 
     #[test]
+    fn scanner_walks_nesting_ten_thousand_deep_without_recursion() {
+        // serde_json stops at 128 levels; the scanner keeps its own stack,
+        // so any depth is fine (run on a small stack to prove it).
+        let deep = format!("{}{{\"k\": 1, \"k\": 2}}{}", "[{\"a\": ".repeat(10_000), "}]".repeat(10_000));
+        let (duplicate, path) = std::thread::Builder::new()
+            .stack_size(256 << 10)
+            .spawn(move || (find_duplicate_key(&deep), path_at(&deep, deep.len() / 2)))
+            .unwrap()
+            .join()
+            .unwrap();
+        let (at, key) = duplicate.unwrap();
+        assert_eq!(key, "k");
+        assert!(at.starts_with("[0].a[0].a") && at.len() > 50_000, "{}", &at[..40]);
+        assert!(path.starts_with("[0].a[0].a"));
+    }
+
+    #[test]
     fn joined_paths_use_dots_and_brackets() {
         assert_eq!(join("lights[1]", "intensity[2]"), "lights[1].intensity[2]");
         assert_eq!(join("a", "[0]"), "a[0]");

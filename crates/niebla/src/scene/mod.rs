@@ -17,7 +17,9 @@ mod parse;
 mod render_scene;
 mod validate;
 
-pub use build::{build_scene, build_transform, integrator_settings, BuiltScene};
+pub use build::{
+    build_scene, build_scene_with_options, build_transform, integrator_settings, BuildOptions, BuiltScene,
+};
 pub use desc::*;
 pub use error::SceneError;
 pub use parse::{load_scene_file, parse_scene_str};

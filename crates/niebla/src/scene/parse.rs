@@ -245,6 +245,56 @@ struct RawVolPath {
     max_depth: Option<u32>,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAnalytic {}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPhoton {
+    #[serde(default)]
+    photons: Option<u32>,
+    #[serde(default)]
+    k: Option<u32>,
+    #[serde(default)]
+    radius: Option<f32>,
+    #[serde(default)]
+    surface_radius: Option<f32>,
+    #[serde(default)]
+    step: Option<f32>,
+    #[serde(default)]
+    steps: Option<u32>,
+    #[serde(default)]
+    query: Option<PhotonQueryRaw>,
+    #[serde(default)]
+    sampling: Option<ScatterSamplingDesc>,
+    #[serde(default)]
+    max_depth: Option<u32>,
+    #[serde(default)]
+    alpha: Option<f32>,
+}
+
+#[derive(Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+enum PhotonQueryRaw {
+    March,
+    Beam,
+}
+
+fn photon_desc(raw: RawPhoton) -> Result<PhotonDesc, Located> {
+    Ok(PhotonDesc {
+        photons: raw.photons,
+        k: raw.k,
+        radius: raw.radius,
+        surface_radius: raw.surface_radius,
+        march: march_step(raw.step, raw.steps)?,
+        beam: raw.query == Some(PhotonQueryRaw::Beam),
+        sampling: raw.sampling,
+        max_depth: raw.max_depth,
+        alpha: raw.alpha,
+    })
+}
+
 fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
     let tag = take_tag(&mut object, "integrator", IntegratorDesc::TYPES, None)?;
     match tag.as_str() {
@@ -269,6 +319,13 @@ fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
                 max_depth: raw.max_depth.unwrap_or(crate::integrator::IntegratorSettings::DEFAULT_MAX_DEPTH),
             }))
         }
+        "analytic" => {
+            let _: RawAnalytic = rest(object)?;
+            Ok(IntegratorDesc::Analytic)
+        }
+        "hegeman" => Ok(IntegratorDesc::Hegeman(rest(object)?)),
+        "photon" => Ok(IntegratorDesc::Photon(photon_desc(rest(object)?)?)),
+        "ppm" => Ok(IntegratorDesc::Ppm(photon_desc(rest(object)?)?)),
         _ => Err(unknown_type("integrator", &tag, IntegratorDesc::TYPES)),
     }
 }

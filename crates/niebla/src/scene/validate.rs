@@ -245,6 +245,16 @@ fn validate_render(render: &RenderDesc) -> Check {
             }
             MarchStepDesc::Auto
         }
+        IntegratorDesc::Analytic => MarchStepDesc::Auto,
+        IntegratorDesc::Hegeman(h) => {
+            if !(2..=512).contains(&h.resolution) {
+                return fail("render.integrator.resolution", format!("must be between 2 and 512, got {}", h.resolution));
+            }
+            positive("render.integrator.step_cells", h.step_cells)?;
+            MarchStepDesc::Auto
+        }
+        IntegratorDesc::Photon(p) => validate_photon(p, false)?,
+        IntegratorDesc::Ppm(p) => validate_photon(p, true)?,
     };
     match march {
         MarchStepDesc::Auto => Ok(()),
@@ -252,6 +262,36 @@ fn validate_render(render: &RenderDesc) -> Check {
         MarchStepDesc::PerSegment(0) => fail("render.integrator.steps", "must be at least 1, got 0"),
         MarchStepDesc::PerSegment(_) => Ok(()),
     }
+}
+
+/// The `photon` and `ppm` settings; returns their march step.
+fn validate_photon(p: &PhotonDesc, ppm: bool) -> Result<MarchStepDesc, Invalid> {
+    let at_least_one = |path: &str, v: Option<u32>| match v {
+        Some(0) => fail(path, "must be at least 1, got 0"),
+        _ => Ok(()),
+    };
+    at_least_one("render.integrator.photons", p.photons)?;
+    at_least_one("render.integrator.k", p.k)?;
+    at_least_one("render.integrator.max_depth", p.max_depth)?;
+    if ppm && p.k.is_some() {
+        fail("render.integrator.k", "ppm gathers within a shrinking radius: give `radius`, not `k`")?;
+    }
+    if !ppm && p.alpha.is_some() {
+        fail("render.integrator.alpha", "only ppm shrinks its radius: `alpha` applies to ppm")?;
+    }
+    for (path, value) in
+        [("render.integrator.radius", p.radius), ("render.integrator.surface_radius", p.surface_radius)]
+    {
+        if let Some(r) = value {
+            positive(path, r)?;
+        }
+    }
+    if let Some(alpha) = p.alpha {
+        if !(alpha > 0.0 && alpha < 1.0) {
+            fail("render.integrator.alpha", format!("must be in (0, 1), got {alpha}"))?;
+        }
+    }
+    Ok(p.march)
 }
 
 // ---------------------------------------------------------------------------
@@ -405,15 +445,16 @@ fn resolution(path: &str, r: &ResolutionDesc, max_per_axis: u32) -> Result<u64, 
             return Err(Invalid { path: at, message: format!("must be at most {max_per_axis}, got {n}") });
         }
     }
-    let cells = dims.iter().map(|n| u64::from(*n)).product::<u64>();
-    if cells > MAX_GRID_VOXELS {
+    // In u128: three u32 counts overflow a u64 (found by fuzzing).
+    let cells = dims.iter().map(|n| u128::from(*n)).product::<u128>();
+    if cells > u128::from(MAX_GRID_VOXELS) {
         let [nx, ny, nz] = dims;
         return Err(Invalid {
             path: path.to_string(),
             message: format!("{nx} x {ny} x {nz} = {cells} cells exceeds the limit of {MAX_GRID_VOXELS} (2^28)"),
         });
     }
-    Ok(cells)
+    Ok(cells as u64)
 }
 
 fn validate_bounds(base: &str, bounds: &BoundsDesc) -> Check {

@@ -147,6 +147,20 @@ impl VdbFile {
     /// (vectors, booleans, integers, points) are a
     /// [`VolumeError::UnsupportedGridType`].
     pub fn read_float_grid(&self, name: &str) -> Result<SparseGrid, VolumeError> {
+        self.read_float_grid_limited(name, u64::MAX)
+    }
+
+    /// [`VdbFile::read_float_grid`] refusing, with a
+    /// [`VolumeError::TooLarge`], a tree whose node tables and leaves would
+    /// take more than `max_bytes` (checked before each node is allocated,
+    /// so at most one node over the limit is ever allocated).
+    ///
+    /// ```no_run
+    /// let file = niebla_volume::VdbFile::open("plume.vdb")?;
+    /// let density = file.read_float_grid_limited("density", 1 << 30)?; // at most 1 GiB
+    /// # Ok::<(), niebla_volume::VolumeError>(())
+    /// ```
+    pub fn read_float_grid_limited(&self, name: &str, max_bytes: u64) -> Result<SparseGrid, VolumeError> {
         let info = self.grid(name)?;
         let Some(kind) = info.scalar_kind() else {
             return Err(VolumeError::UnsupportedGridType {
@@ -177,7 +191,8 @@ impl VdbFile {
 
         let (mut r, compression, _, _) = self.grid_reader(tree_source)?;
         let mut codec = ValueCodec { kind, half: info.half, compression, background: 0.0 };
-        tree::read_tree(&mut r, &mut codec, &mut grid)?;
+        let limit = tree::MemoryLimit { max_bytes, grid: &info.unique_name };
+        tree::read_tree(&mut r, &mut codec, &mut grid, &limit)?;
         Ok(grid)
     }
 

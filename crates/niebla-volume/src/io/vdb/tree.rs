@@ -12,10 +12,47 @@ use crate::io::vdb::values::{bit, ones, read_compressed_values, read_mask, read_
 use crate::sparse::{Leaf, Tile, EMPTY, LEAF_SIZE, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, UPPER_SIZE, UPPER_TOTAL};
 use crate::{SparseGrid, VolumeError};
 
+/// The most memory a tree may take, checked before each node is allocated.
+pub(crate) struct MemoryLimit<'a> {
+    pub(crate) max_bytes: u64,
+    /// The grid's name, for the error.
+    pub(crate) grid: &'a str,
+}
+
+impl MemoryLimit<'_> {
+    /// An error when `grid` plus one more node of `extra` bytes exceeds the
+    /// limit.
+    fn check(&self, r: &ByteReader, grid: &SparseGrid, extra: usize) -> Result<(), VolumeError> {
+        let bytes = (grid.leaves.len() * std::mem::size_of::<Leaf>()
+            + (grid.uppers.len() + grid.lowers.len()) * std::mem::size_of::<u32>()
+            + grid.tiles.len() * std::mem::size_of::<Tile>()
+            + extra) as u64;
+        if bytes <= self.max_bytes {
+            return Ok(());
+        }
+        Err(VolumeError::TooLarge {
+            path: r.path().to_path_buf(),
+            what: format!(
+                "grid {:?} ({} leaves, {} internal nodes so far)",
+                self.grid,
+                grid.leaves.len(),
+                grid.upper_origins.len() + grid.lower_origins.len()
+            ),
+            bytes,
+            limit: self.max_bytes,
+        })
+    }
+}
+
 /// Reads the tree at the reader's position into `grid` (whose transform,
 /// name and background are set by the caller; the background is read
 /// here). `codec.background` is updated with it.
-pub(crate) fn read_tree(r: &mut ByteReader, codec: &mut ValueCodec, grid: &mut SparseGrid) -> Result<(), VolumeError> {
+pub(crate) fn read_tree(
+    r: &mut ByteReader,
+    codec: &mut ValueCodec,
+    grid: &mut SparseGrid,
+    limit: &MemoryLimit,
+) -> Result<(), VolumeError> {
     let pos = r.pos();
     let buffer_count = r.i32("tree buffer count")?;
     if buffer_count != 1 {
@@ -52,7 +89,7 @@ pub(crate) fn read_tree(r: &mut ByteReader, codec: &mut ValueCodec, grid: &mut S
         if grid.root.contains_key(&key) {
             return Err(r.corrupt_at(pos, format!("two root entries at {origin:?}")));
         }
-        let upper = read_upper(r, codec, grid, origin, &mut leaf_order)?;
+        let upper = read_upper(r, codec, grid, origin, &mut leaf_order, limit)?;
         grid.root.insert(key, upper);
     }
 
@@ -163,12 +200,14 @@ fn read_upper(
     grid: &mut SparseGrid,
     origin: [i32; 3],
     leaf_order: &mut Vec<u32>,
+    limit: &MemoryLimit,
 ) -> Result<u32, VolumeError> {
     let node = read_internal(r, codec, Level::Upper)?;
+    limit.check(r, grid, UPPER_SIZE * std::mem::size_of::<u32>())?;
     let u = place_node(r, codec, grid, &node, origin, Level::Upper)?;
     for n in ones(&node.child_mask) {
         let o = child_origin(origin, n, 5, LOWER_TOTAL);
-        let lower = read_lower(r, codec, grid, o, leaf_order)?;
+        let lower = read_lower(r, codec, grid, o, leaf_order, limit)?;
         grid.uppers[u * UPPER_SIZE + n] = lower;
     }
     Ok(u as u32)
@@ -180,13 +219,16 @@ fn read_lower(
     grid: &mut SparseGrid,
     origin: [i32; 3],
     leaf_order: &mut Vec<u32>,
+    limit: &MemoryLimit,
 ) -> Result<u32, VolumeError> {
     let node = read_internal(r, codec, Level::Lower)?;
+    limit.check(r, grid, LOWER_SIZE * std::mem::size_of::<u32>())?;
     let l = place_node(r, codec, grid, &node, origin, Level::Lower)?;
     for n in ones(&node.child_mask) {
         let o = child_origin(origin, n, 4, LEAF_TOTAL);
         // LeafNode::readTopology: just the value mask; values come later.
         let mask = read_mask(r, LEAF_SIZE, "leaf topology mask")?;
+        limit.check(r, grid, std::mem::size_of::<Leaf>())?;
         let mut leaf = Leaf::new(o, codec.background, false);
         leaf.active.copy_from_slice(&mask);
         let index = grid.push_leaf(leaf);

@@ -377,11 +377,79 @@ pub enum IntegratorDesc {
     /// `"type": "volpath"`: unbiased volumetric path tracing (all orders of
     /// scattering).
     VolPath(VolPathDesc),
+    /// `"type": "analytic"`: closed-form single scattering (Sun et al. 2005)
+    /// in homogeneous media from point and spot lights; no parameters.
+    Analytic,
+    /// `"type": "hegeman"`: single scattering plus the blurred
+    /// multiple-scattering approximation of Hegeman et al. 2005
+    /// (reconstructed), interactive.
+    Hegeman(HegemanDesc),
+    /// `"type": "photon"`: volumetric photon mapping (Jensen and Christensen
+    /// 1998) with one photon map per render.
+    Photon(PhotonDesc),
+    /// `"type": "ppm"`: progressive photon mapping (Knaus and Zwicker 2011):
+    /// a photon map and a smaller radius per pass; converges to `volpath`.
+    Ppm(PhotonDesc),
+}
+
+/// Settings of the `photon` and `ppm` integrators. Every field is optional.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PhotonDesc {
+    /// Photons emitted (`photons`, >= 1; per pass for `ppm`).
+    pub photons: Option<u32>,
+    /// Neighbours of a k-nearest estimate (`k`, >= 1; `photon` only). With
+    /// `radius` and no `k`, `photon` gathers within the fixed radius.
+    pub k: Option<u32>,
+    /// Volume gather radius in scene units (`radius`, > 0): fixed radius, cap
+    /// of the k-nearest search, or `ppm`'s initial radius.
+    pub radius: Option<f32>,
+    /// Surface gather radius in scene units (`surface_radius`, > 0).
+    pub surface_radius: Option<f32>,
+    /// Ray-march step of point queries (`step` or `steps`).
+    pub march: MarchStepDesc,
+    /// `query`: `"march"` (point queries, default) or `"beam"` (beam
+    /// radiance estimate).
+    pub beam: bool,
+    /// Single-scattering sampling along camera rays (`sampling`, default `mis`).
+    pub sampling: Option<ScatterSamplingDesc>,
+    /// Largest number of scattering events on a photon path (`max_depth`, >= 1).
+    pub max_depth: Option<u32>,
+    /// `ppm`'s radius reduction in (0, 1) (`alpha`, default 2/3).
+    pub alpha: Option<f32>,
+}
+
+/// Settings of the `hegeman` integrator (`"type": "hegeman"`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HegemanDesc {
+    /// Include the multiple-scattering term (`multiple_scattering`, default true).
+    #[serde(default = "default_true")]
+    pub multiple_scattering: bool,
+    /// Lattice nodes of the per-light volumes along a grid medium's longest
+    /// side (`resolution`, 2 to 512; default 48).
+    #[serde(default = "default_hegeman_resolution")]
+    pub resolution: u32,
+    /// View-ray march step in lattice cells (`step_cells`, > 0; default 1).
+    #[serde(default = "default_one")]
+    pub step_cells: f32,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_hegeman_resolution() -> u32 {
+    48
+}
+
+fn default_one() -> f32 {
+    1.0
 }
 
 impl IntegratorDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["single", "emission", "volpath"];
+    pub const TYPES: &'static [&'static str] =
+        &["single", "emission", "volpath", "analytic", "hegeman", "photon", "ppm"];
 }
 
 /// Settings of the volumetric path tracer (`"type": "volpath"`).

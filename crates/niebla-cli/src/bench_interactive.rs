@@ -1,0 +1,120 @@
+//! `niebla bench interactive`: the interactive methods side by side, one
+//! table per scene: frames per second at 256x256 and 512x512 (1 spp per
+//! frame, precomputation excluded), precomputation time and memory, and the
+//! relative MSE against a high-spp `volpath` reference at a small size.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use niebla::film::Image;
+use niebla::integrator::{HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator};
+use niebla::render::{render_with, RenderOptions};
+use niebla::scene::Scene;
+
+/// Options of `niebla bench interactive`.
+#[derive(Args, Debug)]
+pub struct InteractiveBenchArgs {
+    /// Scenes to measure.
+    #[arg(default_values = ["scenes/smoke.json", "scenes/fog.json", "scenes/cloud.json"])]
+    pub scenes: Vec<PathBuf>,
+    /// Frames timed per method and resolution.
+    #[arg(long, default_value_t = 3)]
+    pub frames: u32,
+    /// Width of the error images (height keeps the scene's aspect).
+    #[arg(long, default_value_t = 96)]
+    pub error_width: u32,
+    /// Samples per pixel of the volpath reference.
+    #[arg(long, default_value_t = 256)]
+    pub reference_spp: u32,
+    /// Samples per pixel of the methods' error images.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+fn resized(scene: &Scene, width: u32, height: Option<u32>) -> Scene {
+    let mut s = scene.clone();
+    let aspect = scene.camera.height as f64 / scene.camera.width as f64;
+    s.camera.width = width;
+    s.camera.height = height.unwrap_or(((width as f64 * aspect).round() as u32).max(1));
+    s
+}
+
+fn frame<I: Integrator>(scene: &Scene, integrator: &I, spp: u32, seed: u64, threads: Option<usize>) -> Image {
+    let options = RenderOptions { spp, seed, first_sample: 0, threads };
+    render_with(scene, integrator, &options, &|_, _| {}, None).expect("render without cancel flag")
+}
+
+/// Frames per second of `integrator` on `scene` at `size` x `size`.
+fn fps<I: Integrator>(scene: &Scene, integrator: &I, size: u32, frames: u32, threads: Option<usize>) -> f64 {
+    let s = resized(scene, size, Some(size));
+    let start = Instant::now();
+    for k in 0..frames {
+        frame(&s, integrator, 1, k as u64, threads);
+    }
+    frames as f64 / start.elapsed().as_secs_f64()
+}
+
+/// The hegeman settings of the scene file, else the defaults.
+fn hegeman_settings(file: IntegratorSettings) -> HegemanSettings {
+    match file {
+        IntegratorSettings::Hegeman(h) => h,
+        _ => HegemanSettings::default(),
+    }
+}
+
+/// `niebla bench interactive`.
+pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
+    if args.frames == 0 || args.spp == 0 || args.reference_spp == 0 || args.error_width == 0 {
+        return Err("--frames, --spp, --reference-spp and --error-width must be at least 1".into());
+    }
+    for path in &args.scenes {
+        let (built, _) = crate::render_cmd::load(Some(path))?;
+        let scene = built.scene;
+        let small = resized(&scene, args.error_width, None);
+        let start = Instant::now();
+        let reference =
+            frame(&small, &VolPathIntegrator { max_depth: 256 }, args.reference_spp, 1_000_003, args.threads);
+        println!(
+            "\n{}: reference volpath {}x{} at {} spp in {:.1} s",
+            path.display(),
+            small.camera.width,
+            small.camera.height,
+            args.reference_spp,
+            start.elapsed().as_secs_f64()
+        );
+        println!(
+            "{:<22} {:>10} {:>10} {:>14} {:>12} {:>14}",
+            "method", "fps 256^2", "fps 512^2", "precompute s", "memory MiB", "rel MSE"
+        );
+        let single = crate::preview_cmd::interactive_single();
+        let single_error = frame(&small, &single, args.spp, 7, args.threads).relative_mse(&reference);
+        println!(
+            "{:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
+            "single (ray march)",
+            fps(&scene, &single, 256, args.frames, args.threads),
+            fps(&scene, &single, 512, args.frames, args.threads),
+            0.0,
+            0.0,
+            single_error
+        );
+        for (name, multiple) in [("hegeman", true), ("hegeman (single only)", false)] {
+            let settings =
+                HegemanSettings { multiple_scattering: multiple, ..hegeman_settings(built.settings.integrator) };
+            let hegeman = HegemanIntegrator::new(&scene, settings);
+            let error = frame(&small, &hegeman, args.spp, 7, args.threads).relative_mse(&reference);
+            println!(
+                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
+                fps(&scene, &hegeman, 256, args.frames, args.threads),
+                fps(&scene, &hegeman, 512, args.frames, args.threads),
+                hegeman.precompute_seconds,
+                hegeman.memory_bytes() as f64 / (1024.0 * 1024.0),
+                error
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,181 @@
+//! `niebla preview`: render a scene again and again at a chosen resolution,
+//! report frames per second, and start over (precomputation included) when
+//! the scene file changes (its modification time is polled before every
+//! frame). Frames go to one image that is rewritten (`--output`) or to a
+//! numbered sequence (`--sequence DIR`); `--frames N` stops after N frames.
+
+use std::path::{Path, PathBuf};
+use std::time::{Instant, SystemTime};
+
+use clap::{Args, ValueEnum};
+use niebla::film::{write_image, Image};
+use niebla::integrator::{
+    AnalyticIntegrator, HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, SingleIntegrator,
+    SingleSampling,
+};
+use niebla::render::{render_with, RenderOptions};
+use niebla::scene::{load_scene, Scene};
+use niebla::tracking::{MarchStep, TransmittanceMethod};
+
+/// Integrators fast enough to preview.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PreviewIntegrator {
+    /// Hegeman et al. 2005 (reconstructed): single + approximate multiple scattering.
+    Hegeman,
+    /// Single scattering by ray marching (ray-marched shadow rays).
+    Single,
+    /// Closed-form single scattering (Sun et al. 2005), homogeneous media.
+    Analytic,
+}
+
+/// Options of `niebla preview`.
+#[derive(Args, Debug)]
+pub struct PreviewArgs {
+    /// Scene file (JSON, version 1).
+    pub scene: PathBuf,
+    /// The integrator (default: the scene's `hegeman` settings, or hegeman defaults).
+    #[arg(long, value_enum, default_value = "hegeman")]
+    pub integrator: PreviewIntegrator,
+    /// Frame width in pixels (default: the scene's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Frame height in pixels (default: the scene's, or the width times the scene's aspect).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel per frame.
+    #[arg(long, default_value_t = 1)]
+    pub spp: u32,
+    /// Stop after this many frames (default: run until interrupted).
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Image rewritten after every frame (.png or .exr).
+    #[arg(long, short = 'o')]
+    pub output: Option<PathBuf>,
+    /// Folder for a numbered sequence `frame_00000.png`, ...
+    #[arg(long, conflicts_with = "output")]
+    pub sequence: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// PNG exposure in stops (default: the scene's).
+    #[arg(long, allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+}
+
+/// A prepared integrator (precomputation done), one per scene version.
+enum Prepared {
+    Hegeman(Box<HegemanIntegrator>),
+    Single(SingleIntegrator),
+    Analytic(AnalyticIntegrator),
+}
+
+impl Prepared {
+    fn new(kind: PreviewIntegrator, scene: &Scene, from_file: IntegratorSettings) -> Prepared {
+        match kind {
+            PreviewIntegrator::Hegeman => {
+                let settings = match from_file {
+                    IntegratorSettings::Hegeman(h) => h,
+                    _ => HegemanSettings::default(),
+                };
+                Prepared::Hegeman(Box::new(HegemanIntegrator::new(scene, settings)))
+            }
+            PreviewIntegrator::Single => Prepared::Single(interactive_single()),
+            PreviewIntegrator::Analytic => Prepared::Analytic(AnalyticIntegrator::new()),
+        }
+    }
+
+    fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, String> {
+        fn go<I: Integrator>(scene: &Scene, i: &I, options: &RenderOptions) -> Result<Image, String> {
+            render_with(scene, i, options, &|_, _| {}, None).map_err(|e| e.to_string())
+        }
+        match self {
+            Prepared::Hegeman(i) => go(scene, i.as_ref(), options),
+            Prepared::Single(i) => go(scene, i, options),
+            Prepared::Analytic(i) => go(scene, i, options),
+        }
+    }
+}
+
+/// `single` as an interactive ray marcher: stratified march along the view
+/// ray, shadow rays ray-marched with 32 steps per segment.
+pub fn interactive_single() -> SingleIntegrator {
+    SingleIntegrator {
+        step: None,
+        sampling: SingleSampling::March,
+        transmittance: TransmittanceMethod::RayMarch(MarchStep::Count(32)),
+    }
+}
+
+fn modified(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// `niebla preview`.
+pub fn run(args: &PreviewArgs) -> Result<(), String> {
+    if args.spp == 0 {
+        return Err("--spp: must be at least 1".into());
+    }
+    if args.width == Some(0) || args.height == Some(0) {
+        return Err("--width/--height: must be at least 1".into());
+    }
+    if let Some(dir) = &args.sequence {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let mut loaded: Option<(SystemTime, Scene, Prepared, f32)> = None;
+    let mut frame = 0u64;
+    let mut last_report = Instant::now();
+    let mut frames_since_report = 0u32;
+    while args.frames.is_none_or(|n| frame < n) {
+        // Reload and precompute again when the file changed.
+        let stamp = modified(&args.scene).ok_or_else(|| format!("{}: scene file not found", args.scene.display()))?;
+        if loaded.as_ref().is_none_or(|(t, ..)| *t != stamp) {
+            match load_scene(&args.scene) {
+                Ok(built) => {
+                    let mut scene = built.scene;
+                    let aspect = scene.camera.height as f64 / scene.camera.width as f64;
+                    let width = args.width.unwrap_or(scene.camera.width);
+                    let height = args.height.unwrap_or_else(|| ((width as f64 * aspect).round() as u32).max(1));
+                    scene.camera.width = width;
+                    scene.camera.height = height;
+                    let start = Instant::now();
+                    let prepared = Prepared::new(args.integrator, &scene, built.settings.integrator);
+                    let exposure = args.exposure.unwrap_or(built.settings.exposure);
+                    eprintln!(
+                        "preview: {} at {width}x{height}, {:?}, precomputed in {:.3} s",
+                        args.scene.display(),
+                        args.integrator,
+                        start.elapsed().as_secs_f64()
+                    );
+                    loaded = Some((stamp, scene, prepared, exposure));
+                }
+                // A half-saved or broken file: keep showing the last good scene.
+                Err(e) if loaded.is_some() => {
+                    eprintln!("preview: {e} (keeping the previous version)");
+                    if let Some(entry) = loaded.as_mut() {
+                        entry.0 = stamp;
+                    }
+                }
+                Err(e) => return Err(e.to_string()),
+            }
+        }
+        let (_, scene, prepared, exposure) = loaded.as_ref().expect("a scene is loaded");
+        let options = RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads: args.threads };
+        let image = prepared.render(scene, &options)?;
+        if let Some(path) = &args.output {
+            write_image(&image, path, *exposure).map_err(|e| e.to_string())?;
+        }
+        if let Some(dir) = &args.sequence {
+            let path = dir.join(format!("frame_{frame:05}.png"));
+            write_image(&image, &path, *exposure).map_err(|e| e.to_string())?;
+        }
+        frame += 1;
+        frames_since_report += 1;
+        let elapsed = last_report.elapsed().as_secs_f64();
+        if elapsed >= 1.0 || args.frames == Some(frame) {
+            println!("frame {frame}: {:.2} frames/s", frames_since_report as f64 / elapsed);
+            last_report = Instant::now();
+            frames_since_report = 0;
+        }
+    }
+    Ok(())
+}

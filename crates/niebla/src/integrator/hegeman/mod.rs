@@ -1,0 +1,397 @@
+//! The `hegeman` integrator: single scattering plus an approximation of
+//! multiple scattering around lights in inhomogeneous media, after Hegeman,
+//! Ashikhmin and Premoze 2005 ("A lighting model for general participating
+//! media", I3D 2005).
+//!
+//! **Reconstruction, not the paper's equations.** The paper's body could not
+//! be read (interactive.md 2.2); this is the physically grounded stand-in of
+//! interactive.md 2.3-2.5 with the paper's structure: light arriving at a
+//! point `u` of a view ray from each light is split into
+//! - an unscattered beam, `E_0 = E exp(-tau_t)` from the light direction, and
+//! - a forward-scattered part, `E_ms = E exp(-tau_a) (1 - exp(-tau_s))`
+//!   (`k_loss = 1`: the Monte Carlo calibration of interactive.md 2.4 is not
+//!   done), blurred in angle around the light direction by a Gaussian of
+//!   per-axis variance `w^2` from small-angle (Fermi-Eyges) theory,
+//!   `w^2 = int z^2 sigma_s (1 - g) dz / s^2` along the straight line
+//!   light -> u (z from the light; for a directional light `w^2 = int sigma_s
+//!   (1 - g) dz`).
+//!
+//! The in-scattered radiance is `sigma_s [E_0 p(mu) + E_ms P_w(mu)]`, with
+//! `P_w` the phase function convolved with the blur ([`blur`], tabulated once
+//! per `g`: the "simple precomputation"), and it is composited along the view
+//! ray by ray marching. The line integrals toward each light are precomputed
+//! on a lattice over each grid medium ([`light_volume`]) and turned into the
+//! per-node factors `exp(-tau_t)`, `exp(-tau_a)(1 - exp(-tau_s))` and `w`
+//! whenever coefficients change (cheap); a view ray only fetches them.
+//!
+//! Scope: point, spot and directional lights; a constant environment is
+//! approximated by [`ENVIRONMENT_DIRECTIONS`] directional lights (the cube's
+//! diagonals, each carrying `4 pi / 8` of its radiance as irradiance, with
+//! the phase function taken as isotropic for them, so that their sum is one
+//! view-independent ambient term per lattice node); area
+//! lights and environment maps are not lit. Volumetric shadows come from the
+//! grid media only (surfaces do not shadow the medium). The blur uses a
+//! Henyey-Greenstein lobe with the phase function's mean cosine; the sharp
+//! term uses the true phase function. Homogeneous media segments use the
+//! `analytic` integrator (single scattering only). Surfaces are lit directly
+//! with ray-marched shadow rays.
+
+pub mod blur;
+pub mod light_volume;
+
+use std::time::Instant;
+
+use crate::color::Rgb;
+use crate::light::{Light, SpotLight};
+use crate::math::{Ray, Vec3};
+use crate::medium::{GridMedium, Medium, MediumId};
+use crate::phase::PhaseFunction;
+use crate::sampling::PixelSampler;
+use crate::scene::Scene;
+use crate::tracking::{MarchStep, TransmittanceMethod};
+
+use super::{trace_camera_ray, AnalyticIntegrator, Integrator, SegmentRadiance};
+use blur::BlurredPhaseTable;
+use light_volume::{LightSource, LightVolume};
+
+/// Directional lights standing in for a constant environment.
+pub const ENVIRONMENT_DIRECTIONS: usize = 8;
+
+/// Parameters of the `hegeman` integrator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HegemanSettings {
+    /// Include the multiple-scattering (blurred) term; `false` gives single
+    /// scattering with precomputed shadow volumes.
+    pub multiple_scattering: bool,
+    /// Lattice nodes along the longest side of a grid medium's box (>= 2).
+    pub resolution: u32,
+    /// View-ray march step in lattice cells (> 0).
+    pub step_cells: f32,
+}
+
+impl Default for HegemanSettings {
+    fn default() -> HegemanSettings {
+        HegemanSettings { multiple_scattering: true, resolution: 48, step_cells: 1.0 }
+    }
+}
+
+/// One light as the model sees it.
+#[derive(Clone, Copy, Debug)]
+struct ModelLight {
+    source: LightSource,
+    /// Intensity (W/sr) of a point or spot light, irradiance (W/m^2) of a direction.
+    power: Rgb,
+    spot: Option<SpotLight>,
+    /// One of the directions standing in for a constant environment: folded
+    /// into the per-node ambient term.
+    ambient: bool,
+}
+
+/// Floats per lattice node before the per-light factors: the ambient
+/// in-scattered radiance (RGB).
+const AMBIENT: usize = 3;
+
+/// Factors per lattice node and light: `exp(-tau_t)` (3), `exp(-tau_a)(1 -
+/// exp(-tau_s))` (3) and `w` (1).
+const FACTORS: usize = 7;
+
+/// A grid medium's precomputation.
+#[derive(Clone, Debug)]
+struct GridModel {
+    volumes: Vec<LightVolume>,
+    lo: Vec3,
+    hi: Vec3,
+    n: [usize; 3],
+    /// `stride` floats per node: ambient RGB, then `FACTORS` per non-ambient light.
+    factors: Vec<f32>,
+    stride: usize,
+    blur: BlurredPhaseTable,
+    step: f32,
+}
+
+/// The integrator with its precomputation (shadow/blur volumes per light and
+/// grid medium, blurred-phase tables).
+#[derive(Clone, Debug)]
+pub struct HegemanIntegrator {
+    settings: HegemanSettings,
+    lights: Vec<ModelLight>,
+    models: Vec<Option<GridModel>>,
+    analytic: AnalyticIntegrator,
+    /// Seconds spent in the precomputation.
+    pub precompute_seconds: f64,
+}
+
+impl HegemanIntegrator {
+    /// Precompute for `scene`: the line-integral lattices (per grid medium
+    /// and light) and the per-node factors.
+    pub fn new(scene: &Scene, settings: HegemanSettings) -> HegemanIntegrator {
+        let start = Instant::now();
+        let lights = model_lights(scene);
+        let resolution = settings.resolution.max(2) as usize;
+        let models = scene
+            .media
+            .iter()
+            .map(|m| match m {
+                Medium::Grid(g) => {
+                    let volumes: Vec<LightVolume> =
+                        lights.iter().map(|l| LightVolume::new(g, l.source, resolution)).collect();
+                    let (lo, hi) = g.world_bounds;
+                    let longest = (hi - lo).max_element();
+                    let step = settings.step_cells.max(0.05) * longest / resolution as f32;
+                    let n = volumes.first().map_or([2, 2, 2], |v| v.dims());
+                    let mut model = GridModel {
+                        volumes,
+                        lo,
+                        hi,
+                        n,
+                        factors: Vec::new(),
+                        stride: 0,
+                        blur: BlurredPhaseTable::new(g.phase.mean_cosine()),
+                        step,
+                    };
+                    model.update_factors(g, &lights, settings.multiple_scattering);
+                    Some(model)
+                }
+                Medium::Homogeneous(_) => None,
+            })
+            .collect();
+        HegemanIntegrator {
+            settings,
+            lights,
+            models,
+            analytic: AnalyticIntegrator::new(),
+            precompute_seconds: start.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// Bytes held by the precomputation.
+    pub fn memory_bytes(&self) -> usize {
+        self.models
+            .iter()
+            .flatten()
+            .map(|m| {
+                m.volumes.iter().map(LightVolume::memory_bytes).sum::<usize>()
+                    + m.factors.len() * 4
+                    + m.blur.memory_bytes()
+            })
+            .sum()
+    }
+
+    /// Radiance scattered toward `wo` at `x` per unit `sigma_s` (the
+    /// in-scattering integral `int p L_i`), from the lattice factors.
+    #[inline]
+    fn in_scattered(&self, model: &GridModel, phase: &PhaseFunction, x: Vec3, wo: Vec3) -> Rgb {
+        let (base, weights) = model.corners(x);
+        let stride = model.stride;
+        let mut l = Rgb::ZERO;
+        for (corner, w) in base.iter().zip(weights) {
+            let o = corner * stride;
+            l += Rgb::new(model.factors[o], model.factors[o + 1], model.factors[o + 2]) * w;
+        }
+        for (index, light) in self.lights.iter().filter(|l| !l.ambient).enumerate() {
+            let mut f = [0f32; FACTORS];
+            for (corner, w) in base.iter().zip(weights) {
+                let o = corner * stride + AMBIENT + index * FACTORS;
+                for (k, v) in f.iter_mut().enumerate() {
+                    *v += w * model.factors[o + k];
+                }
+            }
+            let (wi, mut e) = match light.source {
+                LightSource::Point(p) => {
+                    let v = p - x;
+                    let d2 = v.length_squared();
+                    if d2 == 0.0 {
+                        continue;
+                    }
+                    let wi = v / d2.sqrt();
+                    (wi, light.power / d2)
+                }
+                LightSource::Direction(w) => (w, light.power),
+            };
+            if let Some(spot) = &light.spot {
+                e *= spot.falloff(-wi);
+            }
+            if e.is_black() {
+                continue;
+            }
+            let mu = -wo.dot(wi);
+            let sharp = phase.eval(wo, wi);
+            let mut s = Rgb::new(f[0], f[1], f[2]) * sharp;
+            if self.settings.multiple_scattering {
+                s += Rgb::new(f[3], f[4], f[5]) * model.blur.eval(f[6], mu);
+            }
+            l += e * s;
+        }
+        l
+    }
+
+    /// March a grid segment: front-to-back compositing with per-step opacity
+    /// `1 - exp(-sigma_t dt)` (exact for a source constant over the step).
+    fn grid_segment(
+        &self,
+        g: &GridMedium,
+        model: &GridModel,
+        ray: &Ray,
+        t_end: f32,
+        sampler: &mut PixelSampler,
+    ) -> SegmentRadiance {
+        let Some((a, b)) = g.clip(ray, 0.0, t_end) else {
+            return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
+        };
+        let n = ((b - a) / model.step).ceil().clamp(1.0, 4096.0) as usize;
+        let dt = (b - a) / n as f32;
+        let u = sampler.next_1d();
+        let (sigma_t, sigma_s) = (g.sigma_t(), g.sigma_s);
+        let wo = -ray.d;
+        let mut tr = Rgb::ONE;
+        let mut l = Rgb::ZERO;
+        for k in 0..n {
+            let x = ray.at(a + (k as f32 + u) * dt);
+            let d = g.density_at(x);
+            if d <= 0.0 {
+                continue;
+            }
+            let st = sigma_t * d;
+            let opacity = Rgb::ONE - (st * dt).exp_neg();
+            let mut source = self.in_scattered(model, &g.phase, x, wo) * sigma_s * d;
+            source += g.l_ve(x, d);
+            l += tr * source.safe_div(st) * opacity;
+            tr *= Rgb::ONE - opacity;
+            if tr.max_channel() < 1e-4 {
+                tr = Rgb::ZERO;
+                break;
+            }
+        }
+        SegmentRadiance { radiance: l, transmittance: tr }
+    }
+}
+
+impl GridModel {
+    /// Recompute the per-node factors from the line integrals for the
+    /// medium's current coefficients (no marching: interactive editing of
+    /// `sigma_t`, albedo and `g`).
+    fn update_factors(&mut self, g: &GridMedium, lights: &[ModelLight], multiple: bool) {
+        let nodes = self.n[0] * self.n[1] * self.n[2];
+        let extent = self.hi - self.lo;
+        let (sigma_t, sigma_s) = (g.sigma_t(), g.sigma_s);
+        let sigma_a = g.sigma_a;
+        let power = sigma_s.average() * (1.0 - g.phase.mean_cosine()).max(0.0);
+        let stride = AMBIENT + FACTORS * lights.iter().filter(|l| !l.ambient).count();
+        let mut factors = vec![0f32; nodes * stride];
+        for (node, chunk) in factors.chunks_mut(stride).enumerate() {
+            let (x, y, z) = (node % self.n[0], (node / self.n[0]) % self.n[1], node / (self.n[0] * self.n[1]));
+            let f = Vec3::new(
+                x as f32 / (self.n[0] - 1) as f32,
+                y as f32 / (self.n[1] - 1) as f32,
+                z as f32 / (self.n[2] - 1) as f32,
+            );
+            let p = self.lo + extent * f;
+            let mut slot = 0;
+            for (index, light) in lights.iter().enumerate() {
+                let [d0, d1, d2] = self.volumes[index].node(node);
+                let sharp = (sigma_t * d0).exp_neg();
+                let scattered =
+                    if multiple { (sigma_a * d0).exp_neg() * (Rgb::ONE - (sigma_s * d0).exp_neg()) } else { Rgb::ZERO };
+                if light.ambient {
+                    // Environment directions: phase taken as isotropic (a
+                    // constant environment seen through no medium scatters
+                    // isotropically for any phase function).
+                    let ambient = light.power * (sharp + scattered) * (0.25 / std::f32::consts::PI);
+                    for c in 0..3 {
+                        chunk[c] += ambient[c];
+                    }
+                    continue;
+                }
+                let out = &mut chunk[AMBIENT + slot * FACTORS..AMBIENT + (slot + 1) * FACTORS];
+                slot += 1;
+                let w2 = match light.source {
+                    LightSource::Point(c) => {
+                        let s = (c - p).length().max(1e-6);
+                        power * (s * s * d0 - 2.0 * s * d1 + d2).max(0.0) / (s * s)
+                    }
+                    LightSource::Direction(_) => power * d0,
+                };
+                out[..3].copy_from_slice(&sharp.0);
+                out[3..6].copy_from_slice(&scattered.0);
+                out[6] = w2.max(0.0).sqrt();
+            }
+        }
+        self.factors = factors;
+        self.stride = stride;
+    }
+
+    /// Flat indices of the 8 lattice nodes around `x` and their trilinear weights.
+    #[inline]
+    fn corners(&self, x: Vec3) -> ([usize; 8], [f32; 8]) {
+        let f = ((x - self.lo) / (self.hi - self.lo)).clamp(Vec3::ZERO, Vec3::ONE);
+        let g = [f.x * (self.n[0] - 1) as f32, f.y * (self.n[1] - 1) as f32, f.z * (self.n[2] - 1) as f32];
+        let i = [0, 1, 2].map(|a| (g[a] as usize).min(self.n[a] - 2));
+        let t = [0, 1, 2].map(|a| g[a] - i[a] as f32);
+        let mut base = [0usize; 8];
+        let mut weights = [0f32; 8];
+        for corner in 0..8 {
+            let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            weights[corner] = (if dx == 1 { t[0] } else { 1.0 - t[0] })
+                * (if dy == 1 { t[1] } else { 1.0 - t[1] })
+                * (if dz == 1 { t[2] } else { 1.0 - t[2] });
+            base[corner] = (i[0] + dx) + self.n[0] * ((i[1] + dy) + self.n[1] * (i[2] + dz));
+        }
+        (base, weights)
+    }
+}
+
+/// The scene's lights in the model: point, spot, directional, and a constant
+/// environment as [`ENVIRONMENT_DIRECTIONS`] directions.
+fn model_lights(scene: &Scene) -> Vec<ModelLight> {
+    let mut lights = Vec::new();
+    for light in &scene.lights {
+        match light {
+            Light::Point(l) => lights.push(ModelLight {
+                source: LightSource::Point(l.position),
+                power: l.intensity,
+                spot: None,
+                ambient: false,
+            }),
+            Light::Spot(l) => lights.push(ModelLight {
+                source: LightSource::Point(l.position),
+                power: l.intensity,
+                spot: Some(*l),
+                ambient: false,
+            }),
+            Light::Directional(l) => lights.push(ModelLight {
+                source: LightSource::Direction(-l.direction),
+                power: l.irradiance,
+                spot: None,
+                ambient: false,
+            }),
+            Light::Constant(c) => {
+                let share = 4.0 * std::f32::consts::PI / ENVIRONMENT_DIRECTIONS as f32;
+                for k in 0..ENVIRONMENT_DIRECTIONS {
+                    let s = |bit: usize| if k & bit == 0 { 1.0 } else { -1.0 };
+                    let w = Vec3::new(s(1), s(2), s(4)).normalize();
+                    lights.push(ModelLight {
+                        source: LightSource::Direction(w),
+                        power: c.radiance * share,
+                        spot: None,
+                        ambient: true,
+                    });
+                }
+            }
+            Light::Area(_) | Light::Environment(_) => {}
+        }
+    }
+    lights
+}
+
+impl Integrator for HegemanIntegrator {
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
+        trace_camera_ray(scene, ray, medium, surfaces, sampler, |m, id, ray, t_end, sampler| match m {
+            Medium::Grid(g) => match &self.models[id.0 as usize] {
+                Some(model) => self.grid_segment(g, model, ray, t_end, sampler),
+                None => self.analytic.segment(scene, id, ray, t_end, sampler),
+            },
+            Medium::Homogeneous(_) => self.analytic.segment(scene, id, ray, t_end, sampler),
+        })
+    }
+}

@@ -1,0 +1,357 @@
+//! Photon tracing (Jensen and Christensen 1998): photons leave the lights
+//! (chosen in proportion to their power, then [`Light::sample_le`]) and
+//! travel through media and surfaces with the free-flight and event code of
+//! `volpath` (null-scattering delta tracking over majorant segments with the
+//! hero channel, spectral MIS on the photon's power), scattering by the phase
+//! function in media and by the BSDF in [`TransportMode::Importance`] at
+//! surfaces.
+//!
+//! # Storage rule
+//! - Volume photons are stored at *real scattering* events (after the event
+//!   choice picked scattering, before the phase function is sampled): their
+//!   power density is `sigma_s * integral L dw`, so the in-scattering
+//!   estimate `sum p Phi / V` needs no albedo factor (methods.md 4.2 item 4).
+//! - Surface photons are stored on arrival at diffuse surfaces, before the
+//!   BSDF is sampled (density: incident flux per area).
+//! - *Direct* photons are not stored: those whose path from the light has
+//!   crossed only media (without a real scattering) and index-matched
+//!   boundaries. That light is what shadow rays from the camera side compute
+//!   (single scattering in media, direct lighting at surfaces), so storing it
+//!   would count it twice (methods.md 4.2 item 5). Photons that passed a
+//!   specular surface (a volume caustic behind glass) are stored.
+//!   [`TraceSettings::store_direct`] stores them too (for tests).
+//!
+//! # Determinism
+//! Photon `i` of a pass draws its numbers from
+//! `PixelSampler::from_key(stream ^ i)`; photons are traced in chunks on
+//! rayon and the chunks' photons are concatenated in chunk order, so the
+//! maps depend only on the scene, the seed, the pass and the photon count,
+//! never on the thread count.
+
+use crate::bsdf::TransportMode;
+use crate::color::Rgb;
+use crate::light::{Light, SceneSphere};
+use crate::math::Ray;
+use crate::sampling::{hash_u64, Distribution1D, PixelSampler};
+use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
+use crate::tracking::sample_t_maj;
+
+use super::stored::Photon;
+
+/// Photons traced per chunk (one rayon task).
+const CHUNK: u64 = 2048;
+
+/// What photon tracing needs to know.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraceSettings {
+    /// Photons emitted (>= 1).
+    pub photons: u64,
+    /// Largest number of scattering events (medium or surface) on a path.
+    pub max_depth: u32,
+    /// Store direct photons too (first scattering in a medium, first diffuse
+    /// surface reached straight from a light). For tests only: the photon
+    /// integrators then count direct light twice.
+    pub store_direct: bool,
+}
+
+/// Energy bookkeeping of one tracing pass, W per channel (f64 sums).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TraceStats {
+    /// Photons emitted (including those whose emission sample was empty).
+    pub emitted: u64,
+    /// Total flux emitted.
+    pub emitted_power: [f64; 3],
+    /// Flux of photons that left the scene (no surface hit, no collision).
+    pub escaped_power: [f64; 3],
+    /// Flux absorbed by area lights' surfaces.
+    pub light_absorbed_power: [f64; 3],
+    /// Flux of photons cut off by `max_depth`, the boundary-crossing limit or
+    /// an unbounded homogeneous medium around a distant light.
+    pub lost_power: [f64; 3],
+    /// Real scattering events in media, stored or not.
+    pub volume_events: u64,
+    /// Flux of all real scattering events in media, stored or not.
+    pub volume_event_power: [f64; 3],
+    /// Flux of all arrivals at diffuse surfaces, stored or not.
+    pub surface_event_power: [f64; 3],
+}
+
+impl TraceStats {
+    fn merge(&mut self, o: &TraceStats) {
+        self.emitted += o.emitted;
+        self.volume_events += o.volume_events;
+        for c in 0..3 {
+            self.emitted_power[c] += o.emitted_power[c];
+            self.escaped_power[c] += o.escaped_power[c];
+            self.light_absorbed_power[c] += o.light_absorbed_power[c];
+            self.lost_power[c] += o.lost_power[c];
+            self.volume_event_power[c] += o.volume_event_power[c];
+            self.surface_event_power[c] += o.surface_event_power[c];
+        }
+    }
+}
+
+#[inline]
+fn add(sum: &mut [f64; 3], x: Rgb) {
+    for (s, v) in sum.iter_mut().zip(x.0) {
+        *s += v as f64;
+    }
+}
+
+/// Photons of one pass: volume and surface photons (unordered) and the bookkeeping.
+#[derive(Clone, Debug, Default)]
+pub struct TracedPhotons {
+    /// Photons stored at real scattering events in media.
+    pub volume: Vec<Photon>,
+    /// Photons stored at diffuse surfaces.
+    pub surface: Vec<Photon>,
+    /// Energy bookkeeping.
+    pub stats: TraceStats,
+}
+
+/// The random stream of pass `pass` of a render seeded with `seed`.
+#[inline]
+pub fn photon_stream(seed: u64, pass: u64) -> u64 {
+    hash_u64(hash_u64(seed ^ 0x5048_4f54_4f4e_5321) ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// Trace `settings.photons` photons from the lights of `scene` with random
+/// stream `stream` (see [`photon_stream`]), on the current rayon pool.
+pub fn trace_photons(scene: &Scene, settings: &TraceSettings, stream: u64) -> TracedPhotons {
+    use rayon::prelude::*;
+    let sphere = SceneSphere::around(scene.bounds);
+    let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(&sphere).average()).collect();
+    if powers.iter().all(|&p| !(p > 0.0)) {
+        return TracedPhotons::default();
+    }
+    let choice = Distribution1D::new(&powers);
+    let n = settings.photons.max(1);
+    let tracer = Tracer { scene, settings, sphere, choice: &choice, scale: 1.0 / n as f32 };
+    let chunks: Vec<TracedPhotons> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|chunk| {
+            let mut out = TracedPhotons::default();
+            for index in chunk * CHUNK..((chunk + 1) * CHUNK).min(n) {
+                let mut sampler = PixelSampler::from_key(stream ^ index);
+                tracer.trace(index, &mut sampler, &mut out);
+            }
+            out
+        })
+        .collect();
+    let mut all = TracedPhotons {
+        volume: Vec::with_capacity(chunks.iter().map(|c| c.volume.len()).sum()),
+        surface: Vec::with_capacity(chunks.iter().map(|c| c.surface.len()).sum()),
+        stats: TraceStats::default(),
+    };
+    for c in chunks {
+        all.volume.extend_from_slice(&c.volume);
+        all.surface.extend_from_slice(&c.surface);
+        all.stats.merge(&c.stats);
+    }
+    all
+}
+
+struct Tracer<'a> {
+    scene: &'a Scene,
+    settings: &'a TraceSettings,
+    sphere: SceneSphere,
+    choice: &'a Distribution1D,
+    /// `1 / photons`.
+    scale: f32,
+}
+
+impl Tracer<'_> {
+    /// Trace photon `index` and store what it leaves behind into `out`.
+    fn trace(&self, index: u64, sampler: &mut PixelSampler, out: &mut TracedPhotons) {
+        let scene = self.scene;
+        out.stats.emitted += 1;
+        // Emission: a light by power, then a ray from it.
+        let (light_index, pmf) = self.choice.sample_discrete(sampler.next_1d());
+        let light = &scene.lights[light_index];
+        let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+        let Some(emission) = light.sample_le(u_pos, u_dir, &self.sphere) else {
+            return;
+        };
+        let mut beta = emission.flux() * (self.scale / pmf);
+        if !beta.is_finite() || beta.is_black() {
+            return;
+        }
+        add(&mut out.stats.emitted_power, beta);
+        let mut ray = emission.ray;
+        let on_surface = matches!(light, Light::Area(_));
+        let mut t_min = if on_surface { surface_epsilon(ray.o) } else { 0.0 };
+        let mut medium = scene.medium_at(if on_surface { ray.at(t_min) } else { ray.o });
+        if matches!(light, Light::Directional(_) | Light::Constant(_) | Light::Environment(_)) {
+            // Light from infinity through an unbounded homogeneous medium is
+            // extinguished before it arrives (as shadow rays find).
+            if let Some(h) = medium.and_then(|id| scene.medium(id).as_homogeneous()) {
+                if h.sigma_t().max_channel() > 0.0 {
+                    add(&mut out.stats.lost_power, beta);
+                    return;
+                }
+            }
+        }
+
+        // The hero channel of free-flight sampling cycles over photons.
+        let hero = (index % 3) as usize;
+        let mut r_u = Rgb::ONE;
+        let mut depth = 0u32;
+        let mut direct = true;
+        let mut crossings = 0u32;
+        let store_direct = self.settings.store_direct;
+        let max_depth = self.settings.max_depth;
+
+        loop {
+            let hit = scene.intersect(&ray, t_min, f32::INFINITY);
+            let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
+
+            // Free flight through the medium up to the surface.
+            if let Some(id) = medium {
+                let m = scene.medium(id);
+                let mut scattered: Option<Ray> = None;
+                let mut ended = false;
+                let mut cut = false;
+                let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
+                    let (sigma_a, sigma_s) = (c.point.sigma_a, c.point.sigma_s);
+                    let p_absorb = sigma_a[hero] / c.sigma_maj[hero];
+                    let p_scatter = sigma_s[hero] / c.sigma_maj[hero];
+                    let u = sampler.next_1d();
+                    if u < p_absorb {
+                        // Absorption: the photon ends.
+                        ended = true;
+                        return false;
+                    }
+                    if u < p_absorb + p_scatter {
+                        // Real scattering: store, then sample the phase function.
+                        let pdf = c.t_maj[hero] * sigma_s[hero];
+                        beta *= c.t_maj * sigma_s / pdf;
+                        r_u *= c.t_maj * sigma_s / pdf;
+                        let power = beta / r_u.average();
+                        if !power.is_finite() || power.is_black() {
+                            ended = true;
+                            return false;
+                        }
+                        out.stats.volume_events += 1;
+                        add(&mut out.stats.volume_event_power, power);
+                        if !direct || store_direct {
+                            out.volume.push(Photon::in_medium(c.p, -ray.d, power, id.0));
+                        }
+                        if depth >= max_depth {
+                            add(&mut out.stats.lost_power, power);
+                            cut = true;
+                            return false;
+                        }
+                        depth += 1;
+                        let Some(ps) = m.phase().sample(-ray.d, sampler.next_2d()) else {
+                            ended = true;
+                            return false;
+                        };
+                        beta *= ps.value / ps.pdf;
+                        direct = false;
+                        scattered = Some(Ray::new(c.p, ps.wi));
+                        return false;
+                    }
+                    // Null collision: continue with the null-scattering weights.
+                    let sigma_n = (c.sigma_maj - sigma_a - sigma_s).map(|x| x.max(0.0));
+                    let pdf = c.t_maj[hero] * sigma_n[hero];
+                    if !(pdf > 0.0) {
+                        ended = true;
+                        return false;
+                    }
+                    beta *= c.t_maj * sigma_n / pdf;
+                    r_u *= c.t_maj * sigma_n / pdf;
+                    !(beta.is_black() || r_u.is_black())
+                });
+                if ended || cut || beta.is_black() || r_u.is_black() || !beta.is_finite() {
+                    return;
+                }
+                if let Some(next) = scattered {
+                    ray = next;
+                    t_min = 0.0;
+                    continue;
+                }
+                // Passed through: the hero's majorant transmittance was the
+                // probability of reaching the surface.
+                let h = t_maj[hero];
+                if !(h > 0.0) {
+                    return;
+                }
+                beta *= t_maj / h;
+                r_u *= t_maj / h;
+            }
+
+            let power = beta / r_u.average();
+            // Escaped.
+            let Some(hit) = hit else {
+                add(&mut out.stats.escaped_power, power);
+                return;
+            };
+
+            // Index-matched boundary: cross it without counting a bounce.
+            let object = scene.object(&hit);
+            if object.bsdf.is_null() {
+                crossings += 1;
+                if crossings > MAX_BOUNDARY_CROSSINGS * 16 {
+                    add(&mut out.stats.lost_power, power);
+                    return;
+                }
+                medium = scene.medium_after_crossing(&hit, ray.d, medium);
+                ray = Ray::new(hit.surface.p, ray.d);
+                t_min = surface_epsilon(hit.surface.p);
+                continue;
+            }
+
+            // An area light's surface absorbs.
+            if object.emitter.is_some() {
+                add(&mut out.stats.light_absorbed_power, power);
+                return;
+            }
+
+            // Diffuse surface: store on arrival.
+            let wo = -ray.d;
+            if !object.bsdf.is_specular() {
+                add(&mut out.stats.surface_event_power, power);
+                if !direct || store_direct {
+                    let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
+                    out.surface.push(Photon::on_surface(hit.surface.p, wo, power, n));
+                }
+            }
+            if depth >= max_depth {
+                add(&mut out.stats.lost_power, power);
+                return;
+            }
+            depth += 1;
+
+            // Scatter by the BSDF (flux is not scaled by refraction).
+            let u_lobe = sampler.next_1d();
+            let u_bsdf = sampler.next_2d();
+            let u_rr = sampler.next_1d();
+            let Some(bs) = object.bsdf.sample_with_mode(hit.surface.n, wo, u_lobe, u_bsdf, TransportMode::Importance)
+            else {
+                return;
+            };
+            if !(bs.pdf > 0.0) {
+                return;
+            }
+            beta *= bs.weight(hit.surface.n);
+            direct = false;
+            if bs.is_transmission {
+                medium = scene.medium_after_crossing(&hit, bs.wi, medium);
+            }
+            ray = Ray::new(hit.surface.p, bs.wi);
+            t_min = surface_epsilon(hit.surface.p);
+
+            // Russian roulette keeps the photon's power: survive with the
+            // ratio of new to old power (the albedo for grey surfaces).
+            let before = power.max_channel();
+            let after = (beta / r_u.average()).max_channel();
+            if after < before {
+                let q = after / before;
+                if !(u_rr < q) {
+                    return;
+                }
+                beta /= q;
+            }
+        }
+    }
+}
