@@ -472,7 +472,8 @@ fn unknown_types_list_the_valid_ones() {
         r#"unknown phase function type "mie"; expected one of: isotropic, hg,"#,
     );
     let text = edit(r#""type": "single""#, r#""type": "bidirectional""#);
-    let err = assert_error(&text, "render.integrator.type", r#"unknown integrator type "bidirectional"; expected one of: "#);
+    let err =
+        assert_error(&text, "render.integrator.type", r#"unknown integrator type "bidirectional"; expected one of: "#);
     for name in niebla::scene::IntegratorDesc::TYPES {
         assert!(err.message.contains(name), "{err} does not list {name}");
     }

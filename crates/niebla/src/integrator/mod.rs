@@ -92,7 +92,8 @@ impl IntegratorSettings {
     }
 
     /// Names of all integrators that can be selected.
-    pub const NAMES: &'static [&'static str] = &["emission", "single", "volpath", "analytic", "photon", "ppm", "hegeman"];
+    pub const NAMES: &'static [&'static str] =
+        &["emission", "single", "volpath", "analytic", "photon", "ppm", "hegeman"];
 
     /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
     pub const DEFAULT_MAX_DEPTH: u32 = 1024;

@@ -248,7 +248,10 @@ fn validate_render(render: &RenderDesc) -> Check {
         IntegratorDesc::Analytic => MarchStepDesc::Auto,
         IntegratorDesc::Hegeman(h) => {
             if !(2..=512).contains(&h.resolution) {
-                return fail("render.integrator.resolution", format!("must be between 2 and 512, got {}", h.resolution));
+                return fail(
+                    "render.integrator.resolution",
+                    format!("must be between 2 and 512, got {}", h.resolution),
+                );
             }
             positive("render.integrator.step_cells", h.step_cells)?;
             MarchStepDesc::Auto
