@@ -73,6 +73,12 @@ fn report(name: &str, per_second: f64) {
 }
 
 fn main() {
+    // `cargo test --all-targets` runs bench binaries without `--bench`: print
+    // figures only when asked by `cargo bench`.
+    if !std::env::args().any(|a| a == "--bench") {
+        println!("lookup bench: run with `cargo bench -p niebla-volume --bench lookup`");
+        return;
+    }
     let budget = Duration::from_millis(1500);
     let mut rng = Rng(42);
     let n = 256;
