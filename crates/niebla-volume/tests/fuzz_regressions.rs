@@ -16,6 +16,10 @@ const MAX_GRID_BYTES: u64 = 256 << 20;
 
 fn inputs(kind: &str) -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions").join(kind);
+    if !dir.exists() {
+        // git keeps no empty folder: no regression input of this kind yet.
+        return Vec::new();
+    }
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
