@@ -1,12 +1,14 @@
-//! The walk along a camera ray shared by the emission and single-scattering
-//! integrators: medium segments between surfaces, index-matched boundaries
-//! crossed, opaque surfaces lit directly, escaping rays see the environment.
+//! The walk along a camera ray shared by the integrators that shade camera
+//! rays segment by segment (emission, single, analytic, hegeman, photon):
+//! medium segments between surfaces, index-matched boundaries crossed, area
+//! lights seen, specular surfaces followed, the first opaque surface shaded,
+//! escaping rays see the environment.
 
 use crate::color::Rgb;
-use crate::math::Ray;
+use crate::math::{Ray, Vec3};
 use crate::medium::{Medium, MediumId};
 use crate::sampling::PixelSampler;
-use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
+use crate::scene::{surface_epsilon, Hit, Scene, MAX_BOUNDARY_CROSSINGS};
 use crate::tracking::TransmittanceMethod;
 
 use super::direct_surface_radiance;
@@ -25,16 +27,44 @@ pub struct SegmentRadiance {
     pub transmittance: Rgb,
 }
 
-/// Walk `ray` from the camera through the scene. `segment(medium, id, ray,
-/// t_end, sampler)` integrates one medium segment `[0, t_end)` of `ray`
-/// (`t_end` infinite when the ray escapes).
-pub(crate) fn trace_camera_ray(
+/// What a camera-ray walk ([`walk_camera_ray`]) computes where an integrator
+/// differs: the radiance of a medium segment and of an opaque (non-specular,
+/// non-emitting) surface.
+pub(crate) trait CameraRayVisitor {
+    /// Integrate one medium segment `[0, t_end)` of `ray` (`t_end` infinite
+    /// when the ray escapes).
+    fn segment(
+        &mut self,
+        scene: &Scene,
+        m: &Medium,
+        id: MediumId,
+        ray: &Ray,
+        t_end: f32,
+        sampler: &mut PixelSampler,
+    ) -> SegmentRadiance;
+
+    /// Radiance leaving opaque surface `hit` toward `wo`, whose side is in `medium`.
+    fn opaque_surface(
+        &mut self,
+        scene: &Scene,
+        hit: &Hit,
+        wo: Vec3,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb;
+}
+
+/// Walk `ray` from the camera through the scene: medium segments (by
+/// `visitor.segment`), index-matched boundaries crossed, area lights seen,
+/// specular surfaces followed (up to [`MAX_SPECULAR_BOUNCES`]), the first
+/// opaque surface shaded by `visitor.opaque_surface`, escaping rays see the
+/// environment.
+pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
     scene: &Scene,
     mut ray: Ray,
     mut medium: Option<MediumId>,
-    method: TransmittanceMethod,
     sampler: &mut PixelSampler,
-    mut segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
+    visitor: &mut V,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
     let mut beta = Rgb::ONE;
@@ -46,7 +76,7 @@ pub(crate) fn trace_camera_ray(
 
         // Medium segment up to the next surface (or to infinity).
         if let Some(id) = medium {
-            let s = segment(scene.medium(id), id, &ray, t_end, sampler);
+            let s = visitor.segment(scene, scene.medium(id), id, &ray, t_end, sampler);
             l += beta * s.radiance;
             beta *= s.transmittance;
         }
@@ -96,19 +126,56 @@ pub(crate) fn trace_camera_ray(
             continue;
         }
 
-        // Opaque surface: direct lighting, then stop.
-        l += beta
-            * direct_surface_radiance(
-                scene,
-                hit.surface.p,
-                hit.surface.n,
-                -ray.d,
-                &object.bsdf,
-                medium,
-                method,
-                sampler,
-            );
+        // Opaque surface: shaded by the integrator, then stop.
+        l += beta * visitor.opaque_surface(scene, &hit, -ray.d, medium, sampler);
         break;
     }
     l
+}
+
+/// The walk of the emission and single-scattering style integrators:
+/// `segment(medium, id, ray, t_end, sampler)` integrates one medium segment
+/// and opaque surfaces are lit directly (one sample per light, shadow rays by
+/// `method`).
+pub(crate) fn trace_camera_ray(
+    scene: &Scene,
+    ray: Ray,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+    segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
+) -> Rgb {
+    struct DirectLighting<F> {
+        segment: F,
+        method: TransmittanceMethod,
+    }
+    impl<F: FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance> CameraRayVisitor
+        for DirectLighting<F>
+    {
+        #[inline]
+        fn segment(
+            &mut self,
+            _scene: &Scene,
+            m: &Medium,
+            id: MediumId,
+            ray: &Ray,
+            t_end: f32,
+            sampler: &mut PixelSampler,
+        ) -> SegmentRadiance {
+            (self.segment)(m, id, ray, t_end, sampler)
+        }
+        #[inline]
+        fn opaque_surface(
+            &mut self,
+            scene: &Scene,
+            hit: &Hit,
+            wo: Vec3,
+            medium: Option<MediumId>,
+            sampler: &mut PixelSampler,
+        ) -> Rgb {
+            let bsdf = &scene.object(hit).bsdf;
+            direct_surface_radiance(scene, hit.surface.p, hit.surface.n, wo, bsdf, medium, self.method, sampler)
+        }
+    }
+    walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method })
 }

@@ -15,8 +15,8 @@ mod volpath;
 
 pub use analytic::airlight::{airlight_integral, airlight_table, AirlightTable};
 pub use analytic::AnalyticIntegrator;
-pub(crate) use camera_ray::trace_camera_ray;
 pub use camera_ray::SegmentRadiance;
+pub(crate) use camera_ray::{trace_camera_ray, walk_camera_ray, CameraRayVisitor};
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
 pub use emission::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};

@@ -11,12 +11,14 @@ use crate::math::{Ray, Vec3, PI};
 use crate::medium::{Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
+use crate::scene::{Hit, Scene};
 use crate::tracking::{segment_transmittance, MarchStep, TransmittanceMethod};
 
-use super::super::camera_ray::MAX_SPECULAR_BOUNCES;
 use super::super::emission::{march_segment, marched_range};
-use super::super::{default_march_step, direct_surface_radiance, Integrator, SingleIntegrator};
+use super::super::{
+    default_march_step, direct_surface_radiance, walk_camera_ray, CameraRayVisitor, Integrator, SegmentRadiance,
+    SingleIntegrator,
+};
 
 /// Smallest cosine between a surface photon's normal and the query's.
 const SAME_SURFACE_COS: f32 = 0.7;
@@ -55,78 +57,52 @@ pub struct PhotonIntegrator<'a> {
 }
 
 impl Integrator for PhotonIntegrator<'_> {
-    fn radiance(&self, scene: &Scene, mut ray: Ray, mut medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
-        let mut heap = BinaryHeap::new();
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut t_min = 0.0;
-        let mut specular_bounces = 0u32;
-        for _ in 0..MAX_BOUNDARY_CROSSINGS {
-            let hit = scene.intersect(&ray, t_min, f32::INFINITY);
-            let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        let mut visitor = PhotonVisitor { integrator: self, heap: BinaryHeap::new() };
+        walk_camera_ray(scene, ray, medium, sampler, &mut visitor)
+    }
+}
 
-            // Medium segment: emission and single scattering by shadow rays,
-            // multiple scattering from the volume photon map.
-            if let Some(id) = medium {
-                let s = self.single.segment(scene, id, &ray, t_end, sampler);
-                let multiple = self.volume_segment(scene, id, &ray, t_end, &mut heap, sampler);
-                l += beta * (s.radiance + multiple);
-                beta *= s.transmittance;
-            }
-            if beta.is_black() {
-                break;
-            }
+/// The photon integrator's part of the shared camera-ray walk.
+struct PhotonVisitor<'a, 'b> {
+    integrator: &'a PhotonIntegrator<'b>,
+    /// Scratch of the k-nearest queries, reused along the ray.
+    heap: BinaryHeap<Neighbor>,
+}
 
-            // Escaped: the environment.
-            let Some(hit) = hit else {
-                l += beta * scene.escaped_radiance(ray.d);
-                break;
-            };
+impl CameraRayVisitor for PhotonVisitor<'_, '_> {
+    /// Emission and single scattering by shadow rays, multiple scattering
+    /// from the volume photon map.
+    fn segment(
+        &mut self,
+        scene: &Scene,
+        _m: &Medium,
+        id: MediumId,
+        ray: &Ray,
+        t_end: f32,
+        sampler: &mut PixelSampler,
+    ) -> SegmentRadiance {
+        let s = self.integrator.single.segment(scene, id, ray, t_end, sampler);
+        let multiple = self.integrator.volume_segment(scene, id, ray, t_end, &mut self.heap, sampler);
+        SegmentRadiance { radiance: s.radiance + multiple, transmittance: s.transmittance }
+    }
 
-            // Index-matched boundary: change medium and go on.
-            let object = scene.object(&hit);
-            if object.bsdf.is_null() {
-                medium = scene.medium_after_crossing(&hit, ray.d, medium);
-                ray = Ray::new(hit.surface.p, ray.d);
-                t_min = surface_epsilon(hit.surface.p);
-                continue;
-            }
-
-            // An area light: its emitted radiance.
-            if let Some((le, _)) = scene.emitted_radiance(&hit, -ray.d) {
-                l += beta * le;
-                break;
-            }
-
-            // Specular surface: follow the sampled reflection or refraction.
-            if object.bsdf.is_specular() {
-                specular_bounces += 1;
-                if specular_bounces > MAX_SPECULAR_BOUNCES {
-                    break;
-                }
-                let u_lobe = sampler.next_1d();
-                let Some(bs) = object.bsdf.sample(hit.surface.n, -ray.d, u_lobe, sampler.next_2d()) else {
-                    break;
-                };
-                beta *= bs.weight(hit.surface.n);
-                if bs.is_transmission {
-                    medium = scene.medium_after_crossing(&hit, bs.wi, medium);
-                }
-                ray = Ray::new(hit.surface.p, bs.wi);
-                t_min = surface_epsilon(hit.surface.p);
-                continue;
-            }
-
-            // Diffuse surface: direct light by shadow rays, the rest from the
-            // surface photon map; then stop.
-            let (p, wo) = (hit.surface.p, -ray.d);
-            let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
-            let method = self.single.transmittance;
-            l += beta * direct_surface_radiance(scene, p, n, wo, &object.bsdf, medium, method, sampler);
-            l += beta * self.surface_estimate(p, n, wo, &object.bsdf, &mut heap);
-            break;
-        }
-        l
+    /// Diffuse surface: direct light by shadow rays, the rest from the
+    /// surface photon map.
+    fn opaque_surface(
+        &mut self,
+        scene: &Scene,
+        hit: &Hit,
+        wo: Vec3,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let object = scene.object(hit);
+        let p = hit.surface.p;
+        let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
+        let method = self.integrator.single.transmittance;
+        direct_surface_radiance(scene, p, n, wo, &object.bsdf, medium, method, sampler)
+            + self.integrator.surface_estimate(p, n, wo, &object.bsdf, &mut self.heap)
     }
 }
 
