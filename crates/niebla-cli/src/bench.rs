@@ -100,7 +100,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
 
 /// Time at which the error curve crosses `target`, by log-log interpolation
 /// between the last point above and the first point below it.
-fn time_to_reach(points: &[(f64, f64)], target: f64) -> Option<f64> {
+pub(crate) fn time_to_reach(points: &[(f64, f64)], target: f64) -> Option<f64> {
     let i = points.iter().position(|&(_, e)| e < target)?;
     if i == 0 {
         return Some(points[0].0);

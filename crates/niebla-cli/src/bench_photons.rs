@@ -10,6 +10,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+
+use crate::bench::time_to_reach;
 use niebla::film::Image;
 use niebla::integrator::photon::{
     auto_radius, photon_stream, trace_photons, PhotonSettings, PhotonTree, PpmSettings, TraceSettings, VolumeQuery,
@@ -161,16 +163,4 @@ fn convergence(scene: &Scene, args: &PhotonBenchArgs) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// Time at which the error curve crosses `target`, by log-log interpolation
-/// between the last point above and the first point below it.
-fn time_to_reach(points: &[(f64, f64)], target: f64) -> Option<f64> {
-    let i = points.iter().position(|&(_, e)| e < target)?;
-    if i == 0 {
-        return Some(points[0].0);
-    }
-    let ((t0, e0), (t1, e1)) = (points[i - 1], points[i]);
-    let f = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
-    Some((t0.ln() + f * (t1.ln() - t0.ln())).exp())
 }
