@@ -8,7 +8,10 @@ use std::time::Instant;
 
 use clap::Args;
 use niebla::film::Image;
-use niebla::integrator::{HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator};
+use niebla::integrator::zhou::Compensation;
+use niebla::integrator::{
+    HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator, ZhouIntegrator, ZhouSettings,
+};
 use niebla::render::{render_with, RenderOptions};
 use niebla::scene::Scene;
 
@@ -66,6 +69,16 @@ fn hegeman_settings(file: IntegratorSettings) -> HegemanSettings {
     }
 }
 
+/// The zhou settings of the scene file, else the defaults; the fit cache is
+/// off so that the precomputation column includes the fit.
+fn zhou_settings(file: IntegratorSettings) -> ZhouSettings {
+    let settings = match file {
+        IntegratorSettings::Zhou(z) => z,
+        _ => ZhouSettings::default(),
+    };
+    ZhouSettings { cache: false, ..settings }
+}
+
 /// `niebla bench interactive`.
 pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
     if args.frames == 0 || args.spp == 0 || args.reference_spp == 0 || args.error_width == 0 {
@@ -113,6 +126,26 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
                 hegeman.precompute_seconds,
                 hegeman.memory_bytes() as f64 / (1024.0 * 1024.0),
                 error
+            );
+        }
+        let base = zhou_settings(built.settings.integrator);
+        let variants = [
+            ("zhou", base),
+            ("zhou (single only)", ZhouSettings { multiple_scattering: false, ..base }),
+            ("zhou (no compensation)", ZhouSettings { compensation: Compensation::Off, ..base }),
+            ("zhou (source only)", ZhouSettings { compensation: Compensation::SourceOnly, ..base }),
+        ];
+        for (name, settings) in variants {
+            let zhou = ZhouIntegrator::new(&scene, settings);
+            let error = frame(&small, &zhou, args.spp, 7, args.threads).relative_mse(&reference);
+            println!(
+                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}   (fit error {:.3})",
+                fps(&scene, &zhou, 256, args.frames, args.threads),
+                fps(&scene, &zhou, 512, args.frames, args.threads),
+                zhou.fit_seconds + zhou.lighting_seconds,
+                zhou.memory_bytes() as f64 / (1024.0 * 1024.0),
+                error,
+                zhou.fit_errors().iter().copied().fold(0.0, f64::max)
             );
         }
     }

@@ -11,7 +11,7 @@ use clap::{Args, ValueEnum};
 use niebla::film::{write_image, Image};
 use niebla::integrator::{
     AnalyticIntegrator, HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, SingleIntegrator,
-    SingleSampling,
+    SingleSampling, ZhouIntegrator, ZhouSettings,
 };
 use niebla::render::{render_with, RenderOptions};
 use niebla::scene::{load_scene, Scene};
@@ -22,6 +22,8 @@ use niebla::tracking::{MarchStep, TransmittanceMethod};
 pub enum PreviewIntegrator {
     /// Hegeman et al. 2005 (reconstructed): single + approximate multiple scattering.
     Hegeman,
+    /// Zhou et al. 2008 (reconstructed): compensated ray marching.
+    Zhou,
     /// Single scattering by ray marching (ray-marched shadow rays).
     Single,
     /// Closed-form single scattering (Sun et al. 2005), homogeneous media.
@@ -33,7 +35,7 @@ pub enum PreviewIntegrator {
 pub struct PreviewArgs {
     /// Scene file (JSON, version 1).
     pub scene: PathBuf,
-    /// The integrator (default: the scene's `hegeman` settings, or hegeman defaults).
+    /// The integrator (hegeman or zhou use the scene file's settings of that integrator, else their defaults).
     #[arg(long, value_enum, default_value = "hegeman")]
     pub integrator: PreviewIntegrator,
     /// Frame width in pixels (default: the scene's).
@@ -65,6 +67,7 @@ pub struct PreviewArgs {
 /// A prepared integrator (precomputation done), one per scene version.
 enum Prepared {
     Hegeman(Box<HegemanIntegrator>),
+    Zhou(Box<ZhouIntegrator>),
     Single(SingleIntegrator),
     Analytic(AnalyticIntegrator),
 }
@@ -79,6 +82,13 @@ impl Prepared {
                 };
                 Prepared::Hegeman(Box::new(HegemanIntegrator::new(scene, settings)))
             }
+            PreviewIntegrator::Zhou => {
+                let settings = match from_file {
+                    IntegratorSettings::Zhou(z) => z,
+                    _ => ZhouSettings::default(),
+                };
+                Prepared::Zhou(Box::new(ZhouIntegrator::new(scene, settings)))
+            }
             PreviewIntegrator::Single => Prepared::Single(interactive_single()),
             PreviewIntegrator::Analytic => Prepared::Analytic(AnalyticIntegrator::new()),
         }
@@ -90,6 +100,7 @@ impl Prepared {
         }
         match self {
             Prepared::Hegeman(i) => go(scene, i.as_ref(), options),
+            Prepared::Zhou(i) => go(scene, i.as_ref(), options),
             Prepared::Single(i) => go(scene, i, options),
             Prepared::Analytic(i) => go(scene, i, options),
         }

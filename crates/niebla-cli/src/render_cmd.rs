@@ -82,6 +82,8 @@ pub enum IntegratorName {
     Analytic,
     /// Single + approximate multiple scattering (Hegeman et al. 2005), interactive.
     Hegeman,
+    /// Compensated ray marching (Zhou et al. 2008): RBF fit, SH lighting, diffusion; interactive.
+    Zhou,
     /// Volumetric photon mapping (one photon map per render).
     Photon,
     /// Progressive photon mapping (converges to volpath).
@@ -178,6 +180,8 @@ pub fn override_integrator(
         (Some(IntegratorName::Hegeman), _) => {
             IntegratorSettings::Hegeman(niebla::integrator::HegemanSettings::default())
         }
+        (Some(IntegratorName::Zhou), s @ IntegratorSettings::Zhou(_)) => s,
+        (Some(IntegratorName::Zhou), _) => IntegratorSettings::Zhou(niebla::integrator::ZhouSettings::default()),
         (Some(IntegratorName::Photon), s @ IntegratorSettings::Photon(_)) => s,
         (Some(IntegratorName::Photon), _) => {
             IntegratorSettings::Photon(niebla::integrator::photon::PhotonSettings::photon())

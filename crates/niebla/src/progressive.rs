@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use crate::film::Image;
 use crate::integrator::IntegratorSettings;
-use crate::render::{render, RenderError, RenderOptions};
+use crate::render::{RenderError, RenderOptions};
 use crate::scene::Scene;
 
 /// When a progressive render stops.
@@ -170,6 +170,7 @@ pub fn resume_progressive(
     let mut k = 0u32;
     let mut seconds_per_spp = 0.0f64;
     let mut rendered = 0u64;
+    let prepared = crate::render::PreparedIntegrator::new(scene, settings);
     loop {
         let mut size = next_pass_size(acc.spp);
         match budget {
@@ -189,7 +190,7 @@ pub fn resume_progressive(
         }
         let options = RenderOptions { spp: size as u32, seed, first_sample: acc.spp, threads };
         let pass_start = Instant::now();
-        let image = render(scene, settings, &options, progress, cancel)?;
+        let image = prepared.render(scene, &options, progress, cancel)?;
         seconds_per_spp = pass_start.elapsed().as_secs_f64() / size as f64;
         acc.add(&image, size);
         rendered += size;

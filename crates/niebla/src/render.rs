@@ -54,23 +54,71 @@ pub fn render(
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
 ) -> Result<Image, RenderError> {
-    match *settings {
-        IntegratorSettings::Emission { step, transmittance } => {
-            render_with(scene, &EmissionIntegrator { step, transmittance }, options, progress, cancel)
+    PreparedIntegrator::new(scene, settings).render(scene, options, progress, cancel)
+}
+
+/// An integrator with its per-scene precomputation done (the interactive
+/// methods' volumes and fits), so that progressive passes reuse it.
+pub enum PreparedIntegrator {
+    /// Integrators without a per-scene precomputation (photon maps are per pass).
+    Plain(IntegratorSettings),
+    /// `hegeman` with its light volumes.
+    Hegeman(Box<crate::integrator::HegemanIntegrator>),
+    /// `zhou` with its RBF fit and source radiance.
+    Zhou(Box<crate::integrator::ZhouIntegrator>),
+}
+
+impl PreparedIntegrator {
+    /// Run the precomputation of `settings` for `scene`.
+    pub fn new(scene: &Scene, settings: &IntegratorSettings) -> PreparedIntegrator {
+        match *settings {
+            IntegratorSettings::Hegeman(h) => {
+                PreparedIntegrator::Hegeman(Box::new(crate::integrator::HegemanIntegrator::new(scene, h)))
+            }
+            IntegratorSettings::Zhou(z) => {
+                PreparedIntegrator::Zhou(Box::new(crate::integrator::ZhouIntegrator::new(scene, z)))
+            }
+            other => PreparedIntegrator::Plain(other),
         }
-        IntegratorSettings::Single { step, sampling, transmittance } => {
-            render_with(scene, &SingleIntegrator { step, sampling, transmittance }, options, progress, cancel)
-        }
-        IntegratorSettings::VolPath { max_depth } => {
-            render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
-        }
-        IntegratorSettings::Photon(p) => crate::integrator::photon::render_photon(scene, &p, options, progress, cancel),
-        IntegratorSettings::Ppm(p) => crate::integrator::photon::render_ppm(scene, &p, options, progress, cancel),
-        IntegratorSettings::Analytic => {
-            render_with(scene, &crate::integrator::AnalyticIntegrator::new(), options, progress, cancel)
-        }
-        IntegratorSettings::Hegeman(h) => {
-            render_with(scene, &crate::integrator::HegemanIntegrator::new(scene, h), options, progress, cancel)
+    }
+
+    /// Render `options.spp` samples per pixel of `scene` (the scene the
+    /// integrator was prepared for).
+    pub fn render(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        progress: ProgressFn,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Image, RenderError> {
+        let settings = match self {
+            PreparedIntegrator::Hegeman(i) => return render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Zhou(i) => return render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Plain(settings) => *settings,
+        };
+        match settings {
+            IntegratorSettings::Emission { step, transmittance } => {
+                render_with(scene, &EmissionIntegrator { step, transmittance }, options, progress, cancel)
+            }
+            IntegratorSettings::Single { step, sampling, transmittance } => {
+                render_with(scene, &SingleIntegrator { step, sampling, transmittance }, options, progress, cancel)
+            }
+            IntegratorSettings::VolPath { max_depth } => {
+                render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
+            }
+            IntegratorSettings::Photon(p) => {
+                crate::integrator::photon::render_photon(scene, &p, options, progress, cancel)
+            }
+            IntegratorSettings::Ppm(p) => crate::integrator::photon::render_ppm(scene, &p, options, progress, cancel),
+            IntegratorSettings::Analytic => {
+                render_with(scene, &crate::integrator::AnalyticIntegrator::new(), options, progress, cancel)
+            }
+            IntegratorSettings::Hegeman(h) => {
+                render_with(scene, &crate::integrator::HegemanIntegrator::new(scene, h), options, progress, cancel)
+            }
+            IntegratorSettings::Zhou(z) => {
+                render_with(scene, &crate::integrator::ZhouIntegrator::new(scene, z), options, progress, cancel)
+            }
         }
     }
 }

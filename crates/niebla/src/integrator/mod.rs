@@ -12,6 +12,7 @@ pub mod hegeman;
 pub mod photon;
 mod single;
 mod volpath;
+pub mod zhou;
 
 pub use analytic::airlight::{airlight_integral, airlight_table, AirlightTable};
 pub use analytic::AnalyticIntegrator;
@@ -22,6 +23,7 @@ pub use emission::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use single::{SingleIntegrator, SingleSampling};
 pub use volpath::VolPathIntegrator;
+pub use zhou::{ZhouIntegrator, ZhouSettings};
 
 use crate::color::Rgb;
 use crate::math::Ray;
@@ -69,6 +71,10 @@ pub enum IntegratorSettings {
     /// of Hegeman et al. 2005 (reconstructed), with per-light precomputed
     /// volumes; interactive.
     Hegeman(hegeman::HegemanSettings),
+    /// Compensated ray marching (Zhou et al. 2008, reconstructed): RBF
+    /// density fit, SH environment lighting, diffusion, residual compensated
+    /// along view rays; interactive.
+    Zhou(zhou::ZhouSettings),
     /// Volumetric photon mapping (Jensen and Christensen 1998): one photon
     /// map per render, single scattering by shadow rays.
     Photon(photon::PhotonSettings),
@@ -86,6 +92,7 @@ impl IntegratorSettings {
             IntegratorSettings::VolPath { .. } => "volpath",
             IntegratorSettings::Analytic => "analytic",
             IntegratorSettings::Hegeman(_) => "hegeman",
+            IntegratorSettings::Zhou(_) => "zhou",
             IntegratorSettings::Photon(_) => "photon",
             IntegratorSettings::Ppm(_) => "ppm",
         }
@@ -93,7 +100,7 @@ impl IntegratorSettings {
 
     /// Names of all integrators that can be selected.
     pub const NAMES: &'static [&'static str] =
-        &["emission", "single", "volpath", "analytic", "photon", "ppm", "hegeman"];
+        &["emission", "single", "volpath", "analytic", "photon", "ppm", "hegeman", "zhou"];
 
     /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
     pub const DEFAULT_MAX_DEPTH: u32 = 1024;

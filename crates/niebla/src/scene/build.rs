@@ -344,6 +344,21 @@ pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
             resolution: h.resolution,
             step_cells: h.step_cells,
         }),
+        IntegratorDesc::Zhou(z) => IntegratorSettings::Zhou(crate::integrator::ZhouSettings {
+            rbf_count: z.rbf_count,
+            fit_iterations: z.fit_iterations,
+            resolution: z.resolution,
+            sh_order: z.sh_order,
+            multiple_scattering: z.multiple_scattering,
+            compensation: match z.compensation {
+                crate::scene::desc::CompensationDesc::Full => crate::integrator::zhou::Compensation::Full,
+                crate::scene::desc::CompensationDesc::Source => crate::integrator::zhou::Compensation::SourceOnly,
+                crate::scene::desc::CompensationDesc::Off => crate::integrator::zhou::Compensation::Off,
+            },
+            exact_transmittance: z.transmittance == crate::scene::desc::ZhouTransmittanceDesc::Exact,
+            step_cells: z.step_cells,
+            cache: z.cache,
+        }),
         IntegratorDesc::Photon(p) => crate::integrator::photon::settings_from_desc(p, false),
         IntegratorDesc::Ppm(p) => crate::integrator::photon::settings_from_desc(p, true),
     }

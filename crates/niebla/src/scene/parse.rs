@@ -324,6 +324,7 @@ fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
             Ok(IntegratorDesc::Analytic)
         }
         "hegeman" => Ok(IntegratorDesc::Hegeman(rest(object)?)),
+        "zhou" => Ok(IntegratorDesc::Zhou(rest(object)?)),
         "photon" => Ok(IntegratorDesc::Photon(photon_desc(rest(object)?)?)),
         "ppm" => Ok(IntegratorDesc::Ppm(photon_desc(rest(object)?)?)),
         _ => Err(unknown_type("integrator", &tag, IntegratorDesc::TYPES)),

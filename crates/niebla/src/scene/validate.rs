@@ -256,6 +256,24 @@ fn validate_render(render: &RenderDesc) -> Check {
             positive("render.integrator.step_cells", h.step_cells)?;
             MarchStepDesc::Auto
         }
+        IntegratorDesc::Zhou(z) => {
+            let ranges = [
+                ("rbf_count", z.rbf_count, 1, 20_000),
+                ("fit_iterations", z.fit_iterations, 0, 10_000),
+                ("resolution", z.resolution, 4, 256),
+                ("sh_order", z.sh_order, 1, 6),
+            ];
+            for (field, value, lo, hi) in ranges {
+                if !(lo..=hi).contains(&value) {
+                    return fail(
+                        format!("render.integrator.{field}"),
+                        format!("must be between {lo} and {hi}, got {value}"),
+                    );
+                }
+            }
+            positive("render.integrator.step_cells", z.step_cells)?;
+            MarchStepDesc::Auto
+        }
         IntegratorDesc::Photon(p) => validate_photon(p, false)?,
         IntegratorDesc::Ppm(p) => validate_photon(p, true)?,
     };

@@ -384,6 +384,9 @@ pub enum IntegratorDesc {
     /// multiple-scattering approximation of Hegeman et al. 2005
     /// (reconstructed), interactive.
     Hegeman(HegemanDesc),
+    /// `"type": "zhou"`: compensated ray marching (Zhou et al. 2008,
+    /// reconstructed): RBF density fit, SH environment lighting, diffusion.
+    Zhou(ZhouDesc),
     /// `"type": "photon"`: volumetric photon mapping (Jensen and Christensen
     /// 1998) with one photon map per render.
     Photon(PhotonDesc),
@@ -434,6 +437,78 @@ pub struct HegemanDesc {
     pub step_cells: f32,
 }
 
+/// Settings of the `zhou` integrator (`"type": "zhou"`). Every field is optional.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZhouDesc {
+    /// RBFs per grid medium (`rbf_count`, 1 to 20000; default 600).
+    #[serde(default = "default_rbf_count")]
+    pub rbf_count: u32,
+    /// L-BFGS iterations of the fit (`fit_iterations`, 0 to 10000; default 60).
+    #[serde(default = "default_fit_iterations")]
+    pub fit_iterations: u32,
+    /// Lattice nodes along a grid medium's longest side (`resolution`, 4 to
+    /// 256; default 48).
+    #[serde(default = "default_hegeman_resolution")]
+    pub resolution: u32,
+    /// SH order of lighting and source radiance (`sh_order`, 1 to 6; default 4).
+    #[serde(default = "default_sh_order")]
+    pub sh_order: u32,
+    /// Include the diffusion term (`multiple_scattering`, default true).
+    #[serde(default = "default_true")]
+    pub multiple_scattering: bool,
+    /// How the residual enters the view-ray march (`compensation`: `"full"`,
+    /// `"source"` or `"off"`; default `"full"`).
+    #[serde(default)]
+    pub compensation: CompensationDesc,
+    /// Transmittance toward the environment at the RBF centres
+    /// (`transmittance`: `"sh"` (rotated zonal table, default) or `"exact"`).
+    #[serde(default)]
+    pub transmittance: ZhouTransmittanceDesc,
+    /// View-ray march step in lattice cells (`step_cells`, > 0; default 1).
+    #[serde(default = "default_one")]
+    pub step_cells: f32,
+    /// Read and write RBF fits in the cache folder (`cache`, default true).
+    #[serde(default = "default_true")]
+    pub cache: bool,
+}
+
+/// `compensation` of the `zhou` integrator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CompensationDesc {
+    /// The full density for source and attenuation.
+    #[default]
+    Full,
+    /// The full density for the source, the RBF density for attenuation.
+    Source,
+    /// The RBF density everywhere.
+    Off,
+}
+
+/// `transmittance` of the `zhou` integrator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ZhouTransmittanceDesc {
+    /// Rotated zonal optical-depth table.
+    #[default]
+    Sh,
+    /// Closed form per quadrature direction.
+    Exact,
+}
+
+fn default_rbf_count() -> u32 {
+    600
+}
+
+fn default_fit_iterations() -> u32 {
+    60
+}
+
+fn default_sh_order() -> u32 {
+    4
+}
+
 fn default_true() -> bool {
     true
 }
@@ -449,7 +524,7 @@ fn default_one() -> f32 {
 impl IntegratorDesc {
     /// The `type` names, in the order of the variants.
     pub const TYPES: &'static [&'static str] =
-        &["single", "emission", "volpath", "analytic", "hegeman", "photon", "ppm"];
+        &["single", "emission", "volpath", "analytic", "hegeman", "zhou", "photon", "ppm"];
 }
 
 /// Settings of the volumetric path tracer (`"type": "volpath"`).
