@@ -8,6 +8,13 @@
 //! over the pixel's samples); Russian
 //! roulette on throughput.
 //!
+//! Channels whose medium coefficients differ by more than
+//! [`MAX_SHARED_RATIO`] are traced by separate paths, one per group of
+//! similar channels, each with its hero and spectral MIS over its group only
+//! (`channel_groups`): a path sampled for a thick channel serves a much
+//! thinner one poorly (its nearly constant estimate turns bimodal), which
+//! spectral MIS cannot repair. Grey media keep a single path.
+//!
 //! Path state (pbrt-v4's notation): `beta` is the throughput divided by the
 //! hero channel's path pdf; `r_u` and `r_l` are the unidirectional and
 //! light-sampling path pdfs of every channel divided by that same hero pdf.
@@ -72,12 +79,32 @@ impl Scatter<'_> {
 }
 
 impl Integrator for VolPathIntegrator {
-    fn radiance(&self, scene: &Scene, mut ray: Ray, mut medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
-        // The hero channel cycles over the pixel's samples (stratified), so the
-        // discrete choice adds no variance over each group of three samples.
-        let hero = sampler.stratified_choice(3) as usize;
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        let (groups, count) = channel_groups(scene);
         let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
+        for &group in &groups[..count] {
+            l += self.trace(scene, ray, medium, group, sampler);
+        }
+        l
+    }
+}
+
+impl VolPathIntegrator {
+    /// One path for the channels of `group` (the other channels of the
+    /// result are 0), with the hero channel and spectral MIS over that group.
+    fn trace(
+        &self,
+        scene: &Scene,
+        mut ray: Ray,
+        mut medium: Option<MediumId>,
+        group: Channels,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        // The hero channel cycles over the pixel's samples (stratified), so the
+        // discrete choice adds no variance over each group of samples.
+        let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
+        let mut l = Rgb::ZERO;
+        let mut beta = group.indicator();
         let mut r_u = Rgb::ONE;
         let mut r_l = Rgb::ONE;
         let mut depth = 0u32;
@@ -99,7 +126,7 @@ impl Integrator for VolPathIntegrator {
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
-                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / r_u.average(), sampler);
+                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / group.average(r_u), group, sampler);
                 }
                 let mut scattered: Option<Ray> = None;
                 let mut terminated = false;
@@ -110,8 +137,8 @@ impl Integrator for VolPathIntegrator {
                         let pdf = c.sigma_maj[hero] * c.t_maj[hero];
                         let beta_e = beta * c.t_maj / pdf;
                         let r_e = r_u * c.sigma_maj * c.t_maj / pdf;
-                        if r_e.average() > 0.0 {
-                            l += beta_e * c.point.l_ve / r_e.average();
+                        if group.average(r_e) > 0.0 {
+                            l += beta_e * c.point.l_ve / group.average(r_e);
                         }
                     }
                     let sigma_a = c.point.sigma_a;
@@ -134,7 +161,7 @@ impl Integrator for VolPathIntegrator {
                         let pdf = c.t_maj[hero] * sigma_s[hero];
                         beta *= c.t_maj * sigma_s / pdf;
                         r_u *= c.t_maj * sigma_s / pdf;
-                        if beta.is_black() || r_u.is_black() {
+                        if beta.is_black() || !(group.average(r_u) > 0.0) {
                             terminated = true;
                             return false;
                         }
@@ -146,6 +173,7 @@ impl Integrator for VolPathIntegrator {
                             wo,
                             Scatter::Phase(phase),
                             Some(id),
+                            group,
                             hero,
                             beta,
                             r_u,
@@ -173,9 +201,9 @@ impl Integrator for VolPathIntegrator {
                     beta *= c.t_maj * sigma_n / pdf;
                     r_u *= c.t_maj * sigma_n / pdf;
                     r_l *= c.t_maj * c.sigma_maj / pdf;
-                    !(beta.is_black() || r_u.is_black())
+                    !beta.is_black() && group.average(r_u) > 0.0
                 });
-                if terminated || beta.is_black() || r_u.is_black() || !beta.is_finite() {
+                if terminated || beta.is_black() || !(group.average(r_u) > 0.0) || !beta.is_finite() {
                     return l;
                 }
                 if let Some(next) = scattered {
@@ -209,11 +237,11 @@ impl Integrator for VolPathIntegrator {
                         continue;
                     }
                     if depth == 0 || specular_bounce {
-                        l += beta * le / r_u.average();
+                        l += beta * le / group.average(r_u);
                     } else {
                         let pmf = 1.0 / scene.lights.len() as f32;
                         let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
-                        l += beta * le / (r_u + r_l_env).average();
+                        l += beta * le / group.average(r_u + r_l_env);
                     }
                 }
                 return l;
@@ -237,12 +265,12 @@ impl Integrator for VolPathIntegrator {
             if let Some((le, index)) = scene.emitted_radiance(&hit, -ray.d) {
                 if !le.is_black() {
                     if depth == 0 || specular_bounce {
-                        l += beta * le / r_u.average();
+                        l += beta * le / group.average(r_u);
                     } else {
                         let light = &scene.lights[index as usize];
                         let pmf = 1.0 / scene.lights.len() as f32;
                         let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
-                        l += beta * le / (r_u + r_l_hit).average();
+                        l += beta * le / group.average(r_u + r_l_hit);
                     }
                 }
                 return l;
@@ -257,7 +285,19 @@ impl Integrator for VolPathIntegrator {
             let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
             if !object.bsdf.is_specular() {
-                l += sample_ld(scene, p, wo, Scatter::Surface(&object.bsdf, n), medium, hero, beta, r_u, None, sampler);
+                l += sample_ld(
+                    scene,
+                    p,
+                    wo,
+                    Scatter::Surface(&object.bsdf, n),
+                    medium,
+                    group,
+                    hero,
+                    beta,
+                    r_u,
+                    None,
+                    sampler,
+                );
             }
             // BSDF sampling with the outward geometric normal (dielectrics need it).
             let u_lobe = sampler.next_1d();
@@ -280,7 +320,7 @@ impl Integrator for VolPathIntegrator {
             t_min = surface_epsilon(p);
 
             // Russian roulette on the MIS-normalized throughput.
-            let rr_beta = beta * eta_scale / r_u.average();
+            let rr_beta = beta * eta_scale / group.average(r_u);
             let u = sampler.next_1d();
             if rr_beta.max_channel() < 1.0 && depth > 1 {
                 let q = (1.0 - rr_beta.max_channel()).max(0.0);
@@ -303,6 +343,7 @@ fn sample_ld(
     wo: Vec3,
     scatter: Scatter,
     medium: Option<MediumId>,
+    group: Channels,
     hero: usize,
     beta: Rgb,
     r_p: Rgb,
@@ -336,9 +377,17 @@ fn sample_ld(
         Some(n) => p + n * surface_epsilon(p),
         None => p,
     };
-    let Some((t_ray, mut r_l, mut r_u)) =
-        shadow_transmittance(scene, origin, medium, ls.wi, ls.distance, scene.light_object(light_index), hero, sampler)
-    else {
+    let Some((t_ray, mut r_l, mut r_u)) = shadow_transmittance(
+        scene,
+        origin,
+        medium,
+        ls.wi,
+        ls.distance,
+        scene.light_object(light_index),
+        group,
+        hero,
+        sampler,
+    ) else {
         return Rgb::ZERO;
     };
     let light_pdf = pmf * ls.pdf;
@@ -347,11 +396,11 @@ fn sample_ld(
     if ls.is_delta {
         // A point or spot light seen from a free-flight vertex: the same path can
         // come from equiangular sampling on the segment (`equiangular_ld`).
-        let weight =
-            segment.map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, n_lights).unwrap_or(1.0));
-        beta * f_hat * t_ray * ls.li * weight / r_l.average()
+        let weight = segment
+            .map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, n_lights, group).unwrap_or(1.0));
+        beta * f_hat * t_ray * ls.li * weight / group.average(r_l)
     } else {
-        beta * f_hat * t_ray * ls.li / (r_l + r_u).average()
+        beta * f_hat * t_ray * ls.li / group.average(r_l + r_u)
     }
 }
 
@@ -372,7 +421,7 @@ struct Segment<'a> {
 /// spectral MIS of the free-flight strategy amounts to once the hero is
 /// averaged out, so the two strategies' weights sum to one per channel
 /// (a hero-channel density biased chromatic media by about 0.5%).
-fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32) -> f32 {
+fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32, group: Channels) -> f32 {
     let sigma_s = m.at(ray.at(t)).sigma_s;
     let sigma_t = m.sigma_t_per_density();
     let depth_per_unit_sigma = match m.as_homogeneous() {
@@ -380,7 +429,7 @@ fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32) -> f32
         // exp(-D(t)) with D the integral of the majorant density.
         None => -majorant_profile(m, ray, 0.0, t_end, 1.0).transmittance(t).ln(),
     };
-    (0..3).map(|c| sigma_s[c] * (-sigma_t[c] * depth_per_unit_sigma).exp()).sum::<f32>() / 3.0
+    group.average(per_channel(|c| sigma_s[c] * (-sigma_t[c] * depth_per_unit_sigma).exp()))
 }
 
 /// Number of point and spot lights (the lights equiangular sampling chooses from).
@@ -392,12 +441,18 @@ fn point_light_count(scene: &Scene) -> usize {
 /// (light chosen with probability 1/N) against equiangular sampling of the
 /// same vertex (point light chosen with probability 1/P); `None` when the
 /// light is not point-like or equiangular sampling cannot produce the vertex.
-fn light_weight_against_equiangular(scene: &Scene, seg: Segment, light: &Light, n_lights: usize) -> Option<f32> {
+fn light_weight_against_equiangular(
+    scene: &Scene,
+    seg: Segment,
+    light: &Light,
+    n_lights: usize,
+    group: Channels,
+) -> Option<f32> {
     let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
         return None;
     };
     let p_eq = e.pdf(seg.t) / point_light_count(scene) as f32;
-    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t) / n_lights as f32;
+    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group) / n_lights as f32;
     (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
 }
 
@@ -415,6 +470,7 @@ fn equiangular_ld(
     m: &Medium,
     id: MediumId,
     throughput: Rgb,
+    group: Channels,
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let count = point_light_count(scene);
@@ -452,7 +508,7 @@ fn equiangular_ld(
     }
     let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
     let p_eq = pdf_eq / count as f32;
-    let p_d = free_flight_scatter_density(m, ray, t_end, t) / scene.lights.len() as f32;
+    let p_d = free_flight_scatter_density(m, ray, t_end, t, group) / scene.lights.len() as f32;
     let weight = p_eq / (p_eq + p_d);
     throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
 }
@@ -468,6 +524,7 @@ fn shadow_transmittance(
     wi: Vec3,
     distance: f32,
     ignore: Option<u32>,
+    group: Channels,
     hero: usize,
     sampler: &mut PixelSampler,
 ) -> Option<(Rgb, Rgb, Rgb)> {
@@ -506,7 +563,7 @@ fn shadow_transmittance(
                     r_l *= c.t_maj * c.sigma_maj / pdf;
                     r_u *= c.t_maj * sigma_n / pdf;
                     // Russian roulette on the MIS-normalized transmittance (pbrt-v4).
-                    let tr = t_ray / (r_l + r_u).average();
+                    let tr = t_ray * group.indicator() / group.average(r_l + r_u);
                     if tr.max_channel() < 0.05 {
                         if sampler.next_1d() < 0.75 {
                             t_ray = Rgb::ZERO;
@@ -545,4 +602,139 @@ fn shadow_transmittance(
         }
     }
     None
+}
+
+/// A set of RGB channels traced together by one path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Channels(u8);
+
+impl Channels {
+    const ALL: Channels = Channels(0b111);
+
+    #[inline]
+    fn contains(self, c: usize) -> bool {
+        self.0 & (1 << c) != 0
+    }
+
+    #[inline]
+    fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    /// The `k`-th channel of the set.
+    #[inline]
+    fn nth(self, k: usize) -> usize {
+        (0..3).filter(|&c| self.contains(c)).nth(k).unwrap_or(0)
+    }
+
+    /// 1 in the set's channels, 0 elsewhere.
+    #[inline]
+    fn indicator(self) -> Rgb {
+        per_channel(|c| if self.contains(c) { 1.0 } else { 0.0 })
+    }
+
+    /// Mean over the set's channels.
+    #[inline]
+    fn average(self, x: Rgb) -> f32 {
+        if self == Channels::ALL {
+            return x.average();
+        }
+        (0..3).filter(|&c| self.contains(c)).map(|c| x[c]).sum::<f32>() / self.len() as f32
+    }
+}
+
+/// Largest ratio between two channels' extinction (or scattering)
+/// coefficients in some medium for them to share a path: beyond it, one path
+/// sampled for either channel serves the other poorly.
+const MAX_SHARED_RATIO: f32 = 3.0;
+
+/// The channel groups traced by separate paths: channels whose coefficients
+/// are within [`MAX_SHARED_RATIO`] of each other in every medium share one
+/// (grey media: one group of all three).
+fn channel_groups(scene: &Scene) -> ([Channels; 3], usize) {
+    groups_for(scene.media.iter().map(|m| match m {
+        Medium::Homogeneous(h) => (h.sigma_s, h.sigma_t()),
+        Medium::Grid(g) => (g.sigma_s, g.sigma_t()),
+    }))
+}
+
+/// [`channel_groups`] for media given by `(sigma_s, sigma_t)` (per unit density).
+fn groups_for(media: impl Iterator<Item = (Rgb, Rgb)>) -> ([Channels; 3], usize) {
+    let mut compatible = [[true; 3]; 3];
+    for (sigma_s, sigma_t) in media {
+        for coefficients in [sigma_s, sigma_t] {
+            let scale = coefficients.max_channel();
+            for i in 0..3 {
+                for j in 0..3 {
+                    let (lo, hi) = (coefficients[i].min(coefficients[j]), coefficients[i].max(coefficients[j]));
+                    if hi > MAX_SHARED_RATIO * lo + 1e-3 * scale {
+                        compatible[i][j] = false;
+                    }
+                }
+            }
+        }
+    }
+    let mut groups = [Channels(0); 3];
+    let mut count = 0;
+    let mut assigned = 0u8;
+    for i in 0..3 {
+        if assigned & (1 << i) != 0 {
+            continue;
+        }
+        // Channels compatible with a member join the group (transitively).
+        let mut members = 1u8 << i;
+        for _ in 0..2 {
+            for (k, row) in compatible.iter().enumerate() {
+                if members & (1 << k) != 0 {
+                    for (j, &ok) in row.iter().enumerate() {
+                        if ok {
+                            members |= 1 << j;
+                        }
+                    }
+                }
+            }
+        }
+        assigned |= members;
+        groups[count] = Channels(members);
+        count += 1;
+    }
+    (groups, count)
+}
+
+/// The colour whose channel `c` is `f(c)`.
+#[inline]
+fn per_channel(f: impl Fn(usize) -> f32) -> Rgb {
+    Rgb::new(f(0), f(1), f(2))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn groups(media: &[(Rgb, Rgb)]) -> Vec<u8> {
+        let (g, n) = groups_for(media.iter().copied());
+        g[..n].iter().map(|c| c.0).collect()
+    }
+
+    #[test]
+    fn channel_groups_split_only_dissimilar_channels() {
+        // No media, grey media, a spread within the ratio: one path.
+        assert_eq!(groups(&[]), vec![0b111]);
+        assert_eq!(groups(&[(Rgb::splat(0.9), Rgb::splat(1.0))]), vec![0b111]);
+        assert_eq!(groups(&[(Rgb::new(1.8, 2.7, 4.5), Rgb::new(2.0, 3.0, 5.0))]), vec![0b111]);
+        // Tenfold spread: red alone, green with blue.
+        assert_eq!(groups(&[(Rgb::new(0.4, 2.0, 4.0), Rgb::new(0.44, 2.2, 4.4))]), vec![0b001, 0b110]);
+        // Similar extinction but very different albedo also splits.
+        assert_eq!(groups(&[(Rgb::new(1.0, 1.0, 0.1), Rgb::splat(1.0))]), vec![0b011, 0b100]);
+        // Compatibility is transitive within a group, over all media.
+        assert_eq!(
+            groups(&[(Rgb::splat(1.0), Rgb::splat(1.0)), (Rgb::new(1.0, 2.5, 6.0), Rgb::new(1.0, 2.5, 6.0))]),
+            vec![0b111]
+        );
+        assert_eq!(groups(&[(Rgb::new(1.0, 20.0, 400.0), Rgb::new(1.0, 20.0, 400.0))]), vec![0b001, 0b010, 0b100]);
+        let all: Vec<usize> = (0..3).map(|k| Channels::ALL.nth(k)).collect();
+        assert_eq!(all, vec![0, 1, 2]);
+        assert_eq!(Channels(0b110).nth(0), 1);
+        assert_eq!(Channels(0b110).average(Rgb::new(9.0, 1.0, 3.0)), 2.0);
+    }
 }
