@@ -235,7 +235,7 @@ fn bad_settings_name_the_field() {
         }
     };
     let e = with(r#"{"type": "zhou", "resolution": 2}"#);
-    assert!(e.contains("render.integrator.resolution") && e.contains("between 4 and 256"), "{e}");
+    assert!(e.contains("render.integrator.resolution") && e.contains("between 4 and 128"), "{e}");
     let e = with(r#"{"type": "zhou", "sh_order": 9}"#);
     assert!(e.contains("render.integrator.sh_order"), "{e}");
     let e = with(r#"{"type": "zhou", "compensation": "maybe"}"#);

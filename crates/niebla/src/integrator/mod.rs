@@ -115,6 +115,44 @@ pub fn default_march_step(max_sigma_t: f32, scene_diagonal: f32) -> MarchStep {
     MarchStep::Length(mfp_step.min(diag / 64.0).max(diag / 4096.0))
 }
 
+/// Jittered steps along the part of a camera-ray segment `[0, t_end]` inside a
+/// grid medium's bounds: `n` equal steps (about `step` long, 1 to 4096) with
+/// one offset `u` in [0, 1) shared by all, sample `k` at `a + (k + u) dt`.
+/// Used by the interactive integrators' view-ray marches.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JitteredSteps {
+    /// Start of the clipped segment (ray parameter).
+    pub a: f32,
+    /// Step length (ray parameter).
+    pub dt: f32,
+    /// Number of steps.
+    pub n: usize,
+    /// Offset of the samples within their steps.
+    pub u: f32,
+}
+
+impl JitteredSteps {
+    /// The steps of `ray` within `g`'s bounds up to `t_end`; `None` when the
+    /// segment misses the medium.
+    pub fn new(
+        g: &crate::medium::GridMedium,
+        ray: &Ray,
+        t_end: f32,
+        step: f32,
+        sampler: &mut PixelSampler,
+    ) -> Option<JitteredSteps> {
+        let (a, b) = g.clip(ray, 0.0, t_end)?;
+        let n = ((b - a) / step).ceil().clamp(1.0, 4096.0) as usize;
+        Some(JitteredSteps { a, dt: (b - a) / n as f32, n, u: sampler.next_1d() })
+    }
+
+    /// Ray parameter of sample `k`.
+    #[inline]
+    pub fn t(&self, k: usize) -> f32 {
+        self.a + (k as f32 + self.u) * self.dt
+    }
+}
+
 /// Distance beyond which an unbounded homogeneous segment contributes less
 /// than 1e-6 of its total (transmittance of the least attenuated channel that
 /// matters drops below 1e-6); `None` when some channel does not attenuate.

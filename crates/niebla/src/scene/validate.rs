@@ -260,7 +260,7 @@ fn validate_render(render: &RenderDesc) -> Check {
             let ranges = [
                 ("rbf_count", z.rbf_count, 1, 20_000),
                 ("fit_iterations", z.fit_iterations, 0, 10_000),
-                ("resolution", z.resolution, 4, 256),
+                ("resolution", z.resolution, 4, 128),
                 ("sh_order", z.sh_order, 1, 6),
             ];
             for (field, value, lo, hi) in ranges {

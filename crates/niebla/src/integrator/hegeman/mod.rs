@@ -50,7 +50,7 @@ use crate::sampling::PixelSampler;
 use crate::scene::Scene;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 
-use super::{trace_camera_ray, AnalyticIntegrator, Integrator, SegmentRadiance};
+use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use blur::BlurredPhaseTable;
 use light_volume::{LightSource, LightVolume};
 
@@ -235,18 +235,16 @@ impl HegemanIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some((a, b)) = g.clip(ray, 0.0, t_end) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
-        let n = ((b - a) / model.step).ceil().clamp(1.0, 4096.0) as usize;
-        let dt = (b - a) / n as f32;
-        let u = sampler.next_1d();
+        let dt = steps.dt;
         let (sigma_t, sigma_s) = (g.sigma_t(), g.sigma_s);
         let wo = -ray.d;
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..n {
-            let x = ray.at(a + (k as f32 + u) * dt);
+        for k in 0..steps.n {
+            let x = ray.at(steps.t(k));
             let d = g.density_at(x);
             if d <= 0.0 {
                 continue;

@@ -61,7 +61,7 @@ use crate::sampling::PixelSampler;
 use crate::scene::Scene;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 
-use super::{trace_camera_ray, AnalyticIntegrator, Integrator, SegmentRadiance};
+use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use fit::{FitReport, FitSettings};
 use lattice::Lattice;
 use lighting::{CentreDepth, ModelLight, ZonalDepthTable};
@@ -231,20 +231,18 @@ impl ZhouIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some((a, b)) = g.clip(ray, 0.0, t_end) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
-        let n = ((b - a) / model.step).ceil().clamp(1.0, 4096.0) as usize;
-        let dt = (b - a) / n as f32;
-        let u = sampler.next_1d();
+        let dt = steps.dt;
         let sigma_t = g.sigma_t();
         let wo = -ray.d;
         let lattice = &model.lattice;
         let nl = self.lights.len();
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..n {
-            let x = ray.at(a + (k as f32 + u) * dt);
+        for k in 0..steps.n {
+            let x = ray.at(steps.t(k));
             let (d_att, d_src) = match self.settings.compensation {
                 Compensation::Full => {
                     let d = g.density_at(x);
