@@ -29,16 +29,21 @@ pub struct PhotonBenchArgs {
     /// Image width used for the renders (height keeps the aspect ratio).
     #[arg(long, default_value_t = 64)]
     pub width: u32,
-    /// Samples per pixel of the `volpath` reference.
-    #[arg(long, default_value_t = 4096)]
-    pub reference_spp: u32,
+    /// Seconds spent on the `volpath` reference of each scene (two
+    /// independent halves; the larger, the less its own noise matters).
+    #[arg(long, default_value_t = 120.0)]
+    pub reference_seconds: f64,
     /// Largest sample (pass) count tried per integrator.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = 1 << 20)]
     pub max_spp: u32,
-    /// Photons per `ppm` pass.
+    /// Longest single render of a sweep, seconds.
+    #[arg(long, default_value_t = 60.0)]
+    pub sweep_seconds: f64,
+    /// Photons per `ppm` pass (when the scene file does not name `ppm`).
     #[arg(long, default_value_t = 20_000)]
     pub ppm_photons: u32,
-    /// Photons of the `photon` integrator's map.
+    /// Photons of the `photon` integrator's map (when the scene file does
+    /// not name `photon`).
     #[arg(long, default_value_t = 200_000)]
     pub photons: u32,
     /// Target relative MSE.
@@ -54,9 +59,10 @@ fn timed(
     scene: &Scene,
     settings: &IntegratorSettings,
     spp: u32,
+    seed: u64,
     threads: Option<usize>,
 ) -> Result<(Image, f64), String> {
-    let options = RenderOptions { spp, seed: 7, first_sample: 0, threads };
+    let options = RenderOptions { spp, seed, first_sample: 0, threads };
     let start = Instant::now();
     let image = render(scene, settings, &options, &|_, _| {}, None).map_err(|e| e.to_string())?;
     Ok((image, start.elapsed().as_secs_f64()))
@@ -71,13 +77,14 @@ pub fn run(args: &PhotonBenchArgs) -> Result<(), String> {
     };
     for path in &scenes {
         let (built, _) = crate::render_cmd::load(Some(path))?;
+        let scene_integrator = built.settings.integrator;
         let mut scene = built.scene;
         let aspect = scene.camera.height as f64 / scene.camera.width as f64;
         scene.camera.width = args.width.clamp(1, 16384);
         scene.camera.height = ((scene.camera.width as f64 * aspect).round() as u32).max(1);
         println!("== {} ({}x{} pixels)", path.display(), scene.camera.width, scene.camera.height);
         tracing_and_queries(&scene, args.photons);
-        convergence(&scene, args)?;
+        convergence(&scene, &scene_integrator, args)?;
     }
     Ok(())
 }
@@ -126,41 +133,99 @@ fn tracing_and_queries(scene: &Scene, photons: u32) {
     );
 }
 
-/// Time of `photon`, `ppm` (point and beam queries) and `volpath` to the target error.
-fn convergence(scene: &Scene, args: &PhotonBenchArgs) -> Result<(), String> {
+/// The `volpath` reference: two independent halves (seeds 101 and 102) of
+/// about `seconds` in all, sized by a 16-spp probe, and the reference's own
+/// relative MSE estimated from the halves (their relative MSE is twice each
+/// half's, four times the mean's).
+fn reference(scene: &Scene, args: &PhotonBenchArgs) -> Result<(Image, f64), String> {
     let volpath = IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH };
-    let (reference, seconds) = timed(scene, &volpath, args.reference_spp, args.threads)?;
-    println!("reference: volpath {} spp in {seconds:.1} s", args.reference_spp);
-    let ppm = |query| {
-        IntegratorSettings::Ppm(PpmSettings {
+    let (_, probe_s) = timed(scene, &volpath, 16, 100, args.threads)?;
+    let half = (args.reference_seconds / 2.0 / probe_s.max(1e-6) * 16.0).clamp(16.0, 1e8);
+    let half = 1u32 << (half.log2().floor() as u32).min(30);
+    let start = Instant::now();
+    let (a, _) = timed(scene, &volpath, half, 101, args.threads)?;
+    let (b, _) = timed(scene, &volpath, half, 102, args.threads)?;
+    let noise = a.relative_mse(&b) / 4.0;
+    let pixels = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x + *y) * 0.5).collect();
+    let mean = Image { width: a.width, height: a.height, pixels };
+    println!(
+        "reference: volpath 2 x {half} spp in {:.1} s; its own relative MSE {noise:.2e} (from the two halves)",
+        start.elapsed().as_secs_f64()
+    );
+    Ok((mean, noise))
+}
+
+/// `ppm` or `photon` settings: the scene file's own when it names that
+/// integrator (its radius, photon count, query), else the defaults with
+/// `--ppm-photons` / `--photons`; `query` overrides the volume query of `ppm`.
+fn photon_settings(
+    scene_integrator: &IntegratorSettings,
+    args: &PhotonBenchArgs,
+    query: Option<VolumeQuery>,
+) -> IntegratorSettings {
+    match (scene_integrator, query) {
+        (IntegratorSettings::Ppm(ppm), Some(query)) => {
+            IntegratorSettings::Ppm(PpmSettings { photon: PhotonSettings { query, ..ppm.photon }, ..*ppm })
+        }
+        (IntegratorSettings::Photon(photon), None) => IntegratorSettings::Photon(*photon),
+        (_, Some(query)) => IntegratorSettings::Ppm(PpmSettings {
             photon: PhotonSettings { photons: args.ppm_photons, query, ..PhotonSettings::ppm() },
             ..PpmSettings::default()
-        })
-    };
-    let photon = IntegratorSettings::Photon(PhotonSettings { photons: args.photons, ..PhotonSettings::photon() });
-    println!("{:<12} {:>6} {:>10} {:>12}", "integrator", "spp", "time s", "rel MSE");
+        }),
+        (_, None) => IntegratorSettings::Photon(PhotonSettings { photons: args.photons, ..PhotonSettings::photon() }),
+    }
+}
+
+/// Time of `photon`, `ppm` (point and beam queries) and `volpath` to the
+/// target error. Each sweep renders at 1, 2, 4, ... spp (passes), each a
+/// separate timed render with seed 7, until the error is below the target or
+/// the next render would exceed `--sweep-seconds`. Errors are against the
+/// `volpath` reference with the reference's own error subtracted (the two
+/// are independent, so their relative MSEs add); a sweep that stops short
+/// is extrapolated as error ~ 1 / time and marked `~`.
+fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> Result<(), String> {
+    let (reference, noise) = reference(scene, args)?;
+    let volpath = IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH };
+    println!("{:<12} {:>7} {:>10} {:>12} {:>12}", "integrator", "spp", "time s", "rel MSE", "- ref noise");
+    let mut summary = Vec::new();
     for (name, settings) in [
         ("volpath", volpath),
-        ("photon", photon),
-        ("ppm", ppm(VolumeQuery::March)),
-        ("ppm beam", ppm(VolumeQuery::Beam)),
+        ("photon", photon_settings(scene_integrator, args, None)),
+        ("ppm", photon_settings(scene_integrator, args, Some(VolumeQuery::March))),
+        ("ppm beam", photon_settings(scene_integrator, args, Some(VolumeQuery::Beam))),
     ] {
         let mut points: Vec<(f64, f64)> = Vec::new();
-        let mut spp = 1;
-        while spp <= args.max_spp {
-            let (image, seconds) = timed(scene, &settings, spp, args.threads)?;
-            let error = image.relative_mse(&reference);
-            println!("{name:<12} {spp:>6} {seconds:>10.3} {error:>12.3e}");
+        let mut spp = 1u32;
+        loop {
+            let (image, seconds) = timed(scene, &settings, spp, 7, args.threads)?;
+            let measured = image.relative_mse(&reference);
+            let error = (measured - noise).max(measured * 1e-3);
+            println!("{name:<12} {spp:>7} {seconds:>10.3} {measured:>12.3e} {error:>12.3e}");
             points.push((seconds, error));
-            if error < args.target {
+            let next_too_long = seconds * 2.0 > args.sweep_seconds;
+            if error < args.target || next_too_long || spp >= args.max_spp {
                 break;
             }
             spp *= 2;
         }
-        match time_to_reach(&points, args.target) {
-            Some(t) => println!("{name:<12} reaches relative MSE {:.0e} in {t:.2} s", args.target),
-            None => println!("{name:<12} does not reach relative MSE {:.0e} within {} spp", args.target, args.max_spp),
-        }
+        let line = match time_to_reach(&points, args.target) {
+            Some(t) => format!("{name:<12} reaches relative MSE {:.0e} in {t:.2} s", args.target),
+            None => {
+                // Extrapolate the last point as error ~ 1 / time (variance-dominated).
+                let &(t, e) = points.last().unwrap();
+                format!(
+                    "{name:<12} reaches relative MSE {:.0e} in ~{:.2} s (extrapolated from {e:.2e} at {t:.2} s)",
+                    args.target,
+                    t * e / args.target
+                )
+            }
+        };
+        println!("{line}");
+        summary.push(line);
+    }
+    println!("-- summary ({} x {} pixels):", scene.camera.width, scene.camera.height);
+    for line in summary {
+        println!("   {line}");
     }
     Ok(())
 }
