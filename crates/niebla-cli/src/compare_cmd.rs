@@ -25,8 +25,9 @@ use base64::Engine as _;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use niebla::color::{rgb_to_srgb8, Rgb};
-use niebla::film::{write_atomically, write_exr, Image};
+use niebla::film::{render_memory, write_atomically, write_exr, Image};
 use niebla::integrator::IntegratorSettings;
+use niebla::limits::default_memory_limit;
 use niebla::progressive::{render_progressive, Budget, PassInfo};
 use niebla::scene::{integrator_settings, parse_scene_str, DEFAULT_SCENE};
 use plotters::prelude::*;
@@ -154,6 +155,15 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
         .map(|spec| Ok((spec.to_string(), parse_integrator(spec, &scene_value, &scene_settings)?)))
         .collect::<Result<Vec<_>, String>>()?;
     let scene = &built.scene;
+    let left = default_memory_limit().saturating_sub(render_memory(scene.camera.width, scene.camera.height));
+    for (_, settings) in &candidates {
+        crate::render_cmd::check_precompute_memory(
+            &crate::render_cmd::scene_label(args.scene.as_deref()),
+            settings,
+            scene,
+            left,
+        )?;
+    }
 
     // The reference.
     let reference = match &args.reference {

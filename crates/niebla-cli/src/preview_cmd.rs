@@ -13,6 +13,7 @@ use niebla::integrator::{
     AnalyticIntegrator, HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, SingleIntegrator,
     SingleSampling, ZhouIntegrator, ZhouSettings,
 };
+use niebla::limits::default_memory_limit;
 use niebla::render::{render_with, RenderOptions};
 use niebla::scene::{load_scene, Scene};
 use niebla::tracking::{MarchStep, TransmittanceMethod};
@@ -47,6 +48,11 @@ pub struct PreviewArgs {
     /// Samples per pixel per frame.
     #[arg(long, default_value_t = 1)]
     pub spp: u32,
+    /// Most memory the precomputation may take, e.g. 8G, 512M (binary
+    /// units); a lattice needing more is refused before it is allocated.
+    /// Default: half of the machine's memory.
+    #[arg(long, value_parser = niebla::limits::parse_memory_size)]
+    pub max_memory: Option<u64>,
     /// Stop after this many frames (default: run until interrupted).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -73,24 +79,30 @@ enum Prepared {
 }
 
 impl Prepared {
+    /// The settings `kind` runs with: the scene file's when it names the
+    /// same integrator, else the defaults.
+    fn settings(kind: PreviewIntegrator, from_file: IntegratorSettings) -> IntegratorSettings {
+        match (kind, from_file) {
+            (PreviewIntegrator::Hegeman, s @ IntegratorSettings::Hegeman(_)) => s,
+            (PreviewIntegrator::Hegeman, _) => IntegratorSettings::Hegeman(HegemanSettings::default()),
+            (PreviewIntegrator::Zhou, s @ IntegratorSettings::Zhou(_)) => s,
+            (PreviewIntegrator::Zhou, _) => IntegratorSettings::Zhou(ZhouSettings::default()),
+            (PreviewIntegrator::Single, _) => {
+                let SingleIntegrator { step, sampling, transmittance } = interactive_single();
+                IntegratorSettings::Single { step, sampling, transmittance }
+            }
+            (PreviewIntegrator::Analytic, _) => IntegratorSettings::Analytic,
+        }
+    }
+
     fn new(kind: PreviewIntegrator, scene: &Scene, from_file: IntegratorSettings) -> Prepared {
-        match kind {
-            PreviewIntegrator::Hegeman => {
-                let settings = match from_file {
-                    IntegratorSettings::Hegeman(h) => h,
-                    _ => HegemanSettings::default(),
-                };
+        match Self::settings(kind, from_file) {
+            IntegratorSettings::Hegeman(settings) => {
                 Prepared::Hegeman(Box::new(HegemanIntegrator::new(scene, settings)))
             }
-            PreviewIntegrator::Zhou => {
-                let settings = match from_file {
-                    IntegratorSettings::Zhou(z) => z,
-                    _ => ZhouSettings::default(),
-                };
-                Prepared::Zhou(Box::new(ZhouIntegrator::new(scene, settings)))
-            }
-            PreviewIntegrator::Single => Prepared::Single(interactive_single()),
-            PreviewIntegrator::Analytic => Prepared::Analytic(AnalyticIntegrator::new()),
+            IntegratorSettings::Zhou(settings) => Prepared::Zhou(Box::new(ZhouIntegrator::new(scene, settings))),
+            IntegratorSettings::Analytic => Prepared::Analytic(AnalyticIntegrator::new()),
+            _ => Prepared::Single(interactive_single()),
         }
     }
 
@@ -140,7 +152,14 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
         // Reload and precompute again when the file changed.
         let stamp = modified(&args.scene).ok_or_else(|| format!("{}: scene file not found", args.scene.display()))?;
         if loaded.as_ref().is_none_or(|(t, ..)| *t != stamp) {
-            match load_scene(&args.scene) {
+            let label = args.scene.display().to_string();
+            let checked = load_scene(&args.scene).map_err(|e| e.to_string()).and_then(|built| {
+                let settings = Prepared::settings(args.integrator, built.settings.integrator);
+                let limit = args.max_memory.unwrap_or_else(default_memory_limit);
+                crate::render_cmd::check_precompute_memory(&label, &settings, &built.scene, limit)?;
+                Ok(built)
+            });
+            match checked {
                 Ok(built) => {
                     let mut scene = built.scene;
                     let aspect = scene.camera.height as f64 / scene.camera.width as f64;
@@ -166,7 +185,7 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
                         entry.0 = stamp;
                     }
                 }
-                Err(e) => return Err(e.to_string()),
+                Err(e) => return Err(e),
             }
         }
         let (_, scene, prepared, exposure) = loaded.as_ref().expect("a scene is loaded");

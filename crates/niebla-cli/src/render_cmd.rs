@@ -155,6 +155,33 @@ pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene
     Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
 }
 
+/// Refuse `settings` when its precomputation (photon maps, lattices) would
+/// take more than `left` bytes: the error names the scene (`source`), the
+/// field to lower and the estimated size.
+pub fn check_precompute_memory(
+    source: &str,
+    settings: &IntegratorSettings,
+    scene: &niebla::scene::Scene,
+    left: u64,
+) -> Result<(), String> {
+    match niebla::integrator::precompute_memory(settings, scene) {
+        Some(m) if m.bytes > left => Err(format!(
+            "{source}: render.integrator.{field}: {what} would need about {}, over the {} left of the memory limit \
+             (lower render.integrator.{field} or raise --max-memory)",
+            format_bytes(m.bytes),
+            format_bytes(left),
+            field = m.field,
+            what = m.what,
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The name of a scene in messages: its path, or `<default scene>`.
+pub fn scene_label(scene: Option<&Path>) -> String {
+    scene.map_or_else(|| "<default scene>".to_string(), |p| p.display().to_string())
+}
+
 /// Apply command-line overrides to the scene's integrator settings.
 pub fn override_integrator(
     settings: IntegratorSettings,
@@ -218,6 +245,8 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     let max_memory = args.max_memory.unwrap_or_else(default_memory_limit);
     let LoadedScene { built, stem, hash } = load_limited(args.scene.as_deref(), max_memory)?;
     let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
+    let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
+    check_precompute_memory(&scene_label(args.scene.as_deref()), &integrator, &built.scene, left)?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
         return Err("--spp: must be at least 1".into());

@@ -136,3 +136,41 @@ fn memory_limit_refuses_large_images_and_grids_before_rendering() {
     assert!(err.contains("expected a size such as 8G"), "{err}");
     assert!(!dir.join("x.exr").exists() || dir.join("x.exr").metadata().unwrap().len() > 0);
 }
+
+#[test]
+fn memory_limit_refuses_large_photon_maps_and_lattices_before_precomputing() {
+    let dir = temp_dir("cli_precompute_memory");
+    // A photon count whose map cannot fit: refused at once, nothing written.
+    let photons = SCENE.replace(r#""type": "volpath""#, r#""type": "photon", "photons": 4000000000"#);
+    std::fs::write(dir.join("photons.json"), photons).unwrap();
+    let err = run_err(&dir, &["render", "photons.json", "-o", "x.exr", "--max-memory", "1G"]);
+    assert!(err.contains("photons.json: render.integrator.photons: the photon map: 4000000000 photons"), "{err}");
+    assert!(err.contains("raise --max-memory"), "{err}");
+    assert!(!dir.join("x.exr").exists());
+    // The same photon count per ppm pass.
+    let ppm = SCENE.replace(r#""type": "volpath""#, r#""type": "ppm", "photons": 4000000000"#);
+    std::fs::write(dir.join("ppm.json"), ppm).unwrap();
+    let err = run_err(&dir, &["render", "ppm.json", "-o", "x.exr", "--max-memory", "1G"]);
+    assert!(err.contains("render.integrator.photons: each pass's photon map"), "{err}");
+    // A Hegeman lattice of 512^3 nodes per light (2 lights): 3 GiB.
+    let cloud = SCENE
+        .replace(
+            r#""fog": {"sigma_a": 0.05, "sigma_s": 1.5, "phase": {"type": "hg", "g": 0.4}}"#,
+            r#""fog": {"type": "grid", "sigma_t": 1, "albedo": 0.9,
+                       "density": {"type": "procedural", "shape": "cloud", "resolution": 16}}"#,
+        )
+        .replace(r#""type": "volpath""#, r#""type": "hegeman", "resolution": 512"#);
+    std::fs::write(dir.join("cloud.json"), cloud).unwrap();
+    let err = run_err(&dir, &["render", "cloud.json", "-o", "x.exr", "--max-memory", "1G"]);
+    assert!(err.contains("cloud.json: render.integrator.resolution: 2 light volume(s) of up to 512^3 nodes"), "{err}");
+    assert!(err.contains("would need about 3 GiB"), "{err}");
+    let err =
+        run_err(&dir, &["preview", "cloud.json", "--integrator", "hegeman", "--frames", "1", "--max-memory", "1G"]);
+    assert!(err.contains("render.integrator.resolution"), "{err}");
+    // Within the limit the render runs.
+    let small =
+        std::fs::read_to_string(dir.join("cloud.json")).unwrap().replace(r#""resolution": 512"#, r#""resolution": 16"#);
+    std::fs::write(dir.join("small.json"), small).unwrap();
+    run_ok(&dir, &["render", "small.json", "-o", "x.exr", "--max-memory", "1G", "--spp", "1", "--quiet"]);
+    assert!(dir.join("x.exr").exists());
+}

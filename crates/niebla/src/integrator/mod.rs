@@ -10,6 +10,7 @@ mod emission;
 mod equiangular;
 pub mod hegeman;
 pub mod photon;
+mod precompute_memory;
 mod single;
 mod volpath;
 pub mod zhou;
@@ -21,6 +22,7 @@ pub(crate) use camera_ray::{trace_camera_ray, walk_camera_ray, CameraRayVisitor}
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
 pub use emission::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
+pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use single::{SingleIntegrator, SingleSampling};
 pub use volpath::VolPathIntegrator;
 pub use zhou::{ZhouIntegrator, ZhouSettings};

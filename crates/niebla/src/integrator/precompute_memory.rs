@@ -1,0 +1,112 @@
+//! Memory an integrator's precomputation will take on a scene, estimated
+//! before it runs, so that a scene asking for an absurd photon count or
+//! lattice resolution is refused with the field to lower instead of running
+//! out of memory.
+
+use super::photon::{photon_stream, trace_photons, Photon, TraceSettings};
+use super::IntegratorSettings;
+use crate::medium::Medium;
+use crate::scene::Scene;
+
+/// Photons traced to measure how many get stored per emitted photon.
+const PILOT_PHOTONS: u32 = 256;
+
+/// Bytes per lattice node of the `zhou` model per SH coefficient: RGB f32
+/// source coefficients, with room for the lighting pass's temporaries (the
+/// measured peak was about 0.5 KiB per node at SH order 4, 16 coefficients).
+const ZHOU_BYTES_PER_NODE_AND_COEFFICIENT: u64 = 3 * 4 * 3;
+
+/// Bytes per lattice node of the `zhou` model besides its SH coefficients.
+const ZHOU_BYTES_PER_NODE: u64 = 64;
+
+/// An integrator's precomputed data on a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrecomputeMemory {
+    /// Estimated peak bytes (an upper estimate).
+    pub bytes: u64,
+    /// The scene-file field (under `render.integrator`) that sets the size.
+    pub field: &'static str,
+    /// What takes the memory, in words.
+    pub what: String,
+}
+
+/// Upper estimate of the memory the precomputation of `settings` takes on
+/// `scene`: photon maps (`photon`: the whole map; `ppm`: one pass's map),
+/// per-light lattices (`hegeman`) or the SH lattice (`zhou`). `None` for
+/// integrators without precomputation. Photon counts are measured by tracing
+/// a few hundred photons (stored photons per emitted one) and scaled.
+///
+/// ```
+/// use niebla::integrator::{precompute_memory, HegemanSettings, IntegratorSettings};
+/// use niebla::scene::{build_scene, parse_scene_str};
+/// let text = r#"{"version": 1,
+///     "camera": {"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 8, "height": 8},
+///     "media": {"cloud": {"type": "grid", "sigma_t": 1, "albedo": 0.9,
+///         "density": {"type": "procedural", "shape": "cloud", "resolution": 16}}},
+///     "lights": [{"type": "point", "position": [0, 2, 0], "intensity": 1}]}"#;
+/// let scene = build_scene(&parse_scene_str(text, "c.json").unwrap(), "c.json", ".".as_ref()).unwrap().scene;
+/// let settings = IntegratorSettings::Hegeman(HegemanSettings { resolution: 512, ..Default::default() });
+/// let m = precompute_memory(&settings, &scene).unwrap();
+/// assert_eq!(m.field, "resolution");
+/// assert!(m.bytes >= 512u64.pow(3) * 12);
+/// ```
+pub fn precompute_memory(settings: &IntegratorSettings, scene: &Scene) -> Option<PrecomputeMemory> {
+    let grid_media = scene.media.iter().filter(|m| matches!(m, Medium::Grid(_))).count() as u64;
+    match settings {
+        IntegratorSettings::Hegeman(h) => {
+            // One (D0, D1, D2) f32 lattice per light and grid medium, the
+            // longest side `resolution` nodes.
+            let nodes = (h.resolution as u64).pow(3);
+            let lights = scene.lights.len().max(1) as u64;
+            Some(PrecomputeMemory {
+                bytes: grid_media * lights * nodes * 12,
+                field: "resolution",
+                what: format!(
+                    "{lights} light volume(s) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
+                    r = h.resolution
+                ),
+            })
+        }
+        IntegratorSettings::Zhou(z) => {
+            let nodes = (z.resolution as u64).pow(3);
+            let coefficients = (z.sh_order as u64).pow(2);
+            let per_node = coefficients * ZHOU_BYTES_PER_NODE_AND_COEFFICIENT + ZHOU_BYTES_PER_NODE;
+            Some(PrecomputeMemory {
+                bytes: grid_media * nodes * per_node,
+                field: "resolution",
+                what: format!(
+                    "an SH lattice (order {}) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
+                    z.sh_order,
+                    r = z.resolution
+                ),
+            })
+        }
+        IntegratorSettings::Photon(p) => Some(photon_map_memory(scene, p.photons, p.max_depth, "the photon map")),
+        IntegratorSettings::Ppm(p) => {
+            Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
+        }
+        _ => None,
+    }
+}
+
+/// Stored photons (volume and surface maps) for `photons` emitted, scaled
+/// from a pilot run; twice the photon size for the per-thread chunks
+/// concatenated and the kd-tree's build.
+fn photon_map_memory(scene: &Scene, photons: u32, max_depth: u32, what: &str) -> PrecomputeMemory {
+    let pilot = PILOT_PHOTONS.min(photons.max(1));
+    let traced = trace_photons(
+        scene,
+        &TraceSettings { photons: pilot as u64, max_depth, store_direct: false },
+        photon_stream(0x5eed, 0),
+    );
+    let stored_per_photon = (traced.volume.len() + traced.surface.len()) as f64 / pilot as f64;
+    let stored = (stored_per_photon * photons as f64).ceil();
+    let bytes = stored * (2 * std::mem::size_of::<Photon>()) as f64;
+    PrecomputeMemory {
+        bytes: bytes.min(u64::MAX as f64) as u64,
+        field: "photons",
+        what: format!(
+            "{what}: {photons} photons, about {stored_per_photon:.1} stored per photon (measured on {pilot})"
+        ),
+    }
+}
