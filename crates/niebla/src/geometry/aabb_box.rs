@@ -15,7 +15,12 @@ impl AxisAlignedBox {
     /// (slab test); `t_near > t_far` when it misses.
     #[inline]
     pub fn slab_range(&self, ray: &Ray) -> (f32, f32) {
-        let inv = ray.d.recip();
+        self.slab_range_inv(ray, ray.d.recip())
+    }
+
+    /// [`AxisAlignedBox::slab_range`] with the direction's reciprocal given.
+    #[inline]
+    pub fn slab_range_inv(&self, ray: &Ray, inv: Vec3) -> (f32, f32) {
         let t_lo = (self.min - ray.o) * inv;
         let t_hi = (self.max - ray.o) * inv;
         // NaN (0 * inf) from a ray in a face plane: treat the axis as unbounded.
@@ -30,19 +35,32 @@ impl AxisAlignedBox {
 
     /// Nearest intersection in `(t_min, t_max)`; the normal is the outward face normal.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
-        let (t_near, t_far) = self.slab_range(ray);
+        let t = self.hit_t(ray, ray.d.recip(), t_min, t_max)?;
+        Some(self.surface_at(ray, t))
+    }
+
+    /// Parameter of the nearest intersection in `(t_min, t_max)`, given the
+    /// reciprocal `inv` of the ray's direction.
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        let (t_near, t_far) = self.slab_range_inv(ray, inv);
         if t_near > t_far {
             return None;
         }
-        let t = if t_near > t_min && t_near < t_max {
-            t_near
+        if t_near > t_min && t_near < t_max {
+            Some(t_near)
         } else if t_far > t_min && t_far < t_max {
-            t_far
+            Some(t_far)
         } else {
-            return None;
-        };
+            None
+        }
+    }
+
+    /// The hit record at parameter `t` of an intersection found by [`AxisAlignedBox::hit_t`].
+    #[inline]
+    pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
         let p = ray.at(t);
-        Some(SurfaceHit { t, p, n: self.face_normal(p) })
+        SurfaceHit { t, p, n: self.face_normal(p) }
     }
 
     /// Outward normal of the face nearest to `p`.

@@ -49,6 +49,29 @@ impl Shape {
         }
     }
 
+    /// Parameter of the nearest intersection with `t` in `(t_min, t_max)`,
+    /// without the hit record (see [`Shape::surface_at`]); `inv` is the
+    /// reciprocal of the ray's direction.
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        match self {
+            Shape::Sphere(s) => s.hit_t(ray, t_min, t_max),
+            Shape::Box(b) => b.hit_t(ray, inv, t_min, t_max),
+            Shape::Rectangle(r) => r.hit_t(ray, t_min, t_max),
+        }
+    }
+
+    /// The hit record of an intersection at `t` found by [`Shape::hit_t`]
+    /// (the same record [`Shape::intersect`] returns).
+    #[inline]
+    pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
+        match self {
+            Shape::Sphere(s) => s.surface_at(ray, t),
+            Shape::Box(b) => b.surface_at(ray, t),
+            Shape::Rectangle(r) => r.surface_at(ray, t),
+        }
+    }
+
     /// True for shapes that enclose a volume (and so can hold a medium).
     pub fn is_closed(&self) -> bool {
         !matches!(self, Shape::Rectangle(_))

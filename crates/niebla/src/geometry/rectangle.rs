@@ -19,6 +19,13 @@ impl Rectangle {
 
     /// Nearest intersection in `(t_min, t_max)`; the normal is local +z in world space.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.surface_at(ray, t))
+    }
+
+    /// Parameter of the intersection if it lies in `(t_min, t_max)`.
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         // An affine map preserves the ray parameter: o + t d maps to o' + t d'.
         let o = self.transform.to_local.transform_point3(ray.o);
         let d = self.transform.to_local.transform_vector3(ray.d);
@@ -33,7 +40,13 @@ impl Rectangle {
         if q.x.abs() > 1.0 || q.y.abs() > 1.0 {
             return None;
         }
-        Some(SurfaceHit { t, p: ray.at(t), n: self.normal })
+        Some(t)
+    }
+
+    /// The hit record at parameter `t` of an intersection found by [`Rectangle::hit_t`].
+    #[inline]
+    pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
+        SurfaceHit { t, p: ray.at(t), n: self.normal }
     }
 
     /// World-space bounding box.

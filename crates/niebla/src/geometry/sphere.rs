@@ -13,6 +13,13 @@ pub struct Sphere {
 impl Sphere {
     /// Nearest intersection in `(t_min, t_max)`; the normal points outward.
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
+        let t = self.hit_t(ray, t_min, t_max)?;
+        Some(self.surface_at(ray, t))
+    }
+
+    /// Parameter of the nearest intersection in `(t_min, t_max)`.
+    #[inline]
+    pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
         // Numerically robust quadratic (pbrt-v4 section 6.8.1 idea: compute the
         // discriminant from the closest-approach vector).
         let oc = ray.o - self.center;
@@ -28,16 +35,21 @@ impl Sphere {
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
-        let t = if t0 > t_min && t0 < t_max {
-            t0
+        if t0 > t_min && t0 < t_max {
+            Some(t0)
         } else if t1 > t_min && t1 < t_max {
-            t1
+            Some(t1)
         } else {
-            return None;
-        };
+            None
+        }
+    }
+
+    /// The hit record at parameter `t` of an intersection found by [`Sphere::hit_t`].
+    #[inline]
+    pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
         let p = ray.at(t);
         let n = (p - self.center) / self.radius;
-        Some(SurfaceHit { t, p, n: n.normalize() })
+        SurfaceHit { t, p, n: n.normalize() }
     }
 }
 

@@ -82,21 +82,32 @@ pub(crate) fn cone_hull(ray: &Ray, apex: Vec3, axis: Vec3, cos_cutoff: f32, t_en
     let qa = da * da - cos2;
     let qb = da * wa - cos2 * ray.d.dot(w);
     let qc = wa * wa - cos2 * w.dot(w);
-    let mut breaks = vec![0.0f32];
+    // At most 0, two roots (or one), the apex plane and t_end: no allocation.
+    let mut candidates = [f32::NAN; 4];
+    candidates[0] = 0.0;
     let disc = qb * qb - qa * qc;
     if qa != 0.0 && disc >= 0.0 {
         let r = disc.sqrt();
-        breaks.push((-qb - r) / qa);
-        breaks.push((-qb + r) / qa);
+        candidates[1] = (-qb - r) / qa;
+        candidates[2] = (-qb + r) / qa;
     } else if qa == 0.0 && qb != 0.0 {
-        breaks.push(-qc / (2.0 * qb));
+        candidates[1] = -qc / (2.0 * qb);
     }
     if da != 0.0 {
-        breaks.push(-wa / da);
+        candidates[3] = -wa / da;
     }
-    breaks.retain(|t| t.is_finite() && *t >= 0.0 && *t < t_end);
-    breaks.push(t_end);
-    breaks.sort_by(|a, b| a.total_cmp(b));
+    let mut breaks = [0.0f32; 5];
+    let mut n = 0;
+    for t in candidates {
+        if t.is_finite() && t >= 0.0 && t < t_end {
+            breaks[n] = t;
+            n += 1;
+        }
+    }
+    breaks[n] = t_end;
+    n += 1;
+    let breaks = &mut breaks[..n];
+    breaks.sort_unstable_by(|a, b| a.total_cmp(b));
     let inside = |t: f32| {
         let v = w + ray.d * t;
         let va = v.dot(axis);

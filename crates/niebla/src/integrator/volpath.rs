@@ -81,9 +81,10 @@ impl Scatter<'_> {
 impl Integrator for VolPathIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let (groups, count) = channel_groups(scene);
+        let lights = LightChoice::new(scene);
         let mut l = Rgb::ZERO;
         for &group in &groups[..count] {
-            l += self.trace(scene, ray, medium, group, sampler);
+            l += self.trace(scene, ray, medium, group, lights, sampler);
         }
         l
     }
@@ -98,6 +99,7 @@ impl VolPathIntegrator {
         mut ray: Ray,
         mut medium: Option<MediumId>,
         group: Channels,
+        lights: LightChoice,
         sampler: &mut PixelSampler,
     ) -> Rgb {
         // The hero channel cycles over the pixel's samples (stratified), so the
@@ -126,7 +128,7 @@ impl VolPathIntegrator {
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
-                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / group.average(r_u), group, sampler);
+                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / group.average(r_u), group, lights, sampler);
                 }
                 let mut scattered: Option<Ray> = None;
                 let mut terminated = false;
@@ -178,6 +180,7 @@ impl VolPathIntegrator {
                             beta,
                             r_u,
                             Some(segment),
+                            lights,
                             sampler,
                         );
                         let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
@@ -239,7 +242,7 @@ impl VolPathIntegrator {
                     if depth == 0 || specular_bounce {
                         l += beta * le / group.average(r_u);
                     } else {
-                        let pmf = 1.0 / scene.lights.len() as f32;
+                        let pmf = lights.pmf();
                         let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
                         l += beta * le / group.average(r_u + r_l_env);
                     }
@@ -268,7 +271,7 @@ impl VolPathIntegrator {
                         l += beta * le / group.average(r_u);
                     } else {
                         let light = &scene.lights[index as usize];
-                        let pmf = 1.0 / scene.lights.len() as f32;
+                        let pmf = lights.pmf();
                         let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
                         l += beta * le / group.average(r_u + r_l_hit);
                     }
@@ -296,6 +299,7 @@ impl VolPathIntegrator {
                     beta,
                     r_u,
                     None,
+                    lights,
                     sampler,
                 );
             }
@@ -333,9 +337,56 @@ impl VolPathIntegrator {
     }
 }
 
-/// Next-event estimation (pbrt-v4's `SampleLd`): one light chosen uniformly,
-/// one direction toward it, ratio tracking along the shadow ray through every
-/// medium and index-matched boundary, weighted against phase/BSDF sampling.
+/// How next-event estimation picks lights: every light, each with one
+/// sample, when there are few (no variance from the choice, which dominated
+/// scenes with a bright spot light and a dim sky); else one chosen uniformly.
+#[derive(Clone, Copy, Debug)]
+struct LightChoice {
+    /// Number of lights.
+    n: usize,
+    /// Number of point and spot lights (equiangular sampling's lights).
+    points: usize,
+}
+
+/// Up to this many lights, next-event estimation samples each of them.
+const SAMPLE_ALL_LIGHTS_UP_TO: usize = 4;
+
+impl LightChoice {
+    fn new(scene: &Scene) -> LightChoice {
+        LightChoice { n: scene.lights.len(), points: point_light_count(scene) }
+    }
+
+    /// Whether every light is sampled at each vertex.
+    #[inline]
+    fn all(self) -> bool {
+        self.n <= SAMPLE_ALL_LIGHTS_UP_TO
+    }
+
+    /// Probability that next-event estimation samples a given light.
+    #[inline]
+    fn pmf(self) -> f32 {
+        if self.all() {
+            1.0
+        } else {
+            1.0 / self.n as f32
+        }
+    }
+
+    /// Probability that equiangular sampling on a segment targets a given point light.
+    #[inline]
+    fn point_pmf(self) -> f32 {
+        if self.all() {
+            1.0
+        } else {
+            1.0 / self.points as f32
+        }
+    }
+}
+
+/// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
+/// uniformly ([`LightChoice`]), one direction toward each, ratio tracking
+/// along the shadow ray through every medium and index-matched boundary,
+/// weighted against phase/BSDF sampling.
 #[allow(clippy::too_many_arguments)]
 fn sample_ld(
     scene: &Scene,
@@ -348,17 +399,46 @@ fn sample_ld(
     beta: Rgb,
     r_p: Rgb,
     segment: Option<Segment>,
+    lights: LightChoice,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let n_lights = scene.lights.len();
-    let u_light = sampler.next_1d();
-    let u_dir = sampler.next_2d();
+    let n_lights = lights.n;
     if n_lights == 0 {
         return Rgb::ZERO;
     }
-    let light_index = ((u_light * n_lights as f32) as usize).min(n_lights - 1);
+    if lights.all() {
+        let mut l = Rgb::ZERO;
+        for index in 0..n_lights {
+            l +=
+                sample_ld_light(scene, p, wo, scatter, medium, group, hero, beta, r_p, segment, lights, index, sampler);
+        }
+        return l;
+    }
+    let u_light = sampler.next_1d();
+    let index = ((u_light * n_lights as f32) as usize).min(n_lights - 1);
+    sample_ld_light(scene, p, wo, scatter, medium, group, hero, beta, r_p, segment, lights, index, sampler)
+}
+
+/// [`sample_ld`] for light `light_index`, chosen with probability `lights.pmf()`.
+#[allow(clippy::too_many_arguments)]
+fn sample_ld_light(
+    scene: &Scene,
+    p: Vec3,
+    wo: Vec3,
+    scatter: Scatter,
+    medium: Option<MediumId>,
+    group: Channels,
+    hero: usize,
+    beta: Rgb,
+    r_p: Rgb,
+    segment: Option<Segment>,
+    lights: LightChoice,
+    light_index: usize,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
-    let pmf = 1.0 / n_lights as f32;
+    let pmf = lights.pmf();
     let normal = match scatter {
         Scatter::Surface(_, n) => Some(n),
         Scatter::Phase(_) => None,
@@ -396,8 +476,8 @@ fn sample_ld(
     if ls.is_delta {
         // A point or spot light seen from a free-flight vertex: the same path can
         // come from equiangular sampling on the segment (`equiangular_ld`).
-        let weight = segment
-            .map_or(1.0, |seg| light_weight_against_equiangular(scene, seg, light, n_lights, group).unwrap_or(1.0));
+        let weight =
+            segment.map_or(1.0, |seg| light_weight_against_equiangular(seg, light, lights, group).unwrap_or(1.0));
         beta * f_hat * t_ray * ls.li * weight / group.average(r_l)
     } else {
         beta * f_hat * t_ray * ls.li / group.average(r_l + r_u)
@@ -441,27 +521,22 @@ fn point_light_count(scene: &Scene) -> usize {
 /// (light chosen with probability 1/N) against equiangular sampling of the
 /// same vertex (point light chosen with probability 1/P); `None` when the
 /// light is not point-like or equiangular sampling cannot produce the vertex.
-fn light_weight_against_equiangular(
-    scene: &Scene,
-    seg: Segment,
-    light: &Light,
-    n_lights: usize,
-    group: Channels,
-) -> Option<f32> {
+fn light_weight_against_equiangular(seg: Segment, light: &Light, lights: LightChoice, group: Channels) -> Option<f32> {
     let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
         return None;
     };
-    let p_eq = e.pdf(seg.t) / point_light_count(scene) as f32;
-    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group) / n_lights as f32;
+    let p_eq = e.pdf(seg.t) * lights.point_pmf();
+    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group) * lights.pmf();
     (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
 }
 
 /// Equiangular next-event estimation on the segment `[0, t_end)` of `ray` in
 /// medium `id` (Kulla and Fajardo 2012, combined by MIS with free-flight
-/// sampling as Cycles does): one point or spot light chosen uniformly, one
-/// point sampled equiangularly toward it (within the spot's cone), camera-side
-/// and light-side transmittance exact (homogeneous) or by ratio tracking.
-/// `throughput` is the MIS-normalized path throughput at the segment start.
+/// sampling as Cycles does): every point or spot light, or one chosen
+/// uniformly ([`LightChoice`]), one point sampled equiangularly toward each
+/// (within the spot's cone), camera-side and light-side transmittance exact
+/// (homogeneous) or by ratio tracking. `throughput` is the MIS-normalized
+/// path throughput at the segment start.
 #[allow(clippy::too_many_arguments)]
 fn equiangular_ld(
     scene: &Scene,
@@ -471,17 +546,44 @@ fn equiangular_ld(
     id: MediumId,
     throughput: Rgb,
     group: Channels,
+    lights: LightChoice,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let count = point_light_count(scene);
+    let count = lights.points;
     if count == 0 {
         return Rgb::ZERO;
     }
-    let (u_light, u_t, u_dir) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
+    let mut point_lights = scene.lights.iter().filter(|l| l.point_position().is_some());
+    if lights.all() {
+        let mut l = Rgb::ZERO;
+        for light in point_lights {
+            l += equiangular_ld_light(scene, ray, t_end, m, id, throughput, group, lights, light, sampler);
+        }
+        return l;
+    }
+    let u_light = sampler.next_1d();
     let k = ((u_light * count as f32) as usize).min(count - 1);
-    let Some(light) = scene.lights.iter().filter(|l| l.point_position().is_some()).nth(k) else {
+    let Some(light) = point_lights.nth(k) else {
         return Rgb::ZERO;
     };
+    equiangular_ld_light(scene, ray, t_end, m, id, throughput, group, lights, light, sampler)
+}
+
+/// [`equiangular_ld`] toward `light`, chosen with probability `lights.point_pmf()`.
+#[allow(clippy::too_many_arguments)]
+fn equiangular_ld_light(
+    scene: &Scene,
+    ray: &Ray,
+    t_end: f32,
+    m: &Medium,
+    id: MediumId,
+    throughput: Rgb,
+    group: Channels,
+    lights: LightChoice,
+    light: &Light,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
     let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
         return Rgb::ZERO;
     };
@@ -507,8 +609,8 @@ fn equiangular_ld(
         return Rgb::ZERO;
     }
     let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
-    let p_eq = pdf_eq / count as f32;
-    let p_d = free_flight_scatter_density(m, ray, t_end, t, group) / scene.lights.len() as f32;
+    let p_eq = pdf_eq * lights.point_pmf();
+    let p_d = free_flight_scatter_density(m, ray, t_end, t, group) * lights.pmf();
     let weight = p_eq / (p_eq + p_d);
     throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
 }

@@ -81,15 +81,17 @@ impl Scene {
     /// Nearest surface hit along `ray` with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
+        // Nearest parameter first; the hit record only for the nearest object.
+        let inv = ray.d.recip();
+        let mut best: Option<usize> = None;
         let mut t_best = t_max;
         for (i, object) in self.objects.iter().enumerate() {
-            if let Some(h) = object.shape.intersect(ray, t_min, t_best) {
-                t_best = h.t;
-                best = Some(Hit { surface: h, object: i as u32 });
+            if let Some(t) = object.shape.hit_t(ray, inv, t_min, t_best) {
+                t_best = t;
+                best = Some(i);
             }
         }
-        best
+        best.map(|i| Hit { surface: self.objects[i].shape.surface_at(ray, t_best), object: i as u32 })
     }
 
     /// The medium with id `id`.

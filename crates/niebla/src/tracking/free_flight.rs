@@ -93,37 +93,52 @@ where
     P: Fn(Vec3, f32) -> MediumPoint,
     F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
 {
-    let mut t_maj = Rgb::ONE;
+    // Majorant optical depth since the previous collision, summed over the
+    // segments crossed and exponentiated once per collision (and at the end).
+    let mut tau = Rgb::ZERO;
+    let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
     let mut stopped = false;
     let _ = r.segments(|seg| {
         let sigma_maj = sigma_t * seg.d_max;
         let mut t_min = seg.t0;
         if !(sigma_maj[hero] > 0.0) {
             // No collision for the hero channel: only attenuate the others.
-            t_maj *= (sigma_maj * finite_length(seg.t1 - t_min)).exp_neg();
+            tau += sigma_maj * finite_length(seg.t1 - t_min);
             return std::ops::ControlFlow::Continue(());
         }
         loop {
             let t = t_min - (1.0 - sampler.next_1d()).ln() / sigma_maj[hero];
             if !(t < seg.t1) {
-                t_maj *= (sigma_maj * finite_length(seg.t1 - t_min)).exp_neg();
+                tau += sigma_maj * finite_length(seg.t1 - t_min);
                 return std::ops::ControlFlow::Continue(());
             }
-            t_maj *= (sigma_maj * (t - t_min)).exp_neg();
+            tau += sigma_maj * (t - t_min);
+            let t_maj = transmittance(tau, grey);
             let p = ray.at(t);
             let collision = MajorantCollision { t, p, point: point_at(p, r.density(t)), sigma_maj, t_maj };
             if !callback(collision, sampler) {
                 stopped = true;
                 return std::ops::ControlFlow::Break(());
             }
-            t_maj = Rgb::ONE;
+            tau = Rgb::ZERO;
             t_min = t;
         }
     });
     if stopped {
         Rgb::ONE
     } else {
-        t_maj
+        transmittance(tau, grey)
+    }
+}
+
+/// `exp(-tau)` per channel, one exponential when the channels are equal
+/// (`grey`: the medium's extinction is the same in every channel).
+#[inline]
+fn transmittance(tau: Rgb, grey: bool) -> Rgb {
+    if grey {
+        Rgb::splat((-tau[0]).exp())
+    } else {
+        tau.exp_neg()
     }
 }
 
