@@ -211,13 +211,24 @@ fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &Phot
         let line = match time_to_reach(&points, args.target) {
             Some(t) => format!("{name:<12} reaches relative MSE {:.0e} in {t:.2} s", args.target),
             None => {
-                // Extrapolate the last point as error ~ 1 / time (variance-dominated).
                 let &(t, e) = points.last().unwrap();
-                format!(
-                    "{name:<12} reaches relative MSE {:.0e} in ~{:.2} s (extrapolated from {e:.2e} at {t:.2} s)",
-                    args.target,
-                    t * e / args.target
-                )
+                // Doubling the samples should halve a variance-dominated error;
+                // an error that falls less than 20% has stalled (the bias of a
+                // fixed photon map) and is not extrapolated.
+                let stalled = points.len() >= 2 && e > 0.8 * points[points.len() - 2].1;
+                if stalled {
+                    format!(
+                        "{name:<12} does not reach relative MSE {:.0e}: the error stalls at {e:.2e} ({t:.2} s)",
+                        args.target
+                    )
+                } else {
+                    // Extrapolate the last point as error ~ 1 / time.
+                    format!(
+                        "{name:<12} reaches relative MSE {:.0e} in ~{:.2} s (extrapolated from {e:.2e} at {t:.2} s)",
+                        args.target,
+                        t * e / args.target
+                    )
+                }
             }
         };
         println!("{line}");
