@@ -3,8 +3,9 @@
 
 use std::collections::BinaryHeap;
 
+use super::emitters::Emitters;
 use super::kdtree::PhotonTree;
-use super::trace::{trace_photons, TraceSettings, TraceStats};
+use super::trace::{trace_photons_with, TraceSettings, TraceStats};
 use super::{PhotonGather, PhotonSettings, VolumeQuery};
 use crate::scene::Scene;
 
@@ -27,14 +28,14 @@ pub struct PhotonMaps {
 
 impl PhotonMaps {
     /// Trace and build the maps of one pass (stream from
-    /// [`super::photon_stream`]) on the current rayon pool.
-    pub fn trace(scene: &Scene, settings: &PhotonSettings, stream: u64) -> PhotonMaps {
+    /// [`super::photon_stream`]) from `emitters` on the current rayon pool.
+    pub fn trace(scene: &Scene, emitters: &Emitters, settings: &PhotonSettings, stream: u64) -> PhotonMaps {
         let trace = TraceSettings {
             photons: settings.photons.max(1) as u64,
             max_depth: settings.max_depth,
             store_direct: settings.store_direct,
         };
-        let traced = trace_photons(scene, &trace, stream);
+        let traced = trace_photons_with(scene, emitters, &trace, stream);
         let (volume, surface) = rayon::join(|| PhotonTree::build(traced.volume), || PhotonTree::build(traced.surface));
         PhotonMaps { volume, surface, stats: traced.stats }
     }

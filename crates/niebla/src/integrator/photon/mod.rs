@@ -27,9 +27,11 @@
 //! `(seed, s, i)` and maps are concatenated in a fixed order, so both
 //! integrators give the same image for any thread count.
 //!
-//! Not covered: light emitted by media (`L_ve`) is included only as
-//! emission and its single scattering along camera rays, not as photons.
+//! Light emitted by media (`L_ve`) is seen along camera rays by the
+//! single-scattering code and scattered by photons emitted from the media
+//! ([`Emitters`]).
 
+mod emitters;
 mod estimate;
 mod kdtree;
 mod maps;
@@ -37,12 +39,13 @@ mod passes;
 mod stored;
 mod trace;
 
+pub use emitters::Emitters;
 pub use estimate::{Kernel, PhotonIntegrator};
 pub use kdtree::{Neighbor, PhotonTree};
 pub use maps::{auto_radius, PhotonMaps};
 pub use passes::{ppm_radius_factor, render_photon, render_ppm};
 pub use stored::{pack_normal, unpack_normal, Photon};
-pub use trace::{photon_stream, trace_photons, TraceSettings, TraceStats, TracedPhotons};
+pub use trace::{photon_stream, trace_photons, trace_photons_with, TraceSettings, TraceStats, TracedPhotons};
 
 use super::SingleSampling;
 use crate::tracking::MarchStep;

@@ -3,6 +3,7 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
+use super::emitters::Emitters;
 use super::estimate::{Kernel, PhotonIntegrator};
 use super::maps::{auto_radius, PhotonMaps};
 use super::trace::photon_stream;
@@ -99,7 +100,8 @@ pub fn render_photon(
     cancel: Option<&AtomicBool>,
 ) -> Result<Image, RenderError> {
     with_pool(options.threads, || {
-        let mut maps = PhotonMaps::trace(scene, settings, photon_stream(options.seed, PHOTON_PASS));
+        let emitters = Emitters::new(scene);
+        let mut maps = PhotonMaps::trace(scene, &emitters, settings, photon_stream(options.seed, PHOTON_PASS));
         let cap = scene.diagonal() / 16.0;
         let (volume_kernel, surface_kernel, beam_radius) = match settings.gather {
             PhotonGather::Nearest(k) => {
@@ -152,11 +154,12 @@ pub fn render_ppm(
         let photon = settings.photon;
         let alpha = settings.alpha.clamp(1e-3, 1.0) as f64;
         let volume_dimension = if photon.query == VolumeQuery::Beam { 2 } else { 3 };
+        let emitters = Emitters::new(scene);
         for s in options.first_sample..options.first_sample + options.spp as u64 {
             if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 return Err(RenderError::Cancelled);
             }
-            let mut maps = PhotonMaps::trace(scene, &photon, photon_stream(options.seed, s));
+            let mut maps = PhotonMaps::trace(scene, &emitters, &photon, photon_stream(options.seed, s));
             let r_volume = radius_or_auto(photon.radius, || auto_radius(&maps.volume, true))
                 * ppm_radius_factor(s + 1, alpha, volume_dimension) as f32;
             let r_surface = radius_or_auto(photon.surface_radius, || auto_radius(&maps.surface, false))

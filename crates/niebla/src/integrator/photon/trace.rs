@@ -1,5 +1,6 @@
 //! Photon tracing (Jensen and Christensen 1998): photons leave the lights
-//! (chosen in proportion to their power, then [`Light::sample_le`]) and
+//! (chosen in proportion to their power, then [`Light::sample_le`]) or
+//! emissive media (see [`Emitters`]) and
 //! travel through media and surfaces with the free-flight and event code of
 //! `volpath` (null-scattering delta tracking over majorant segments with the
 //! hero channel, spectral MIS on the photon's power), scattering by the phase
@@ -18,7 +19,8 @@
 //!   boundaries. That light is what shadow rays from the camera side compute
 //!   (single scattering in media, direct lighting at surfaces), so storing it
 //!   would count it twice (methods.md 4.2 item 5). Photons that passed a
-//!   specular surface (a volume caustic behind glass) are stored.
+//!   specular surface (a volume caustic behind glass) are stored, and so
+//!   are all events of photons emitted by media.
 //!   [`TraceSettings::store_direct`] stores them too (for tests).
 //!
 //! # Determinism
@@ -30,12 +32,13 @@
 
 use crate::bsdf::TransportMode;
 use crate::color::Rgb;
-use crate::light::{Light, SceneSphere};
-use crate::math::Ray;
-use crate::sampling::{hash_u64, Distribution1D, PixelSampler};
+use crate::light::Light;
+use crate::math::{Ray, Vec3};
+use crate::sampling::{hash_u64, PixelSampler};
 use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
 use crate::tracking::sample_t_maj;
 
+use super::emitters::{Emitters, Source};
 use super::stored::Photon;
 
 /// Photons traced per chunk (one rayon task).
@@ -115,18 +118,22 @@ pub fn photon_stream(seed: u64, pass: u64) -> u64 {
     hash_u64(hash_u64(seed ^ 0x5048_4f54_4f4e_5321) ^ pass.wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
-/// Trace `settings.photons` photons from the lights of `scene` with random
-/// stream `stream` (see [`photon_stream`]), on the current rayon pool.
+/// Trace `settings.photons` photons from the lights and emissive media of
+/// `scene` with random stream `stream` (see [`photon_stream`]), on the
+/// current rayon pool. Builds the [`Emitters`] each call; renders with many
+/// passes use [`trace_photons_with`].
 pub fn trace_photons(scene: &Scene, settings: &TraceSettings, stream: u64) -> TracedPhotons {
+    trace_photons_with(scene, &Emitters::new(scene), settings, stream)
+}
+
+/// [`trace_photons`] with the photon sources built beforehand.
+pub fn trace_photons_with(scene: &Scene, emitters: &Emitters, settings: &TraceSettings, stream: u64) -> TracedPhotons {
     use rayon::prelude::*;
-    let sphere = SceneSphere::around(scene.bounds);
-    let powers: Vec<f32> = scene.lights.iter().map(|l| l.power(&sphere).average()).collect();
-    if powers.iter().all(|&p| !(p > 0.0)) {
+    if emitters.is_empty() {
         return TracedPhotons::default();
     }
-    let choice = Distribution1D::new(&powers);
     let n = settings.photons.max(1);
-    let tracer = Tracer { scene, settings, sphere, choice: &choice, scale: 1.0 / n as f32 };
+    let tracer = Tracer { scene, settings, emitters, scale: 1.0 / n as f32 };
     let chunks: Vec<TracedPhotons> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|chunk| {
@@ -154,8 +161,7 @@ pub fn trace_photons(scene: &Scene, settings: &TraceSettings, stream: u64) -> Tr
 struct Tracer<'a> {
     scene: &'a Scene,
     settings: &'a TraceSettings,
-    sphere: SceneSphere,
-    choice: &'a Distribution1D,
+    emitters: &'a Emitters,
     /// `1 / photons`.
     scale: f32,
 }
@@ -165,38 +171,52 @@ impl Tracer<'_> {
     fn trace(&self, index: u64, sampler: &mut PixelSampler, out: &mut TracedPhotons) {
         let scene = self.scene;
         out.stats.emitted += 1;
-        // Emission: a light by power, then a ray from it.
-        let (light_index, pmf) = self.choice.sample_discrete(sampler.next_1d());
-        let light = &scene.lights[light_index];
+        // Emission: a light or an emissive medium by power, then a ray from it.
+        let u_choice = sampler.next_1d();
         let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-        let Some(emission) = light.sample_le(u_pos, u_dir, &self.sphere) else {
-            return;
+        let (mut ray, mut beta, mut t_min, mut medium, from_medium) = match self.emitters.choose(u_choice) {
+            None => return,
+            Some(Source::Light { index, pmf }) => {
+                let light = &scene.lights[index];
+                let Some(emission) = light.sample_le(u_pos, u_dir, &self.emitters.sphere) else {
+                    return;
+                };
+                let beta = emission.flux() * (self.scale / pmf);
+                let ray = emission.ray;
+                let on_surface = matches!(light, Light::Area(_));
+                let t_min = if on_surface { surface_epsilon(ray.o) } else { 0.0 };
+                let medium = scene.medium_at(if on_surface { ray.at(t_min) } else { ray.o });
+                if matches!(light, Light::Directional(_) | Light::Constant(_) | Light::Environment(_)) {
+                    // Light from infinity through an unbounded homogeneous medium is
+                    // extinguished before it arrives (as shadow rays find).
+                    if let Some(h) = medium.and_then(|id| scene.medium(id).as_homogeneous()) {
+                        if h.sigma_t().max_channel() > 0.0 && beta.is_finite() {
+                            add(&mut out.stats.emitted_power, beta);
+                            add(&mut out.stats.lost_power, beta);
+                            return;
+                        }
+                    }
+                }
+                (ray, beta, t_min, medium, false)
+            }
+            Some(Source::Medium { emitter, pmf }) => {
+                let u_z = sampler.next_1d();
+                let u_pos = Vec3::new(u_pos.x, u_pos.y, u_z);
+                let (p, d, flux) = emitter.sample(scene, sampler.next_1d(), u_pos, u_dir);
+                (Ray::new(p, d), flux * (self.scale / pmf), 0.0, Some(emitter.id), true)
+            }
         };
-        let mut beta = emission.flux() * (self.scale / pmf);
         if !beta.is_finite() || beta.is_black() {
             return;
         }
         add(&mut out.stats.emitted_power, beta);
-        let mut ray = emission.ray;
-        let on_surface = matches!(light, Light::Area(_));
-        let mut t_min = if on_surface { surface_epsilon(ray.o) } else { 0.0 };
-        let mut medium = scene.medium_at(if on_surface { ray.at(t_min) } else { ray.o });
-        if matches!(light, Light::Directional(_) | Light::Constant(_) | Light::Environment(_)) {
-            // Light from infinity through an unbounded homogeneous medium is
-            // extinguished before it arrives (as shadow rays find).
-            if let Some(h) = medium.and_then(|id| scene.medium(id).as_homogeneous()) {
-                if h.sigma_t().max_channel() > 0.0 {
-                    add(&mut out.stats.lost_power, beta);
-                    return;
-                }
-            }
-        }
 
         // The hero channel of free-flight sampling cycles over photons.
         let hero = (index % 3) as usize;
         let mut r_u = Rgb::ONE;
         let mut depth = 0u32;
-        let mut direct = true;
+        // Photons from emissive media have no part that shadow rays compute.
+        let mut direct = !from_medium;
         let mut crossings = 0u32;
         let store_direct = self.settings.store_direct;
         let max_depth = self.settings.max_depth;
