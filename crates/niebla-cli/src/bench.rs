@@ -40,7 +40,8 @@ fn single(sampling: SingleSampling) -> IntegratorSettings {
     IntegratorSettings::Single { step: None, sampling, transmittance: TransmittanceMethod::Analytic }
 }
 
-fn timed(
+/// Render `spp` samples per pixel with `seed`; the image and the seconds it took.
+pub(crate) fn timed(
     scene: &Scene,
     settings: &IntegratorSettings,
     spp: u32,

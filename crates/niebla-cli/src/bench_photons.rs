@@ -11,13 +11,12 @@ use std::time::Instant;
 
 use clap::Args;
 
-use crate::bench::time_to_reach;
+use crate::bench::{time_to_reach, timed};
 use niebla::film::Image;
 use niebla::integrator::photon::{
     auto_radius, photon_stream, trace_photons, PhotonSettings, PhotonTree, PpmSettings, TraceSettings, VolumeQuery,
 };
 use niebla::integrator::IntegratorSettings;
-use niebla::render::{render, RenderOptions};
 use niebla::scene::Scene;
 
 /// Options of `niebla bench photons`.
@@ -53,19 +52,6 @@ pub struct PhotonBenchArgs {
     /// figure always uses all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-}
-
-fn timed(
-    scene: &Scene,
-    settings: &IntegratorSettings,
-    spp: u32,
-    seed: u64,
-    threads: Option<usize>,
-) -> Result<(Image, f64), String> {
-    let options = RenderOptions { spp, seed, first_sample: 0, threads };
-    let start = Instant::now();
-    let image = render(scene, settings, &options, &|_, _| {}, None).map_err(|e| e.to_string())?;
-    Ok((image, start.elapsed().as_secs_f64()))
 }
 
 /// `niebla bench photons`.
