@@ -98,6 +98,8 @@ where
     let mut tau = Rgb::ZERO;
     let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
     let mut stopped = false;
+    // Hero-channel majorant optical depth left to the next collision, once drawn.
+    let mut to_collision: Option<f32> = None;
     let _ = r.segments(|seg| {
         let sigma_maj = sigma_t * seg.d_max;
         let mut t_min = seg.t0;
@@ -107,11 +109,19 @@ where
             return std::ops::ControlFlow::Continue(());
         }
         loop {
-            let t = t_min - (1.0 - sampler.next_1d()).ln() / sigma_maj[hero];
+            // The hero channel's majorant optical depth to the next collision is
+            // drawn once and spent over the segments it crosses (the same
+            // distribution as redrawing per segment, by memorylessness, without a
+            // logarithm and a random number per segment crossed).
+            let depth = *to_collision.get_or_insert_with(|| -(1.0 - sampler.next_1d()).ln());
+            let t = t_min + depth / sigma_maj[hero];
             if !(t < seg.t1) {
-                tau += sigma_maj * finite_length(seg.t1 - t_min);
+                let length = finite_length(seg.t1 - t_min);
+                to_collision = Some((depth - sigma_maj[hero] * length).max(0.0));
+                tau += sigma_maj * length;
                 return std::ops::ControlFlow::Continue(());
             }
+            to_collision = None;
             tau += sigma_maj * (t - t_min);
             let t_maj = transmittance(tau, grey);
             let p = ray.at(t);
