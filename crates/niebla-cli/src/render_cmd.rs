@@ -62,7 +62,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = parse_memory_size)]
     pub max_memory: Option<u64>,
     /// Continue the progressive render whose EXR checkpoint (an output of an
-    /// earlier `niebla render`, rewritten after every pass) is given, up to
+    /// earlier `niebla render`, rewritten between passes) is given, up to
     /// --spp samples in all: same scene, integrator and seed required, and
     /// the result is bit-identical to a render that was never stopped.
     #[arg(long, value_name = "CHECKPOINT.exr")]
@@ -313,36 +313,54 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         Budget::Samples(_) => bar.set_position(samples_before_pass.load(Ordering::Relaxed) + done),
         Budget::Time(_) => bar.set_position(start.elapsed().as_millis() as u64),
     };
-    // After every pass, checkpoint the outputs (each written to a temporary
-    // file and renamed), so a long render stopped at any time leaves a usable image.
-    // EXR outputs are checkpoints: their header records the samples so far,
-    // the seed, the scene's hash and the integrator, for --resume.
+    // After a pass, checkpoint the outputs (each written to a temporary file
+    // and renamed), so a long render stopped at any time leaves a usable
+    // image. EXR outputs are checkpoints: their header records the samples so
+    // far, the seed, the scene's hash and the integrator, for --resume.
+    // Checkpoints are at most CHECKPOINT_INTERVAL apart: the first passes take
+    // milliseconds, and compressing and writing an image after each of them
+    // took up to a third of a short render. The final image is always written.
     let mut write_error: Option<String> = None;
     let mut spp_done = start_acc.spp;
+    let mut spp_written = start_acc.spp;
+    let mut last_write = Instant::now();
+    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), String> {
+        let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
+        for out in &outputs {
+            let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    };
     let on_pass = |image: &niebla::film::Image, info: PassInfo| {
         samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
         spp_done = info.spp;
         bar.set_message(format!("({} spp)", info.spp));
-        let checkpoint =
-            CheckpointInfo { spp: info.spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
-        for out in &outputs {
-            let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            let written =
-                if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) };
-            if let Err(e) = written {
-                write_error = Some(e.to_string());
-                return false;
-            }
+        if last_write.elapsed() < CHECKPOINT_INTERVAL {
+            return true;
         }
+        if let Err(e) = write_outputs(image, info.spp) {
+            write_error = Some(e);
+            return false;
+        }
+        spp_written = info.spp;
+        last_write = Instant::now();
         true
     };
-    resume_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, start_acc, on_pass)
+    let image = resume_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, start_acc, on_pass)
         .map_err(|e| e.to_string())?;
-    bar.finish_and_clear();
+    // Rendering time, checkpoints included; the final write is not (as a
+    // renderer's own timing of a render excludes saving the result).
+    let seconds = start.elapsed().as_secs_f64();
     if let Some(e) = write_error {
+        bar.finish_and_clear();
         return Err(e);
     }
-    let seconds = start.elapsed().as_secs_f64();
+    if spp_written != spp_done {
+        write_outputs(&image, spp_done)?;
+    }
+    bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
     println!(
         "rendered {}x{} at {} spp with {} in {:.2} s ({:.2} M samples/s) -> {}",
@@ -356,6 +374,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     );
     Ok(())
 }
+
+/// Least time between two checkpoints written during a render.
+const CHECKPOINT_INTERVAL: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// The accumulator and seed to continue the checkpoint at `path` with,
 /// after checking that it was rendered from this scene text, with these
