@@ -73,6 +73,25 @@ impl MajorantGrid {
             return ControlFlow::Continue(());
         }
 
+        // Cell widths and reciprocal directions, so that stepping needs no division.
+        let width: [f32; 3] = std::array::from_fn(|a| (self.bounds_max[a] - self.bounds_min[a]) / self.res[a] as f32);
+        let inv_d: [f32; 3] = std::array::from_fn(|a| if d[a] != 0.0 { 1.0 / d[a] } else { 0.0 });
+        let crossing = |a: usize, c: usize| -> f32 {
+            let plane = |k: usize| {
+                if k >= self.res[a] {
+                    self.bounds_max[a]
+                } else {
+                    self.bounds_min[a] + k as f32 * width[a]
+                }
+            };
+            if d[a] > 0.0 {
+                (plane(c + 1) - o[a]) * inv_d[a]
+            } else if d[a] < 0.0 {
+                (plane(c) - o[a]) * inv_d[a]
+            } else {
+                f32::INFINITY
+            }
+        };
         // Starting cell and the t of the next boundary plane along each axis.
         let mut cell = [0usize; 3];
         let mut next = [f32::INFINITY; 3];
@@ -88,7 +107,7 @@ impl MajorantGrid {
             } else if d[a] < 0.0 && cell[a] > 0 && self.plane(a, cell[a]) >= p {
                 cell[a] -= 1;
             }
-            next[a] = self.crossing(a, cell[a], o, d);
+            next[a] = crossing(a, cell[a]);
         }
 
         let mut t = t0;
@@ -121,19 +140,7 @@ impl MajorantGrid {
                 }
                 cell[axis] -= 1;
             }
-            next[axis] = self.crossing(axis, cell[axis], o, d);
-        }
-    }
-
-    /// `t` at which the ray leaves cell index `c` along axis `a`.
-    #[inline(always)]
-    fn crossing(&self, a: usize, c: usize, o: [f32; 3], d: [f32; 3]) -> f32 {
-        if d[a] > 0.0 {
-            (self.plane(a, c + 1) - o[a]) / d[a]
-        } else if d[a] < 0.0 {
-            (self.plane(a, c) - o[a]) / d[a]
-        } else {
-            f32::INFINITY
+            next[axis] = crossing(axis, cell[axis]);
         }
     }
 
