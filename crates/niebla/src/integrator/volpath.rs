@@ -169,20 +169,16 @@ impl VolPathIntegrator {
                         }
                         let phase = m.phase();
                         let segment = Segment { ray: &ray, t_end, t: c.t, medium: m };
-                        l += sample_ld(
-                            scene,
-                            c.p,
+                        let vertex = NeeVertex {
+                            p: c.p,
                             wo,
-                            Scatter::Phase(phase),
-                            Some(id),
-                            group,
-                            hero,
+                            scatter: Scatter::Phase(phase),
+                            medium: Some(id),
                             beta,
-                            r_u,
-                            Some(segment),
-                            lights,
-                            sampler,
-                        );
+                            r_p: r_u,
+                            segment: Some(segment),
+                        };
+                        l += sample_ld(scene, &vertex, group, hero, lights, sampler);
                         let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
                             terminated = true;
                             return false;
@@ -288,20 +284,16 @@ impl VolPathIntegrator {
             let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
             if !object.bsdf.is_specular() {
-                l += sample_ld(
-                    scene,
+                let vertex = NeeVertex {
                     p,
                     wo,
-                    Scatter::Surface(&object.bsdf, n),
+                    scatter: Scatter::Surface(&object.bsdf, n),
                     medium,
-                    group,
-                    hero,
                     beta,
-                    r_u,
-                    None,
-                    lights,
-                    sampler,
-                );
+                    r_p: r_u,
+                    segment: None,
+                };
+                l += sample_ld(scene, &vertex, group, hero, lights, sampler);
             }
             // BSDF sampling with the outward geometric normal (dielectrics need it).
             let u_lobe = sampler.next_1d();
@@ -407,22 +399,35 @@ fn sampled_by_nee(light: &Light) -> bool {
     !matches!(light, Light::Constant(_))
 }
 
+/// A scattering vertex at which next-event estimation samples the lights.
+#[derive(Clone, Copy)]
+struct NeeVertex<'a> {
+    /// Position (world).
+    p: Vec3,
+    /// Unit direction back along the path.
+    wo: Vec3,
+    /// Phase function or surface there.
+    scatter: Scatter<'a>,
+    /// Medium the vertex lies in (the side of `wo` for surfaces).
+    medium: Option<MediumId>,
+    /// Path throughput over the hero channel's pdf, up to the vertex.
+    beta: Rgb,
+    /// Unidirectional path pdfs per channel over the hero's, up to the vertex.
+    r_p: Rgb,
+    /// The medium segment of a free-flight vertex (for the MIS against
+    /// equiangular sampling); `None` at surfaces.
+    segment: Option<Segment<'a>>,
+}
+
 /// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
 /// uniformly ([`LightChoice`]), one direction toward each, ratio tracking
 /// along the shadow ray through every medium and index-matched boundary,
 /// weighted against phase/BSDF sampling.
-#[allow(clippy::too_many_arguments)]
 fn sample_ld(
     scene: &Scene,
-    p: Vec3,
-    wo: Vec3,
-    scatter: Scatter,
-    medium: Option<MediumId>,
+    vertex: &NeeVertex,
     group: Channels,
     hero: usize,
-    beta: Rgb,
-    r_p: Rgb,
-    segment: Option<Segment>,
     lights: LightChoice,
     sampler: &mut PixelSampler,
 ) -> Rgb {
@@ -434,8 +439,7 @@ fn sample_ld(
     if lights.all() {
         let mut l = Rgb::ZERO;
         for index in sampled {
-            l +=
-                sample_ld_light(scene, p, wo, scatter, medium, group, hero, beta, r_p, segment, lights, index, sampler);
+            l += sample_ld_light(scene, vertex, group, hero, lights, index, sampler);
         }
         return l;
     }
@@ -444,26 +448,20 @@ fn sample_ld(
     let Some(index) = sampled.nth(k) else {
         return Rgb::ZERO;
     };
-    sample_ld_light(scene, p, wo, scatter, medium, group, hero, beta, r_p, segment, lights, index, sampler)
+    sample_ld_light(scene, vertex, group, hero, lights, index, sampler)
 }
 
 /// [`sample_ld`] for light `light_index`, chosen with probability `lights.pmf()`.
-#[allow(clippy::too_many_arguments)]
 fn sample_ld_light(
     scene: &Scene,
-    p: Vec3,
-    wo: Vec3,
-    scatter: Scatter,
-    medium: Option<MediumId>,
+    vertex: &NeeVertex,
     group: Channels,
     hero: usize,
-    beta: Rgb,
-    r_p: Rgb,
-    segment: Option<Segment>,
     lights: LightChoice,
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
+    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment } = *vertex;
     let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
