@@ -50,11 +50,11 @@ sys.path.insert(0, HERE)
 import niebla2mitsuba  # noqa: E402
 from volumes import ensure_volumes  # noqa: E402
 
-SCENES = ["fog_spot", "smoke_plume", "dense_cloud", "milk_cube"]
+SCENES = ["fog_spot", "fog_point", "smoke_plume", "dense_cloud", "milk_cube"]
 # Reference budget per scene, as a multiple of --ref-seconds: roughly in
 # proportion to how long the renderers take to reach the target there, so that
 # every reference's own error stays a small fraction of the target.
-REF_WEIGHT = {"fog_spot": 3.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5}
+REF_WEIGHT = {"fog_spot": 3.0, "fog_point": 1.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5}
 THREADS = 2
 
 

@@ -89,8 +89,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
         let scene = built.scene;
         let small = resized(&scene, args.error_width, None);
         let start = Instant::now();
-        let reference =
-            frame(&small, &VolPathIntegrator { max_depth: 256 }, args.reference_spp, 1_000_003, args.threads);
+        let reference = frame(&small, &VolPathIntegrator::new(256), args.reference_spp, 1_000_003, args.threads);
         println!(
             "\n{}: reference volpath {}x{} at {} spp in {:.1} s",
             path.display(),

@@ -104,7 +104,7 @@ impl PreparedIntegrator {
                 render_with(scene, &SingleIntegrator { step, sampling, transmittance }, options, progress, cancel)
             }
             IntegratorSettings::VolPath { max_depth } => {
-                render_with(scene, &VolPathIntegrator { max_depth }, options, progress, cancel)
+                render_with(scene, &VolPathIntegrator::for_scene(scene, max_depth), options, progress, cancel)
             }
             IntegratorSettings::Photon(p) => {
                 crate::integrator::photon::render_photon(scene, &p, options, progress, cancel)

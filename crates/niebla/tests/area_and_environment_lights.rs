@@ -69,14 +69,14 @@ fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
         SingleIntegrator { step: None, sampling: SingleSampling::Mis, transmittance: TransmittanceMethod::Analytic };
     for (name, stats) in [
         ("single", mean_radiance(&single, &s, ray, None, 4_000)),
-        ("volpath", mean_radiance(&VolPathIntegrator { max_depth: 8 }, &s, ray, None, 40_000)),
+        ("volpath", mean_radiance(&VolPathIntegrator::new(8), &s, ray, None, 40_000)),
     ] {
         let z = (stats.mean() - expected) / (stats.standard_error() + 1e-6 * expected);
         assert!(z.abs() < 4.0, "{name}: {} +- {} vs {expected}", stats.mean(), stats.standard_error());
     }
     // Looking at the light itself shows its radiance.
     let at_light = Ray::new(Vec3::new(0.0, height, 5.0), -Vec3::Z);
-    let direct = mean_radiance(&VolPathIntegrator { max_depth: 8 }, &s, at_light, None, 16);
+    let direct = mean_radiance(&VolPathIntegrator::new(8), &s, at_light, None, 16);
     assert!((direct.mean() - radiance as f64).abs() < 1e-5);
 }
 
@@ -101,13 +101,8 @@ fn uniform_environment_map_is_a_white_furnace_for_volpath() {
         emitter: None,
     };
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![medium], vec![env], None);
-    let stats = mean_radiance(
-        &VolPathIntegrator { max_depth: 1000 },
-        &s,
-        Ray::new(Vec3::new(-3.0, 0.2, 0.1), Vec3::X),
-        None,
-        4_000,
-    );
+    let stats =
+        mean_radiance(&VolPathIntegrator::new(1000), &s, Ray::new(Vec3::new(-3.0, 0.2, 0.1), Vec3::X), None, 4_000);
     let z = (stats.mean() - 0.5) / (stats.standard_error() + 1e-5);
     assert!(z.abs() < 4.0, "{} +- {}", stats.mean(), stats.standard_error());
 }
@@ -123,13 +118,13 @@ fn environment_map_seen_directly_is_its_radiance_and_lights_a_floor() {
     let camera = PerspectiveCamera::look_at(Vec3::new(2.0, 2.0, 0.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1).unwrap();
     let s = scene(camera, vec![floor(0.5)], vec![], vec![env], None);
     let up = Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.3, 0.8, 0.1).normalize());
-    let seen = mean_radiance(&VolPathIntegrator { max_depth: 4 }, &s, up, None, 8);
+    let seen = mean_radiance(&VolPathIntegrator::new(4), &s, up, None, 8);
     assert!((seen.mean() - map.le(up.d).g() as f64).abs() < 1e-6);
     let ray = Ray::new(camera.position, (Vec3::ZERO - camera.position).normalize());
     let single =
         SingleIntegrator { step: None, sampling: SingleSampling::Mis, transmittance: TransmittanceMethod::Analytic };
     let a = mean_radiance(&single, &s, ray, None, 20_000);
-    let b = mean_radiance(&VolPathIntegrator { max_depth: 4 }, &s, ray, None, 20_000);
+    let b = mean_radiance(&VolPathIntegrator::new(4), &s, ray, None, 20_000);
     // Irradiance from the upper hemisphere by direct quadrature over pixels.
     let mut e = 0.0f64;
     for y in 0..h {

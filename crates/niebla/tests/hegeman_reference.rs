@@ -68,8 +68,7 @@ fn hegeman_thin_limit_matches_single() {
 fn errors_against_volpath(scene_file: &str) -> (f64, f64) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes").join(scene_file);
     let scene = resized(load_scene(&path).unwrap().scene, 40);
-    let reference =
-        render_with(&scene, &VolPathIntegrator { max_depth: 256 }, &options(256, 1), &|_, _| {}, None).unwrap();
+    let reference = render_with(&scene, &VolPathIntegrator::new(256), &options(256, 1), &|_, _| {}, None).unwrap();
     let with = hegeman(&scene, true, 16).relative_mse(&reference);
     let without = hegeman(&scene, false, 16).relative_mse(&reference);
     println!("{scene_file}: relative MSE vs volpath: hegeman {with:.4}, single-scattering only {without:.4}");

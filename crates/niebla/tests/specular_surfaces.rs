@@ -50,12 +50,8 @@ fn glass_of_milk_in_a_uniform_environment_is_a_white_furnace() {
     let env = Light::Constant(ConstantLight { radiance: Rgb::splat(0.8) });
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![glass], vec![milk], vec![env], None);
     for target in [Vec3::ZERO, Vec3::new(0.0, 0.7, 0.3)] {
-        let stats = mean(
-            &VolPathIntegrator { max_depth: 100_000 },
-            &s,
-            Ray::new(Vec3::new(-4.0, target.y, target.z), Vec3::X),
-            4_000,
-        );
+        let stats =
+            mean(&VolPathIntegrator::new(100_000), &s, Ray::new(Vec3::new(-4.0, target.y, target.z), Vec3::X), 4_000);
         for (c, st) in stats.iter().enumerate() {
             let z = (st.mean() - 0.8) / (st.standard_error() + 1e-5);
             assert!(z.abs() < 4.0, "channel {c}: {} +- {}", st.mean(), st.standard_error());
@@ -82,7 +78,7 @@ fn mirror_shows_the_environment_times_its_fresnel_reflectance() {
     let expected = fresnel_complex(d.y.abs(), eta, k) * 2.0;
     let single =
         SingleIntegrator { step: None, sampling: SingleSampling::March, transmittance: TransmittanceMethod::Analytic };
-    for stats in [mean(&VolPathIntegrator { max_depth: 8 }, &s, ray, 16), mean(&single, &s, ray, 16)] {
+    for stats in [mean(&VolPathIntegrator::new(8), &s, ray, 16), mean(&single, &s, ray, 16)] {
         for c in 0..3 {
             assert!(
                 (stats[c].mean() - expected[c] as f64).abs() < 1e-5,

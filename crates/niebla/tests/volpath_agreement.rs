@@ -140,3 +140,71 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
         );
     }
 }
+
+/// A lamp inside fog, with a small diffuse ball next to it in the fog:
+/// direction guiding toward the lamp (at medium and surface vertices) must
+/// keep every pixel's mean and lower the variance that segments passing
+/// close to the lamp cause.
+#[test]
+fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
+    use niebla::geometry::Sphere;
+    use niebla::integrator::{VolPathIntegrator, DEFAULT_GUIDE_FRACTION};
+    use niebla::light::PointLight;
+    use niebla::render::render_with;
+
+    let lamp = Light::Point(PointLight { position: Vec3::new(4.0, 0.25, 0.2), intensity: Rgb::splat(0.5) });
+    let mut s = sphere_scene(Rgb::splat(0.6), Rgb::splat(0.03), vec![lamp]);
+    s.objects.push(SceneObject {
+        shape: Shape::Sphere(Sphere { center: Vec3::new(4.2, -0.45, -0.1), radius: 0.25 }),
+        bsdf: Bsdf::Diffuse { reflectance: Rgb::splat(0.7) },
+        interior: None,
+        exterior: Some(MediumId(0)),
+        bounds_medium: false,
+        emitter: None,
+    });
+    let stats = |integrator: &VolPathIntegrator| {
+        let (spp, batches) = (256, 12u64);
+        let images: Vec<Image> = (0..batches)
+            .map(|b| {
+                let options = RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None };
+                render_with(&s, integrator, &options, &|_, _| {}, None).unwrap()
+            })
+            .collect();
+        let n = batches as f64;
+        let pixel = |i: usize| -> (f64, f64) {
+            let v: Vec<f64> = images.iter().map(|im| im.pixels[i].g() as f64).collect();
+            let m = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0);
+            (m, var)
+        };
+        (0..64).map(pixel).collect::<Vec<_>>()
+    };
+    let guided = stats(&VolPathIntegrator::new(64));
+    assert_eq!(VolPathIntegrator::new(64).guide_fraction, DEFAULT_GUIDE_FRACTION);
+    let plain = stats(&VolPathIntegrator::new(64).with_guide_fraction(0.0));
+    let n = 12.0;
+    let brightest = plain.iter().map(|p| p.0).fold(0.0, f64::max);
+    let (mut relative_guided, mut relative_plain) = (Vec::new(), Vec::new());
+    for i in 0..64 {
+        let ((a, va), (b, vb)) = (guided[i], plain[i]);
+        if b < 1e-4 {
+            continue;
+        }
+        let se = ((va + vb) / n).sqrt();
+        assert!((a - b).abs() < 4.5 * se + 1e-6, "pixel {i}: guided {a:.5e} vs plain {b:.5e} +- {se:.1e}");
+        // Efficiency where the fog is seen well (grazing pixels find it too
+        // rarely for 12 batches to estimate a variance).
+        if b > 0.03 * brightest {
+            relative_guided.push(va / (b * b));
+            relative_plain.push(vb / (b * b));
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (g, p) = (median(&mut relative_guided), median(&mut relative_plain));
+    println!("median relative variance per batch over {} pixels: guided {g:.3e}, plain {p:.3e}", relative_plain.len());
+    assert!(relative_plain.len() >= 16);
+    assert!(g < 0.8 * p, "guided {g:.3e} vs plain {p:.3e}");
+}

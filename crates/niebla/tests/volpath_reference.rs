@@ -45,7 +45,7 @@ fn black_plane(y: f32) -> SceneObject {
 
 /// Mean and standard error per channel of `n` path samples along `ray`.
 fn estimate(s: &Scene, ray: Ray, medium: Option<MediumId>, n: u32, max_depth: u32) -> [Stats; 3] {
-    let integrator = VolPathIntegrator { max_depth };
+    let integrator = VolPathIntegrator::new(max_depth);
     let mut stats = [Stats::default(); 3];
     for i in 0..n {
         let mut sampler = PixelSampler::from_key(0x51ab_0000_0000 + i as u64);

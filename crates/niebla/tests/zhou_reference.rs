@@ -207,8 +207,7 @@ fn smoke_error_against_volpath_does_not_regress() {
     let aspect = scene.camera.height as f64 / scene.camera.width as f64;
     scene.camera.width = 40;
     scene.camera.height = (40.0 * aspect).round() as u32;
-    let reference =
-        render_with(&scene, &VolPathIntegrator { max_depth: 256 }, &options(256, 1), &|_, _| {}, None).unwrap();
+    let reference = render_with(&scene, &VolPathIntegrator::new(256), &options(256, 1), &|_, _| {}, None).unwrap();
     let with = zhou(&scene, no_cache(), 16).relative_mse(&reference);
     let without = zhou(&scene, ZhouSettings { multiple_scattering: false, ..no_cache() }, 16).relative_mse(&reference);
     println!("smoke: relative MSE vs volpath: zhou {with:.4}, single scattering only {without:.4}");

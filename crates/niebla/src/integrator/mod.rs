@@ -9,6 +9,7 @@ mod direct;
 mod emission;
 mod equiangular;
 pub mod hegeman;
+mod light_volume;
 pub mod photon;
 mod precompute_memory;
 mod single;
@@ -24,7 +25,7 @@ pub use emission::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use single::{SingleIntegrator, SingleSampling};
-pub use volpath::VolPathIntegrator;
+pub use volpath::{VolPathIntegrator, DEFAULT_GUIDE_FRACTION};
 pub use zhou::{ZhouIntegrator, ZhouSettings};
 
 use crate::color::Rgb;

@@ -33,6 +33,7 @@ use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
 use crate::tracking::{majorant_profile, sample_t_maj, segment_transmittance, TransmittanceMethod};
 
 use super::equiangular::{equiangular_target, PointLightTarget};
+use super::light_volume::LightGuide;
 use super::Integrator;
 
 /// The volumetric path tracer.
@@ -40,6 +41,61 @@ use super::Integrator;
 pub struct VolPathIntegrator {
     /// Largest number of scattering events (medium or surface) on a path.
     pub max_depth: u32,
+    /// Probability, at a vertex whose next segment runs through a medium,
+    /// of drawing the direction toward a point or spot light inside a
+    /// medium instead of from the phase function or diffuse BSDF (one-sample
+    /// MIS of the two; see `LightGuide`). 0 turns guiding off; it only acts
+    /// in scenes with such a light.
+    pub guide_fraction: f32,
+    /// The guide, when computed once for the scene being rendered
+    /// ([`VolPathIntegrator::for_scene`]); else found for every path.
+    guide: Option<LightGuide>,
+}
+
+/// [`VolPathIntegrator::guide_fraction`] of [`VolPathIntegrator::new`].
+pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
+
+impl VolPathIntegrator {
+    /// The path tracer with at most `max_depth` scattering events per path
+    /// and the default light guiding, for any scene.
+    pub fn new(max_depth: u32) -> VolPathIntegrator {
+        VolPathIntegrator { max_depth, guide_fraction: DEFAULT_GUIDE_FRACTION, guide: None }
+    }
+
+    /// [`VolPathIntegrator::new`] with the lights to guide toward found once,
+    /// in `scene`: render only that scene (unchanged) with it.
+    pub fn for_scene(scene: &Scene, max_depth: u32) -> VolPathIntegrator {
+        VolPathIntegrator { guide: Some(LightGuide::new(scene)), ..VolPathIntegrator::new(max_depth) }
+    }
+
+    /// The same integrator with guiding probability `fraction` (0: off).
+    pub fn with_guide_fraction(self, fraction: f32) -> VolPathIntegrator {
+        VolPathIntegrator { guide_fraction: fraction, ..self }
+    }
+}
+
+/// How a path samples lights: next-event estimation's choice and direction
+/// guiding toward lights inside media.
+#[derive(Clone, Copy)]
+struct LightSampling<'a> {
+    lights: LightChoice,
+    guiding: Option<Guiding<'a>>,
+}
+
+/// Direction guiding at a vertex: the guide and the probability of using it.
+#[derive(Clone, Copy)]
+struct Guiding<'a> {
+    guide: &'a LightGuide,
+    fraction: f32,
+}
+
+impl Guiding<'_> {
+    /// The one-sample MIS density of direction `w` at `x`, given the density
+    /// `pdf` of phase or BSDF sampling there.
+    #[inline]
+    fn mix(&self, x: Vec3, w: Vec3, pdf: f32) -> f32 {
+        (1.0 - self.fraction) * pdf + self.fraction * self.guide.pdf(x, w)
+    }
 }
 
 /// How the previous vertex scattered: what light sampling there would have done.
@@ -82,9 +138,15 @@ impl Integrator for VolPathIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let (groups, count) = channel_groups(scene);
         let lights = LightChoice::new(scene);
+        let guide = match self.guide {
+            _ if !(self.guide_fraction > 0.0) || lights.points == 0 => LightGuide::NONE,
+            Some(guide) => guide,
+            None => LightGuide::new(scene),
+        };
+        let guiding = guide.is_active().then_some(Guiding { guide: &guide, fraction: self.guide_fraction.min(1.0) });
         let mut l = Rgb::ZERO;
         for &group in &groups[..count] {
-            l += self.trace(scene, ray, medium, group, lights, sampler);
+            l += self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler);
         }
         l
     }
@@ -99,9 +161,10 @@ impl VolPathIntegrator {
         mut ray: Ray,
         mut medium: Option<MediumId>,
         group: Channels,
-        lights: LightChoice,
+        light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> Rgb {
+        let LightSampling { lights, guiding } = light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -177,9 +240,10 @@ impl VolPathIntegrator {
                             beta,
                             r_p: r_u,
                             segment: Some(segment),
+                            guiding,
                         };
                         l += sample_ld(scene, &vertex, group, hero, lights, sampler);
-                        let Some(ps) = phase.sample(wo, sampler.next_2d()) else {
+                        let Some(ps) = sample_phase(phase, c.p, wo, guiding, sampler) else {
                             terminated = true;
                             return false;
                         };
@@ -283,6 +347,9 @@ impl VolPathIntegrator {
             let wo = -ray.d;
             let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
             let p = hit.surface.p;
+            // Guiding toward lights inside a medium, for non-specular surfaces
+            // whose side of `wo` lies in a medium.
+            let surface_guiding = guiding.filter(|_| medium.is_some() && !object.bsdf.is_specular());
             if !object.bsdf.is_specular() {
                 let vertex = NeeVertex {
                     p,
@@ -292,12 +359,11 @@ impl VolPathIntegrator {
                     beta,
                     r_p: r_u,
                     segment: None,
+                    guiding: surface_guiding,
                 };
                 l += sample_ld(scene, &vertex, group, hero, lights, sampler);
             }
-            // BSDF sampling with the outward geometric normal (dielectrics need it).
-            let u_lobe = sampler.next_1d();
-            let Some(bs) = object.bsdf.sample(hit.surface.n, wo, u_lobe, sampler.next_2d()) else {
+            let Some(bs) = sample_bsdf(&object.bsdf, hit.surface.n, p, wo, surface_guiding, sampler) else {
                 return l;
             };
             if !(bs.pdf > 0.0) {
@@ -417,6 +483,59 @@ struct NeeVertex<'a> {
     /// The medium segment of a free-flight vertex (for the MIS against
     /// equiangular sampling); `None` at surfaces.
     segment: Option<Segment<'a>>,
+    /// Guiding, when the vertex's own direction sampling mixes it in.
+    guiding: Option<Guiding<'a>>,
+}
+
+/// Phase sampling at `x`, mixed with guiding toward lights when `guiding` is
+/// given (one-sample MIS: the returned `pdf` is the mixture's density and
+/// `value` the phase function, so `value / pdf` is the path weight). Without
+/// guiding it draws the same random numbers as plain phase sampling.
+fn sample_phase(
+    phase: &PhaseFunction,
+    x: Vec3,
+    wo: Vec3,
+    guiding: Option<Guiding>,
+    sampler: &mut PixelSampler,
+) -> Option<crate::phase::PhaseSample> {
+    let Some(g) = guiding else {
+        return phase.sample(wo, sampler.next_2d());
+    };
+    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let wi = if u_choice < g.fraction { g.guide.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
+    let pdf = g.mix(x, wi, phase.pdf(wo, wi));
+    (pdf > 0.0).then(|| crate::phase::PhaseSample { wi, value: phase.eval(wo, wi), pdf })
+}
+
+/// BSDF sampling at surface point `p` with outward geometric normal `n`,
+/// mixed with guiding toward lights when `guiding` is given (only for
+/// non-specular BSDFs; the sample's `f` and `pdf` are then the BSDF value
+/// and the mixture's density). Without guiding it draws the same random
+/// numbers as plain BSDF sampling.
+fn sample_bsdf(
+    bsdf: &Bsdf,
+    n: Vec3,
+    p: Vec3,
+    wo: Vec3,
+    guiding: Option<Guiding>,
+    sampler: &mut PixelSampler,
+) -> Option<crate::bsdf::BsdfSample> {
+    let u_lobe = sampler.next_1d();
+    let Some(g) = guiding else {
+        return bsdf.sample(n, wo, u_lobe, sampler.next_2d());
+    };
+    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let wi = if u_choice < g.fraction {
+        g.guide.sample(p, u_light, u_dir, u_r)?
+    } else {
+        bsdf.sample(n, wo, u_lobe, u_dir)?.wi
+    };
+    let f = bsdf.eval(n, wo, wi);
+    if f.is_black() {
+        return None;
+    }
+    let pdf = g.mix(p, wi, bsdf.pdf(n, wo, wi));
+    Some(crate::bsdf::BsdfSample { wi, f, pdf, is_specular: false, is_transmission: false, eta: 1.0 })
 }
 
 /// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
@@ -461,7 +580,7 @@ fn sample_ld_light(
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment, guiding } = *vertex;
     let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
@@ -476,6 +595,8 @@ fn sample_ld_light(
         return Rgb::ZERO;
     }
     let (f_hat, scatter_pdf) = scatter.eval(wo, ls.wi);
+    // The density with which this vertex's own direction sampling draws `wi`.
+    let scatter_pdf = guiding.map_or(scatter_pdf, |g| g.mix(p, ls.wi, scatter_pdf));
     if f_hat.is_black() {
         return Rgb::ZERO;
     }
