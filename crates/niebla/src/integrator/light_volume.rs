@@ -1,12 +1,13 @@
 //! Directions toward the volume a point or spot light illuminates, for
 //! `volpath`'s direction guiding toward lights inside media ([`LightGuide`]).
 //!
-//! This module samples a point
-//! `y` with density proportional to `1/r^2` (r the distance to the light)
-//! inside the light's cone (the whole sphere for a point light) out to a
-//! radius `R`, i.e. directions from the light uniform over the cone and `r`
-//! uniform on `[0, R]`, and gives the solid-angle density of the direction
-//! toward `y` seen from another point in closed form.
+//! A point `y` is sampled with density proportional to `1/r^2` (r the
+//! distance to the light) inside the light's cone (the whole sphere for a
+//! point light) out to a radius `R`: directions from the light uniform over
+//! the cone and `r` uniform on `[0, R]`. The solid-angle density of the
+//! direction toward `y` seen from another point is the integral of that
+//! density times `s^2` along the ray, in closed form; it grows as `1/h` for
+//! directions passing at distance `h` from the light.
 
 use crate::light::Light;
 use crate::math::{Frame, Ray, Vec3};
