@@ -45,7 +45,9 @@ pub struct VolPathIntegrator {
     /// of drawing the direction toward a point or spot light inside a
     /// medium instead of from the phase function or diffuse BSDF (one-sample
     /// MIS of the two; see `LightGuide`). 0 turns guiding off; it only acts
-    /// in scenes with such a light.
+    /// in scenes with such a light. Values above [`MAX_GUIDE_FRACTION`] act
+    /// as it: phase/BSDF sampling must keep a share, or directions the guide
+    /// never draws would be lost.
     pub guide_fraction: f32,
     /// The guide, when computed once for the scene being rendered
     /// ([`VolPathIntegrator::for_scene`]); else found for every path.
@@ -54,6 +56,9 @@ pub struct VolPathIntegrator {
 
 /// [`VolPathIntegrator::guide_fraction`] of [`VolPathIntegrator::new`].
 pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
+
+/// Largest guiding probability used.
+pub const MAX_GUIDE_FRACTION: f32 = 0.9;
 
 impl VolPathIntegrator {
     /// The path tracer with at most `max_depth` scattering events per path
@@ -143,7 +148,9 @@ impl Integrator for VolPathIntegrator {
             Some(guide) => guide,
             None => LightGuide::new(scene),
         };
-        let guiding = guide.is_active().then_some(Guiding { guide: &guide, fraction: self.guide_fraction.min(1.0) });
+        let guiding = guide
+            .is_active()
+            .then_some(Guiding { guide: &guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
         let mut l = Rgb::ZERO;
         for &group in &groups[..count] {
             l += self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler);
