@@ -602,8 +602,6 @@ fn sample_ld_light(
         return Rgb::ZERO;
     }
     let (f_hat, scatter_pdf) = scatter.eval(wo, ls.wi);
-    // The density with which this vertex's own direction sampling draws `wi`.
-    let scatter_pdf = guiding.map_or(scatter_pdf, |g| g.mix(p, ls.wi, scatter_pdf));
     if f_hat.is_black() {
         return Rgb::ZERO;
     }
@@ -626,7 +624,6 @@ fn sample_ld_light(
     };
     let light_pdf = pmf * ls.pdf;
     r_l *= r_p * light_pdf;
-    r_u *= r_p * scatter_pdf;
     if ls.is_delta {
         // A point or spot light seen from a free-flight vertex: the same path can
         // come from equiangular sampling on the segment (`equiangular_ld`).
@@ -634,6 +631,10 @@ fn sample_ld_light(
             segment.map_or(1.0, |seg| light_weight_against_equiangular(seg, light, lights, group).unwrap_or(1.0));
         beta * f_hat * t_ray * ls.li * weight / group.average(r_l)
     } else {
+        // The density with which this vertex's own direction sampling draws
+        // `wi` (only a light that is not a delta can be reached that way).
+        let scatter_pdf = guiding.map_or(scatter_pdf, |g| g.mix(p, ls.wi, scatter_pdf));
+        r_u *= r_p * scatter_pdf;
         beta * f_hat * t_ray * ls.li / group.average(r_l + r_u)
     }
 }
