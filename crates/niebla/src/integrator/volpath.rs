@@ -198,7 +198,9 @@ impl VolPathIntegrator {
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
-                    l += equiangular_ld(scene, &ray, t_end, m, id, beta / group.average(r_u), group, lights, sampler);
+                    let segment =
+                        EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput: beta / group.average(r_u) };
+                    l += equiangular_ld(scene, &segment, group, lights, sampler);
                 }
                 let mut scattered: Option<Ray> = None;
                 let mut terminated = false;
@@ -685,21 +687,26 @@ fn light_weight_against_equiangular(seg: Segment, light: &Light, lights: LightCh
     (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
 }
 
-/// Equiangular next-event estimation on the segment `[0, t_end)` of `ray` in
-/// medium `id` (Kulla and Fajardo 2012, combined by MIS with free-flight
-/// sampling as Cycles does): every point or spot light, or one chosen
-/// uniformly ([`LightChoice`]), one point sampled equiangularly toward each
-/// (within the spot's cone), camera-side and light-side transmittance exact
-/// (homogeneous) or by ratio tracking. `throughput` is the MIS-normalized
-/// path throughput at the segment start.
-#[allow(clippy::too_many_arguments)]
+/// A medium segment on which [`equiangular_ld`] samples points.
+struct EquiangularSegment<'a> {
+    /// The path's ray; the segment is `[0, t_end)` of it.
+    ray: &'a Ray,
+    t_end: f32,
+    /// The medium the segment lies in, and its id.
+    medium: &'a Medium,
+    id: MediumId,
+    /// MIS-normalized path throughput at the segment's start.
+    throughput: Rgb,
+}
+
+/// Equiangular next-event estimation on a medium segment (Kulla and Fajardo
+/// 2012, combined by MIS with free-flight sampling as Cycles does): every
+/// point or spot light, or one chosen uniformly ([`LightChoice`]), one point
+/// sampled equiangularly toward each (within the spot's cone), camera-side
+/// and light-side transmittance exact (homogeneous) or by ratio tracking.
 fn equiangular_ld(
     scene: &Scene,
-    ray: &Ray,
-    t_end: f32,
-    m: &Medium,
-    id: MediumId,
-    throughput: Rgb,
+    segment: &EquiangularSegment,
     group: Channels,
     lights: LightChoice,
     sampler: &mut PixelSampler,
@@ -712,7 +719,7 @@ fn equiangular_ld(
     if lights.all() {
         let mut l = Rgb::ZERO;
         for light in point_lights {
-            l += equiangular_ld_light(scene, ray, t_end, m, id, throughput, group, lights, light, sampler);
+            l += equiangular_ld_light(scene, segment, group, lights, light, sampler);
         }
         return l;
     }
@@ -721,23 +728,19 @@ fn equiangular_ld(
     let Some(light) = point_lights.nth(k) else {
         return Rgb::ZERO;
     };
-    equiangular_ld_light(scene, ray, t_end, m, id, throughput, group, lights, light, sampler)
+    equiangular_ld_light(scene, segment, group, lights, light, sampler)
 }
 
 /// [`equiangular_ld`] toward `light`, chosen with probability `lights.point_pmf()`.
-#[allow(clippy::too_many_arguments)]
 fn equiangular_ld_light(
     scene: &Scene,
-    ray: &Ray,
-    t_end: f32,
-    m: &Medium,
-    id: MediumId,
-    throughput: Rgb,
+    segment: &EquiangularSegment,
     group: Channels,
     lights: LightChoice,
     light: &Light,
     sampler: &mut PixelSampler,
 ) -> Rgb {
+    let EquiangularSegment { ray, t_end, medium: m, id, throughput } = *segment;
     let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
     let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
         return Rgb::ZERO;
