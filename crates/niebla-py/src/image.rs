@@ -79,19 +79,9 @@ pub(crate) fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'p
     Ok(image_to_array(py, &image))
 }
 
-/// Reads an EXR file's first RGB(A) layer.
+/// Reads an EXR file's first RGB(A) layer (through `niebla::film::read_exr`).
 pub(crate) fn read_exr_image(path: &Path) -> Result<Image, String> {
-    use exr::prelude::read_first_rgba_layer_from_file;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| Image::new(resolution.width() as u32, resolution.height() as u32),
-        |image: &mut Image, pos: exr::math::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = pos.y() * image.width as usize + pos.x();
-            image.pixels[i] = Rgb::new(r, g, b);
-        },
-    )
-    .map_err(|e| format!("{}: could not read EXR: {e}", path.display()))?;
-    Ok(image.layer_data.channel_data.pixels)
+    niebla::film::read_exr(path).map(|read| read.image).map_err(|e| e.to_string())
 }
 
 /// niebla's relative mean squared error of `image` against `reference`

@@ -17,7 +17,6 @@
 use std::path::{Path, PathBuf};
 
 use super::{write_exr_with_attributes, Image, OutputError};
-use crate::color::Rgb;
 
 const VERSION: &str = "1";
 
@@ -102,36 +101,13 @@ pub fn write_checkpoint(image: &Image, info: &CheckpointInfo, path: &Path) -> Re
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn read_checkpoint(path: &Path) -> Result<(Image, CheckpointInfo), CheckpointError> {
-    use exr::prelude::*;
-    let read_error = |message: String| CheckpointError::Read { path: path.to_path_buf(), message };
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |resolution, _channels: &RgbaChannels| {
-                (resolution.width(), vec![Rgb::ZERO; resolution.width() * resolution.height()])
-            },
-            |(width, pixels): &mut (usize, Vec<Rgb>), position, (r, g, b, _a): (f32, f32, f32, f32)| {
-                pixels[position.y() * *width + position.x()] = Rgb::new(r, g, b);
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|e| read_error(e.to_string()))?;
-    let other = &image.layer_data.attributes.other;
+    let read =
+        super::read_exr(path).map_err(|e| CheckpointError::Read { path: path.to_path_buf(), message: e.reason() })?;
     let text = |name: &str| -> std::result::Result<String, CheckpointError> {
-        match Text::new_or_none(name).and_then(|key| other.get(&key).cloned()) {
-            Some(AttributeValue::Text(t)) => Ok(t.to_string()),
-            Some(_) => Err(CheckpointError::NotCheckpoint {
-                path: path.to_path_buf(),
-                message: format!("attribute {name} is not text"),
-            }),
-            None => Err(CheckpointError::NotCheckpoint {
-                path: path.to_path_buf(),
-                message: format!("the header has no {name} attribute (was it written by `niebla render`?)"),
-            }),
-        }
+        read.text_attributes.get(name).cloned().ok_or_else(|| CheckpointError::NotCheckpoint {
+            path: path.to_path_buf(),
+            message: format!("the header has no text attribute {name} (was it written by `niebla render`?)"),
+        })
     };
     let number = |name: &str| -> std::result::Result<u64, CheckpointError> {
         let t = text(name)?;
@@ -153,8 +129,5 @@ pub fn read_checkpoint(path: &Path) -> Result<(Image, CheckpointInfo), Checkpoin
         scene_hash: text("nieblaSceneHash")?,
         integrator: text("nieblaIntegrator")?,
     };
-    let size = image.layer_data.size;
-    let (_, pixels) = image.layer_data.channel_data.pixels;
-    let image = super::Image { width: size.width() as u32, height: size.height() as u32, pixels };
-    Ok((image, info))
+    Ok((read.image, info))
 }

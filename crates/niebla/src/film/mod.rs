@@ -7,9 +7,11 @@
 //! render can be continued exactly (`checkpoint.rs`).
 
 mod checkpoint;
+mod exr_read;
 mod output;
 
 pub use checkpoint::{read_checkpoint, scene_hash, write_checkpoint, CheckpointError, CheckpointInfo};
+pub use exr_read::{read_exr, ExrImage, ExrReadError};
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
 
 use crate::color::Rgb;

@@ -433,53 +433,21 @@ fn is_rotation(m: Mat3) -> bool {
     max_err < 1e-4 && (m.determinant() - 1.0).abs() < 1e-4
 }
 
-/// Read the R, G, B channels of the first layer of an EXR that has them.
+/// Read the R, G, B channels of the first layer of an EXR that has them
+/// (through [`crate::film::read_exr`]), as (width, height, pixels).
 fn read_exr_rgb(path: &Path) -> Result<(usize, usize, Vec<Rgb>), LightError> {
-    use exr::prelude::*;
-
-    // Missing or unreadable file.
-    let bytes = std::fs::read(path).map_err(|source| match source.kind() {
-        std::io::ErrorKind::NotFound => LightError::Missing { path: path.to_path_buf() },
-        _ => LightError::Io { path: path.to_path_buf(), source },
-    })?;
-    // Headers: is it an EXR, and does a layer have R, G and B?
-    let not_exr = |e: exr::error::Error| LightError::NotExr { path: path.to_path_buf(), message: e.to_string() };
-    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(&bytes), false).map_err(not_exr)?;
-    let has_rgb =
-        meta.headers.iter().any(|h| ["R", "G", "B"].iter().all(|name| h.channels.list.iter().any(|c| c.name.eq(name))));
-    if !has_rgb {
-        let found: Vec<String> =
-            meta.headers.iter().flat_map(|h| h.channels.list.iter().map(|c| c.name.to_string())).collect();
-        return Err(LightError::NoRgbChannels { path: path.to_path_buf(), found: found.join(", ") });
-    }
-    if let Some(h) = meta.headers.first() {
-        if h.layer_size.width() == 0 || h.layer_size.height() == 0 {
-            return Err(LightError::ZeroSize {
-                source_name: path.display().to_string(),
-                width: h.layer_size.width(),
-                height: h.layer_size.height(),
-            });
+    use crate::film::ExrReadError;
+    let read = crate::film::read_exr(path).map_err(|e| match e {
+        ExrReadError::Missing { path } => LightError::Missing { path },
+        ExrReadError::Io { path, source } => LightError::Io { path, source },
+        ExrReadError::NotExr { path, message } => LightError::NotExr { path, message },
+        ExrReadError::NoRgbChannels { path, found } => LightError::NoRgbChannels { path, found },
+        ExrReadError::ZeroSize { path, width, height } => {
+            LightError::ZeroSize { source_name: path.display().to_string(), width, height }
         }
-    }
-    // Pixels.
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |resolution, _channels: &RgbaChannels| {
-                (resolution.width(), vec![Rgb::ZERO; resolution.width() * resolution.height()])
-            },
-            |(width, pixels): &mut (usize, Vec<Rgb>), position, (r, g, b, _a): (f32, f32, f32, f32)| {
-                pixels[position.y() * *width + position.x()] = Rgb::new(r, g, b);
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(&bytes))
-        .map_err(not_exr)?;
-    let size = image.layer_data.size;
-    let (_, pixels) = image.layer_data.channel_data.pixels;
-    Ok((size.width(), size.height(), pixels))
+    })?;
+    let image = read.image;
+    Ok((image.width as usize, image.height as usize, image.pixels))
 }
 
 #[cfg(test)]
