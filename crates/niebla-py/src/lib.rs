@@ -61,7 +61,7 @@ fn _niebla(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RenderError", py.get_type::<RenderError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The names the scene parser accepts (Python passes integrators through it).
-    m.add("INTEGRATORS", niebla::scene::IntegratorDesc::TYPES.to_vec())?;
+    m.add("INTEGRATORS", niebla::integrator::registry::NAMES.to_vec())?;
     m.add_class::<scene::PyScene>()?;
     m.add_function(wrap_pyfunction!(image::write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_png, m)?)?;

@@ -20,11 +20,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use niebla::integrator::IntegratorSettings;
+use niebla::integrator::{registry, IntegratorSettings};
 use niebla::progressive::Budget;
 use niebla::scene::{
-    build_scene, integrator_settings, load_scene_file, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc,
-    InlineGridDesc, MediumDesc, SceneDesc, SceneError as RustSceneError,
+    build_scene, load_scene_file, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc,
+    MediumDesc, SceneDesc, SceneError as RustSceneError,
 };
 use numpy::{PyArray3, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -140,18 +140,19 @@ impl PyScene {
     }
 
     /// The integrator settings of JSON `integrator` (a scene file's
-    /// `render.integrator` object), checked by the scene parser: errors name
-    /// `render.integrator...` paths as they would in a file.
+    /// `render.integrator` object), read by the integrator registry: errors
+    /// name `render.integrator...` paths as they would in a file.
     fn integrator_from_json(&self, py: Python<'_>, integrator: &str) -> PyResult<IntegratorSettings> {
-        let value: Value = serde_json::from_str(integrator).map_err(|e| {
-            let e = RustSceneError::new(&self.source, "render.integrator", format!("invalid JSON: {e}"));
-            scene_error(py, &e)
-        })?;
-        // A scene with this scene's camera and nothing else, so that only the
-        // integrator can be at fault.
-        let probe = json!({"version": 1, "camera": self.value["camera"], "render": {"integrator": value}});
-        let desc = parse_scene_str(&probe.to_string(), &self.source).map_err(|e| scene_error(py, &e))?;
-        Ok(integrator_settings(&desc.render.integrator))
+        let at = |path: &str, message: String| {
+            let path =
+                if path.is_empty() { "render.integrator".to_string() } else { format!("render.integrator.{path}") };
+            scene_error(py, &RustSceneError::new(&self.source, path, message))
+        };
+        let value: Value = serde_json::from_str(integrator).map_err(|e| at("", format!("invalid JSON: {e}")))?;
+        let Value::Object(object) = value else {
+            return Err(at("", "expected an integrator object with a \"type\" field".to_string()));
+        };
+        registry::parse(&object).map_err(|e| at(&e.path, e.message))
     }
 }
 

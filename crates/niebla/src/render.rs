@@ -6,9 +6,10 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::color::Rgb;
 use crate::film::Image;
-use crate::integrator::{EmissionIntegrator, Integrator, IntegratorSettings, SingleIntegrator, VolPathIntegrator};
+pub use crate::integrator::PreparedIntegrator;
+use crate::integrator::{Integrator, IntegratorSettings};
 use crate::sampling::PixelSampler;
-use crate::scene::Scene;
+use crate::world::Scene;
 
 /// Tile edge length in pixels.
 pub const TILE_SIZE: u32 = 16;
@@ -46,7 +47,8 @@ pub enum RenderError {
 /// Progress of a render: called after each tile with (pixel samples done, total).
 pub type ProgressFn<'a> = &'a (dyn Fn(u64, u64) + Sync);
 
-/// Render `scene` with the integrator described by `settings`.
+/// Render `scene` with the integrator described by `settings` (its
+/// precomputation included).
 pub fn render(
     scene: &Scene,
     settings: &IntegratorSettings,
@@ -55,72 +57,6 @@ pub fn render(
     cancel: Option<&AtomicBool>,
 ) -> Result<Image, RenderError> {
     PreparedIntegrator::new(scene, settings).render(scene, options, progress, cancel)
-}
-
-/// An integrator with its per-scene precomputation done (the interactive
-/// methods' volumes and fits), so that progressive passes reuse it.
-pub enum PreparedIntegrator {
-    /// Integrators without a per-scene precomputation (photon maps are per pass).
-    Plain(IntegratorSettings),
-    /// `hegeman` with its light volumes.
-    Hegeman(Box<crate::integrator::HegemanIntegrator>),
-    /// `zhou` with its RBF fit and source radiance.
-    Zhou(Box<crate::integrator::ZhouIntegrator>),
-}
-
-impl PreparedIntegrator {
-    /// Run the precomputation of `settings` for `scene`.
-    pub fn new(scene: &Scene, settings: &IntegratorSettings) -> PreparedIntegrator {
-        match *settings {
-            IntegratorSettings::Hegeman(h) => {
-                PreparedIntegrator::Hegeman(Box::new(crate::integrator::HegemanIntegrator::new(scene, h)))
-            }
-            IntegratorSettings::Zhou(z) => {
-                PreparedIntegrator::Zhou(Box::new(crate::integrator::ZhouIntegrator::new(scene, z)))
-            }
-            other => PreparedIntegrator::Plain(other),
-        }
-    }
-
-    /// Render `options.spp` samples per pixel of `scene` (the scene the
-    /// integrator was prepared for).
-    pub fn render(
-        &self,
-        scene: &Scene,
-        options: &RenderOptions,
-        progress: ProgressFn,
-        cancel: Option<&AtomicBool>,
-    ) -> Result<Image, RenderError> {
-        let settings = match self {
-            PreparedIntegrator::Hegeman(i) => return render_with(scene, i.as_ref(), options, progress, cancel),
-            PreparedIntegrator::Zhou(i) => return render_with(scene, i.as_ref(), options, progress, cancel),
-            PreparedIntegrator::Plain(settings) => *settings,
-        };
-        match settings {
-            IntegratorSettings::Emission { step, transmittance } => {
-                render_with(scene, &EmissionIntegrator { step, transmittance }, options, progress, cancel)
-            }
-            IntegratorSettings::Single { step, sampling, transmittance } => {
-                render_with(scene, &SingleIntegrator { step, sampling, transmittance }, options, progress, cancel)
-            }
-            IntegratorSettings::VolPath { max_depth } => {
-                render_with(scene, &VolPathIntegrator::for_scene(scene, max_depth), options, progress, cancel)
-            }
-            IntegratorSettings::Photon(p) => {
-                crate::integrator::photon::render_photon(scene, &p, options, progress, cancel)
-            }
-            IntegratorSettings::Ppm(p) => crate::integrator::photon::render_ppm(scene, &p, options, progress, cancel),
-            IntegratorSettings::Analytic => {
-                render_with(scene, &crate::integrator::AnalyticIntegrator::new(), options, progress, cancel)
-            }
-            IntegratorSettings::Hegeman(h) => {
-                render_with(scene, &crate::integrator::HegemanIntegrator::new(scene, h), options, progress, cancel)
-            }
-            IntegratorSettings::Zhou(z) => {
-                render_with(scene, &crate::integrator::ZhouIntegrator::new(scene, z), options, progress, cancel)
-            }
-        }
-    }
 }
 
 /// Render with a concrete integrator type (monomorphized per integrator).

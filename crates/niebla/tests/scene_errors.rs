@@ -4,12 +4,13 @@
 //! Each error test takes the valid scene [`FULL`], changes one thing in its
 //! text and checks the error's `file`, `path` and message.
 
+use niebla::integrator::{IntegratorSettings, SingleSampling};
 use niebla::scene::{
     load_scene_file, parse_scene_str, BoundsDesc, BsdfDesc, CameraDesc, CoefficientsDesc, ColorDesc, DensitySourceDesc,
-    GeometryDesc, GridEmissionDesc, GridMediumDesc, IntegratorDesc, LightDesc, MarchStepDesc, MediumDesc, PhaseDesc,
-    ProceduralDesc, ProceduralShapeDesc, ResolutionDesc, ScatterSamplingDesc, SceneDesc, SceneError, SchlickDesc,
-    SpotAimDesc, TransformDesc, TransmittanceDesc,
+    GeometryDesc, GridEmissionDesc, GridMediumDesc, IntegratorSpec, LightDesc, MediumDesc, PhaseDesc, ProceduralDesc,
+    ProceduralShapeDesc, ResolutionDesc, SceneDesc, SceneError, SchlickDesc, SpotAimDesc, TransformDesc,
 };
+use niebla::tracking::{MarchStep, TransmittanceMethod};
 
 const FILE: &str = "test.json";
 
@@ -86,10 +87,10 @@ fn full_scene_parses_with_defaults_filled_in() {
     assert_eq!((camera.width, camera.height, camera.fov_y), (64, 48, 35.0));
     assert_eq!(desc.render.spp, 4);
     assert_eq!(desc.render.seed, 7);
-    match &desc.render.integrator {
-        IntegratorDesc::Single(s) => {
-            assert_eq!(s.march, MarchStepDesc::Length(0.05));
-            assert_eq!(s.sampling, ScatterSamplingDesc::Mis);
+    match desc.render.integrator.settings {
+        IntegratorSettings::Single { step, sampling, .. } => {
+            assert_eq!(step, Some(MarchStep::Length(0.05)));
+            assert_eq!(sampling, SingleSampling::Mis);
         }
         other => panic!("wrong integrator {other:?}"),
     }
@@ -148,7 +149,7 @@ fn minimal_scene_gets_documented_defaults() {
     let CameraDesc::Perspective(camera) = &desc.camera;
     assert_eq!((camera.up, camera.fov_y), ([0.0, 1.0, 0.0], 40.0));
     assert_eq!((desc.render.spp, desc.render.seed, desc.render.exposure), (16, 0, 0.0));
-    assert_eq!(desc.render.integrator, IntegratorDesc::default());
+    assert_eq!(desc.render.integrator, IntegratorSpec::default());
     assert!(desc.media.is_empty() && desc.shapes.is_empty() && desc.lights.is_empty());
     assert_eq!(desc.ambient_medium, None);
 }
@@ -474,7 +475,7 @@ fn unknown_types_list_the_valid_ones() {
     let text = edit(r#""type": "single""#, r#""type": "bidirectional""#);
     let err =
         assert_error(&text, "render.integrator.type", r#"unknown integrator type "bidirectional"; expected one of: "#);
-    for name in niebla::scene::IntegratorDesc::TYPES {
+    for name in niebla::integrator::registry::NAMES {
         assert!(err.message.contains(name), "{err} does not list {name}");
     }
     let text = edit(r#""type": "homogeneous""#, r#""type": "foam""#);
@@ -574,9 +575,9 @@ fn grid_medium<'a>(desc: &'a SceneDesc, name: &str) -> &'a GridMediumDesc {
 #[test]
 fn grid_scene_parses_with_defaults_filled_in() {
     let desc = parse_scene_str(GRID, FILE).unwrap();
-    match &desc.render.integrator {
-        IntegratorDesc::Emission(e) => {
-            assert_eq!(e.transmittance, TransmittanceDesc::ResidualRatio)
+    match desc.render.integrator.settings {
+        IntegratorSettings::Emission { transmittance, .. } => {
+            assert_eq!(transmittance, TransmittanceMethod::ResidualRatio)
         }
         other => panic!("wrong integrator {other:?}"),
     }
@@ -699,16 +700,18 @@ fn source_defaults_are_documented_values() {
 #[test]
 fn every_transmittance_method_is_accepted() {
     for (name, expected) in [
-        ("analytic", TransmittanceDesc::Analytic),
-        ("ray_march", TransmittanceDesc::RayMarch),
-        ("delta", TransmittanceDesc::Delta),
-        ("ratio", TransmittanceDesc::Ratio),
-        ("residual_ratio", TransmittanceDesc::ResidualRatio),
+        ("analytic", TransmittanceMethod::Analytic),
+        ("ray_march", TransmittanceMethod::RayMarch(MarchStep::Count(32))),
+        ("delta", TransmittanceMethod::Delta),
+        ("ratio", TransmittanceMethod::Ratio),
+        ("residual_ratio", TransmittanceMethod::ResidualRatio),
     ] {
         let text = edit_grid(r#""transmittance": "residual_ratio""#, &format!(r#""transmittance": "{name}""#));
         let desc = parse_scene_str(&text, FILE).unwrap();
-        let IntegratorDesc::Emission(e) = &desc.render.integrator else { panic!("wrong integrator") };
-        assert_eq!(e.transmittance, expected, "{name}");
+        let IntegratorSettings::Emission { transmittance, .. } = desc.render.integrator.settings else {
+            panic!("wrong integrator")
+        };
+        assert_eq!(transmittance, expected, "{name}");
     }
     let text = edit_grid(r#""transmittance": "residual_ratio""#, r#""transmittance": "residual""#);
     assert_error(
@@ -1121,10 +1124,7 @@ fn volpath_integrator_parses_and_rejects_a_zero_depth() {
         r#"{"type": "volpath", "max_depth": 64}"#,
     );
     let desc = parse_scene_str(&text, FILE).unwrap();
-    assert_eq!(
-        desc.render.integrator,
-        niebla::scene::IntegratorDesc::VolPath(niebla::scene::VolPathDesc { max_depth: 64 })
-    );
+    assert_eq!(desc.render.integrator.settings, IntegratorSettings::VolPath { max_depth: 64 });
     let zero = text.replace(r#""max_depth": 64"#, r#""max_depth": 0"#);
     assert_error(&zero, "render.integrator.max_depth", "at least 1");
     let typo = text.replace(r#""max_depth": 64"#, r#""max_dept": 64"#);

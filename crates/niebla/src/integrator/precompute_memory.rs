@@ -4,9 +4,9 @@
 //! out of memory.
 
 use super::photon::{photon_stream, trace_photons, Photon, TraceSettings};
-use super::IntegratorSettings;
+use super::{HegemanSettings, IntegratorSettings, ZhouSettings};
 use crate::medium::Medium;
-use crate::scene::Scene;
+use crate::world::Scene;
 
 /// Photons traced to measure how many get stored per emitted photon.
 const PILOT_PHOTONS: u32 = 256;
@@ -51,48 +51,51 @@ pub struct PrecomputeMemory {
 /// assert!(m.bytes >= 512u64.pow(3) * 12);
 /// ```
 pub fn precompute_memory(settings: &IntegratorSettings, scene: &Scene) -> Option<PrecomputeMemory> {
-    let grid_media = scene.media.iter().filter(|m| matches!(m, Medium::Grid(_))).count() as u64;
-    match settings {
-        IntegratorSettings::Hegeman(h) => {
-            // One (D0, D1, D2) f32 lattice per light and grid medium, the
-            // longest side `resolution` nodes.
-            let nodes = (h.resolution as u64).pow(3);
-            let lights = scene.lights.len().max(1) as u64;
-            Some(PrecomputeMemory {
-                bytes: grid_media * lights * nodes * 12,
-                field: "resolution",
-                what: format!(
-                    "{lights} light volume(s) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
-                    r = h.resolution
-                ),
-            })
-        }
-        IntegratorSettings::Zhou(z) => {
-            let nodes = (z.resolution as u64).pow(3);
-            let coefficients = (z.sh_order as u64).pow(2);
-            let per_node = coefficients * ZHOU_BYTES_PER_NODE_AND_COEFFICIENT + ZHOU_BYTES_PER_NODE;
-            Some(PrecomputeMemory {
-                bytes: grid_media * nodes * per_node,
-                field: "resolution",
-                what: format!(
-                    "an SH lattice (order {}) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
-                    z.sh_order,
-                    r = z.resolution
-                ),
-            })
-        }
-        IntegratorSettings::Photon(p) => Some(photon_map_memory(scene, p.photons, p.max_depth, "the photon map")),
-        IntegratorSettings::Ppm(p) => {
-            Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
-        }
-        _ => None,
+    settings.precompute_memory(scene)
+}
+
+/// Grid media of `scene` (the interactive methods precompute per grid medium).
+fn grid_media(scene: &Scene) -> u64 {
+    scene.media.iter().filter(|m| matches!(m, Medium::Grid(_))).count() as u64
+}
+
+/// `hegeman`: one (D0, D1, D2) f32 lattice per light and grid medium, the
+/// longest side `resolution` nodes.
+pub(crate) fn hegeman_memory(h: &HegemanSettings, scene: &Scene) -> PrecomputeMemory {
+    let grid_media = grid_media(scene);
+    let nodes = (h.resolution as u64).pow(3);
+    let lights = scene.lights.len().max(1) as u64;
+    PrecomputeMemory {
+        bytes: grid_media * lights * nodes * 12,
+        field: "resolution",
+        what: format!(
+            "{lights} light volume(s) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
+            r = h.resolution
+        ),
+    }
+}
+
+/// `zhou`: the SH lattice of each grid medium.
+pub(crate) fn zhou_memory(z: &ZhouSettings, scene: &Scene) -> PrecomputeMemory {
+    let grid_media = grid_media(scene);
+    let nodes = (z.resolution as u64).pow(3);
+    let coefficients = (z.sh_order as u64).pow(2);
+    let per_node = coefficients * ZHOU_BYTES_PER_NODE_AND_COEFFICIENT + ZHOU_BYTES_PER_NODE;
+    PrecomputeMemory {
+        bytes: grid_media * nodes * per_node,
+        field: "resolution",
+        what: format!(
+            "an SH lattice (order {}) of up to {r}^3 nodes for each of {grid_media} grid medium(s)",
+            z.sh_order,
+            r = z.resolution
+        ),
     }
 }
 
 /// Stored photons (volume and surface maps) for `photons` emitted, scaled
 /// from a pilot run; twice the photon size for the per-thread chunks
 /// concatenated and the kd-tree's build.
-fn photon_map_memory(scene: &Scene, photons: u32, max_depth: u32, what: &str) -> PrecomputeMemory {
+pub(crate) fn photon_map_memory(scene: &Scene, photons: u32, max_depth: u32, what: &str) -> PrecomputeMemory {
     let pilot = PILOT_PHOTONS.min(photons.max(1));
     let traced = trace_photons(
         scene,

@@ -12,14 +12,13 @@ use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
 use crate::color::Rgb;
 use crate::geometry::{AxisAlignedBox, Rectangle, Shape, Sphere, Transform};
-use crate::integrator::{IntegratorSettings, SingleSampling};
+use crate::integrator::IntegratorSettings;
 use crate::light::{
     AreaLight, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
 };
 use crate::math::{Frame, Vec3};
 use crate::medium::MediumId;
 use crate::phase::{PhaseFunction, Schlick, Tabulated};
-use crate::tracking::{MarchStep, TransmittanceMethod};
 
 /// A scene ready to render and the render settings its file asked for.
 #[derive(Clone, Debug)]
@@ -309,59 +308,10 @@ fn charge_envmap(file: &Path, budget: &mut crate::limits::MemoryBudget) -> Resul
         .map_err(|why| format!("{}: the {w} x {h} environment map {why}", file.display()))
 }
 
-/// Integrator settings from the file's description.
-pub fn integrator_settings(desc: &IntegratorDesc) -> IntegratorSettings {
-    let step = |m: &MarchStepDesc| match *m {
-        MarchStepDesc::Auto => None,
-        MarchStepDesc::Length(l) => Some(MarchStep::Length(l)),
-        MarchStepDesc::PerSegment(n) => Some(MarchStep::Count(n)),
-    };
-    let transmittance = |t: &TransmittanceDesc, s: Option<MarchStep>| match t {
-        TransmittanceDesc::Analytic => TransmittanceMethod::Analytic,
-        TransmittanceDesc::RayMarch => TransmittanceMethod::RayMarch(s.unwrap_or(MarchStep::Count(64))),
-        TransmittanceDesc::Delta => TransmittanceMethod::Delta,
-        TransmittanceDesc::Ratio => TransmittanceMethod::Ratio,
-        TransmittanceDesc::ResidualRatio => TransmittanceMethod::ResidualRatio,
-    };
-    match desc {
-        IntegratorDesc::Single(s) => IntegratorSettings::Single {
-            step: step(&s.march),
-            sampling: match s.sampling {
-                ScatterSamplingDesc::March => SingleSampling::March,
-                ScatterSamplingDesc::Equiangular => SingleSampling::Equiangular,
-                ScatterSamplingDesc::Mis => SingleSampling::Mis,
-            },
-            transmittance: transmittance(&s.transmittance, step(&s.march)),
-        },
-        IntegratorDesc::Emission(e) => IntegratorSettings::Emission {
-            step: step(&e.march),
-            transmittance: transmittance(&e.transmittance, step(&e.march)),
-        },
-        IntegratorDesc::VolPath(v) => IntegratorSettings::VolPath { max_depth: v.max_depth },
-        IntegratorDesc::Analytic => IntegratorSettings::Analytic,
-        IntegratorDesc::Hegeman(h) => IntegratorSettings::Hegeman(crate::integrator::HegemanSettings {
-            multiple_scattering: h.multiple_scattering,
-            resolution: h.resolution,
-            step_cells: h.step_cells,
-        }),
-        IntegratorDesc::Zhou(z) => IntegratorSettings::Zhou(crate::integrator::ZhouSettings {
-            rbf_count: z.rbf_count,
-            fit_iterations: z.fit_iterations,
-            resolution: z.resolution,
-            sh_order: z.sh_order,
-            multiple_scattering: z.multiple_scattering,
-            compensation: match z.compensation {
-                crate::scene::desc::CompensationDesc::Full => crate::integrator::zhou::Compensation::Full,
-                crate::scene::desc::CompensationDesc::Source => crate::integrator::zhou::Compensation::SourceOnly,
-                crate::scene::desc::CompensationDesc::Off => crate::integrator::zhou::Compensation::Off,
-            },
-            exact_transmittance: z.transmittance == crate::scene::desc::ZhouTransmittanceDesc::Exact,
-            step_cells: z.step_cells,
-            cache: z.cache,
-        }),
-        IntegratorDesc::Photon(p) => crate::integrator::photon::settings_from_desc(p, false),
-        IntegratorDesc::Ppm(p) => crate::integrator::photon::settings_from_desc(p, true),
-    }
+/// Integrator settings of a scene file's `render.integrator` (read by the
+/// integrator registry when the file was parsed).
+pub fn integrator_settings(spec: &IntegratorSpec) -> IntegratorSettings {
+    spec.settings
 }
 
 /// Transform from its description: scale, rotate x, y, z (degrees), translate;

@@ -1,12 +1,12 @@
 //! The one error type of scene loading, [`SceneError`]: where (file and JSON
-//! path) and what. Also the machinery that finds the path: errors with
-//! relative paths that travel out through serde ([`Located`]) and a scanner
-//! that maps a position in the text to its JSON path.
+//! path) and what, and a scanner that maps a position in the text to its
+//! JSON path (for syntax errors and duplicate keys). Errors with paths
+//! relative to a nested object are [`crate::params::Located`].
 
 use std::collections::HashSet;
 use std::fmt;
 
-use serde::de;
+use crate::params::join;
 
 /// An error in a scene file: the file, the JSON path inside it and what was
 /// expected there.
@@ -57,96 +57,6 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
-
-// ---------------------------------------------------------------------------
-// Errors with relative paths
-// ---------------------------------------------------------------------------
-
-/// Marks a serde error message that carries a path: `"\u{1}PATH\u{1}MESSAGE"`.
-const NESTED: char = '\u{1}';
-
-/// An error with a path relative to the object being read.
-#[derive(Debug)]
-pub(super) struct Located {
-    /// Path relative to the object being read; empty for the object itself.
-    pub(super) path: String,
-    /// What is wrong and what was expected.
-    pub(super) message: String,
-}
-
-impl Located {
-    pub(super) fn new(path: impl Into<String>, message: impl Into<String>) -> Located {
-        Located { path: path.into(), message: message.into() }
-    }
-
-    /// Passes this error out through serde, keeping its path in the message;
-    /// [`Located::from_path_error`] unpacks it and joins the outer path.
-    pub(super) fn into_serde<E: de::Error>(self) -> E {
-        E::custom(format!("{NESTED}{}{NESTED}{}", self.path, self.message))
-    }
-
-    /// Converts a `serde_path_to_error` error: its path joined with any path
-    /// carried in the message, and serde's wording made friendlier.
-    pub(super) fn from_path_error(e: serde_path_to_error::Error<serde_json::Error>) -> Located {
-        let outer = path_string(e.path());
-        let text = e.into_inner().to_string();
-        match text.strip_prefix(NESTED).and_then(|t| t.split_once(NESTED)) {
-            Some((inner, message)) => Located::new(join(&outer, inner), message),
-            None => normalize(outer, &text),
-        }
-    }
-
-    /// The same error seen from the parent object, where this value is `key`.
-    pub(super) fn under(mut self, key: &str) -> Located {
-        self.path = join(key, &self.path);
-        self
-    }
-}
-
-/// Formats a `serde_path_to_error` path as `a.b[2].c`; empty for the root.
-fn path_string(path: &serde_path_to_error::Path) -> String {
-    let mut out = String::new();
-    for segment in path.iter() {
-        match segment {
-            serde_path_to_error::Segment::Seq { index } => out.push_str(&format!("[{index}]")),
-            serde_path_to_error::Segment::Map { key } | serde_path_to_error::Segment::Enum { variant: key } => {
-                out = join(&out, key);
-            }
-            serde_path_to_error::Segment::Unknown => out = join(&out, "?"),
-        }
-    }
-    out
-}
-
-/// Joins two relative paths: `join("lights[1]", "intensity[2]")` is
-/// `lights[1].intensity[2]`, `join("a", "[0]")` is `a[0]`.
-fn join(outer: &str, inner: &str) -> String {
-    if outer.is_empty() {
-        inner.to_string()
-    } else if inner.is_empty() {
-        outer.to_string()
-    } else if inner.starts_with('[') {
-        format!("{outer}{inner}")
-    } else {
-        format!("{outer}.{inner}")
-    }
-}
-
-/// Rewords a plain serde message: a missing field's path names the field,
-/// Rust type names become words, and an unknown string in a closed set (such
-/// as `sampling`) is an unknown value rather than a "variant".
-fn normalize(path: String, message: &str) -> Located {
-    if let Some(field) = message.strip_prefix("missing field `").and_then(|rest| rest.strip_suffix('`')) {
-        return Located::new(join(&path, field), format!("missing required field `{field}`"));
-    }
-    let message = message
-        .replace("expected f32", "expected a number")
-        .replace("expected u32", "expected a whole number from 0 to 4294967295")
-        .replace("expected u64", "expected a whole number >= 0")
-        .replace("unknown variant `", "unknown value `")
-        .replace(", there are no fields", "; this type has no fields besides `type`");
-    Located::new(path, message)
-}
 
 // ---------------------------------------------------------------------------
 // Text scanner: JSON paths of text positions, duplicate keys
@@ -297,13 +207,5 @@ mod tests {
         assert_eq!(key, "k");
         assert!(at.starts_with("[0].a[0].a") && at.len() > 50_000, "{}", &at[..40]);
         assert!(path.starts_with("[0].a[0].a"));
-    }
-
-    #[test]
-    fn joined_paths_use_dots_and_brackets() {
-        assert_eq!(join("lights[1]", "intensity[2]"), "lights[1].intensity[2]");
-        assert_eq!(join("a", "[0]"), "a[0]");
-        assert_eq!(join("", "x"), "x");
-        assert_eq!(join("x", ""), "x");
     }
 }

@@ -14,16 +14,15 @@ mod build_medium;
 pub mod desc;
 mod error;
 mod parse;
-mod render_scene;
 mod validate;
 
+pub use crate::world::{offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS};
 pub use build::{
     build_scene, build_scene_with_options, build_transform, integrator_settings, BuildOptions, BuiltScene,
 };
 pub use desc::*;
 pub use error::SceneError;
 pub use parse::{load_scene_file, parse_scene_str};
-pub use render_scene::{offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS};
 
 use crate::integrator::IntegratorSettings;
 

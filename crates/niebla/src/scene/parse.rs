@@ -18,15 +18,15 @@
 //! inside the serde error message (see [`Located::into_serde`]) and is joined
 //! to the outer path, so every error carries its full path.
 
-use std::fmt;
 use std::path::Path;
 
-use serde::de::{DeserializeOwned, Deserializer, MapAccess, Visitor};
+use serde::de::Deserializer;
 use serde::Deserialize;
-use serde_json::{Map, Value};
+use serde_json::Value;
 
 use super::desc::*;
-use super::error::{byte_offset, find_duplicate_key, path_at, Located, SceneError};
+use super::error::{byte_offset, find_duplicate_key, path_at, SceneError};
+use crate::params::{describe, read_object, rest, take, take_tag, unknown_type, Located, Object};
 
 /// Parses and validates a scene from JSON text.
 ///
@@ -108,78 +108,6 @@ fn check_top_level(value: &Value, source: &str) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// A short description of a JSON value's kind, for messages.
-fn describe(value: &Value) -> &'static str {
-    match value {
-        Value::Null => "null",
-        Value::Bool(_) => "a boolean",
-        Value::Number(_) => "a number",
-        Value::String(_) => "a string",
-        Value::Array(_) => "an array",
-        Value::Object(_) => "an object",
-    }
-}
-
-// ---------------------------------------------------------------------------
-// Reading objects field by field
-// ---------------------------------------------------------------------------
-
-type Object = Map<String, Value>;
-
-/// Reads any JSON object into a map; `expecting` completes "expected ..." when
-/// the value is not an object.
-fn read_object<'de, D: Deserializer<'de>>(deserializer: D, expecting: &'static str) -> Result<Object, D::Error> {
-    struct ObjectVisitor(&'static str);
-    impl<'de> Visitor<'de> for ObjectVisitor {
-        type Value = Object;
-        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-            f.write_str(self.0)
-        }
-        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Object, A::Error> {
-            let mut object = Object::new();
-            while let Some((key, value)) = map.next_entry::<String, Value>()? {
-                object.insert(key, value);
-            }
-            Ok(object)
-        }
-    }
-    deserializer.deserialize_map(ObjectVisitor(expecting))
-}
-
-/// Takes the `type` tag out of a tagged object. A missing tag is an error
-/// unless there is a `default`.
-fn take_tag(object: &mut Object, kind: &str, types: &[&str], default: Option<&str>) -> Result<String, Located> {
-    match object.remove("type") {
-        Some(Value::String(tag)) => Ok(tag),
-        Some(other) => Err(Located::new(
-            "type",
-            format!("expected a string naming the {kind} type, one of: {}; got {}", types.join(", "), describe(&other)),
-        )),
-        None => default.map(str::to_string).ok_or_else(|| {
-            Located::new("type", format!("missing required field `type`; expected one of: {}", types.join(", ")))
-        }),
-    }
-}
-
-/// The error for a `type` that names no variant.
-fn unknown_type(kind: &str, tag: &str, types: &[&str]) -> Located {
-    Located::new("type", format!("unknown {kind} type {tag:?}; expected one of: {}", types.join(", ")))
-}
-
-/// Takes `key` out of the object and deserializes it, if present.
-fn take<T: DeserializeOwned>(object: &mut Object, key: &str) -> Result<Option<T>, Located> {
-    object
-        .remove(key)
-        .map(|value| serde_path_to_error::deserialize(value).map_err(|e| Located::from_path_error(e).under(key)))
-        .transpose()
-}
-
-/// Deserializes what is left of an object (the tag removed) as `T`, usually a
-/// `deny_unknown_fields` struct.
-fn rest<T: DeserializeOwned>(object: Object) -> Result<T, Located> {
-    serde_path_to_error::deserialize(Value::Object(object)).map_err(Located::from_path_error)
-}
-
 /// An object that must have no fields besides `type`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -212,136 +140,12 @@ fn parse_camera(mut object: Object) -> Result<CameraDesc, Located> {
     }
 }
 
-deserialize_object!(IntegratorDesc, "an integrator object with a \"type\" field", parse_integrator);
+deserialize_object!(IntegratorSpec, "an integrator object with a \"type\" field", parse_integrator);
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawSingle {
-    #[serde(default)]
-    step: Option<f32>,
-    #[serde(default)]
-    steps: Option<u32>,
-    #[serde(default)]
-    sampling: ScatterSamplingDesc,
-    #[serde(default)]
-    transmittance: TransmittanceDesc,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawEmission {
-    #[serde(default)]
-    step: Option<f32>,
-    #[serde(default)]
-    steps: Option<u32>,
-    #[serde(default)]
-    transmittance: TransmittanceDesc,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawVolPath {
-    #[serde(default)]
-    max_depth: Option<u32>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawAnalytic {}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawPhoton {
-    #[serde(default)]
-    photons: Option<u32>,
-    #[serde(default)]
-    k: Option<u32>,
-    #[serde(default)]
-    radius: Option<f32>,
-    #[serde(default)]
-    surface_radius: Option<f32>,
-    #[serde(default)]
-    step: Option<f32>,
-    #[serde(default)]
-    steps: Option<u32>,
-    #[serde(default)]
-    query: Option<PhotonQueryRaw>,
-    #[serde(default)]
-    sampling: Option<ScatterSamplingDesc>,
-    #[serde(default)]
-    max_depth: Option<u32>,
-    #[serde(default)]
-    alpha: Option<f32>,
-}
-
-#[derive(Deserialize, PartialEq)]
-#[serde(rename_all = "snake_case")]
-enum PhotonQueryRaw {
-    March,
-    Beam,
-}
-
-fn photon_desc(raw: RawPhoton) -> Result<PhotonDesc, Located> {
-    Ok(PhotonDesc {
-        photons: raw.photons,
-        k: raw.k,
-        radius: raw.radius,
-        surface_radius: raw.surface_radius,
-        march: march_step(raw.step, raw.steps)?,
-        beam: raw.query == Some(PhotonQueryRaw::Beam),
-        sampling: raw.sampling,
-        max_depth: raw.max_depth,
-        alpha: raw.alpha,
-    })
-}
-
-fn parse_integrator(mut object: Object) -> Result<IntegratorDesc, Located> {
-    let tag = take_tag(&mut object, "integrator", IntegratorDesc::TYPES, None)?;
-    match tag.as_str() {
-        "single" => {
-            let raw: RawSingle = rest(object)?;
-            Ok(IntegratorDesc::Single(SingleScatteringDesc {
-                march: march_step(raw.step, raw.steps)?,
-                sampling: raw.sampling,
-                transmittance: raw.transmittance,
-            }))
-        }
-        "emission" => {
-            let raw: RawEmission = rest(object)?;
-            Ok(IntegratorDesc::Emission(EmissionIntegratorDesc {
-                march: march_step(raw.step, raw.steps)?,
-                transmittance: raw.transmittance,
-            }))
-        }
-        "volpath" => {
-            let raw: RawVolPath = rest(object)?;
-            Ok(IntegratorDesc::VolPath(VolPathDesc {
-                max_depth: raw.max_depth.unwrap_or(crate::integrator::IntegratorSettings::DEFAULT_MAX_DEPTH),
-            }))
-        }
-        "analytic" => {
-            let _: RawAnalytic = rest(object)?;
-            Ok(IntegratorDesc::Analytic)
-        }
-        "hegeman" => Ok(IntegratorDesc::Hegeman(rest(object)?)),
-        "zhou" => Ok(IntegratorDesc::Zhou(rest(object)?)),
-        "photon" => Ok(IntegratorDesc::Photon(photon_desc(rest(object)?)?)),
-        "ppm" => Ok(IntegratorDesc::Ppm(photon_desc(rest(object)?)?)),
-        _ => Err(unknown_type("integrator", &tag, IntegratorDesc::TYPES)),
-    }
-}
-
-fn march_step(step: Option<f32>, steps: Option<u32>) -> Result<MarchStepDesc, Located> {
-    match (step, steps) {
-        (Some(_), Some(_)) => Err(Located::new(
-            "steps",
-            "`step` and `steps` are mutually exclusive: give a step length in scene units \
-             (`step`) or a number of steps per medium segment (`steps`), not both",
-        )),
-        (Some(length), None) => Ok(MarchStepDesc::Length(length)),
-        (None, Some(count)) => Ok(MarchStepDesc::PerSegment(count)),
-        (None, None) => Ok(MarchStepDesc::Auto),
-    }
+/// The `render.integrator` object, read by the integrator registry.
+fn parse_integrator(object: Object) -> Result<IntegratorSpec, Located> {
+    let settings = crate::integrator::registry::parse(&object)?;
+    Ok(IntegratorSpec { object, settings })
 }
 
 // ---------------------------------------------------------------------------
@@ -999,7 +803,7 @@ mod tests {
             }
         }
         accepted(|o| parse_camera(o).map(drop), CameraDesc::TYPES);
-        accepted(|o| parse_integrator(o).map(drop), IntegratorDesc::TYPES);
+        accepted(|o| parse_integrator(o).map(drop), &crate::integrator::registry::NAMES);
         accepted(|o| parse_medium(o).map(drop), MediumDesc::TYPES);
         accepted(|o| parse_density_source(o).map(drop), DensitySourceDesc::TYPES);
         accepted(|o| parse_phase(o).map(drop), PhaseDesc::TYPES);

@@ -231,88 +231,13 @@ fn image_side(path: &str, pixels: u32) -> Check {
     }
 }
 
+/// `spp` and `exposure`; the integrator object was checked by the
+/// integrator registry when it was read.
 fn validate_render(render: &RenderDesc) -> Check {
     if render.spp == 0 {
         return fail("render.spp", "samples per pixel must be at least 1, got 0");
     }
-    finite("render.exposure", render.exposure)?;
-    let march = match &render.integrator {
-        IntegratorDesc::Single(s) => s.march,
-        IntegratorDesc::Emission(e) => e.march,
-        IntegratorDesc::VolPath(v) => {
-            if v.max_depth == 0 {
-                return fail("render.integrator.max_depth", "must be at least 1, got 0");
-            }
-            MarchStepDesc::Auto
-        }
-        IntegratorDesc::Analytic => MarchStepDesc::Auto,
-        IntegratorDesc::Hegeman(h) => {
-            if !(2..=512).contains(&h.resolution) {
-                return fail(
-                    "render.integrator.resolution",
-                    format!("must be between 2 and 512, got {}", h.resolution),
-                );
-            }
-            positive("render.integrator.step_cells", h.step_cells)?;
-            MarchStepDesc::Auto
-        }
-        IntegratorDesc::Zhou(z) => {
-            let ranges = [
-                ("rbf_count", z.rbf_count, 1, 20_000),
-                ("fit_iterations", z.fit_iterations, 0, 10_000),
-                ("resolution", z.resolution, 4, 128),
-                ("sh_order", z.sh_order, 1, 6),
-            ];
-            for (field, value, lo, hi) in ranges {
-                if !(lo..=hi).contains(&value) {
-                    return fail(
-                        format!("render.integrator.{field}"),
-                        format!("must be between {lo} and {hi}, got {value}"),
-                    );
-                }
-            }
-            positive("render.integrator.step_cells", z.step_cells)?;
-            MarchStepDesc::Auto
-        }
-        IntegratorDesc::Photon(p) => validate_photon(p, false)?,
-        IntegratorDesc::Ppm(p) => validate_photon(p, true)?,
-    };
-    match march {
-        MarchStepDesc::Auto => Ok(()),
-        MarchStepDesc::Length(step) => positive("render.integrator.step", step),
-        MarchStepDesc::PerSegment(0) => fail("render.integrator.steps", "must be at least 1, got 0"),
-        MarchStepDesc::PerSegment(_) => Ok(()),
-    }
-}
-
-/// The `photon` and `ppm` settings; returns their march step.
-fn validate_photon(p: &PhotonDesc, ppm: bool) -> Result<MarchStepDesc, Invalid> {
-    let at_least_one = |path: &str, v: Option<u32>| match v {
-        Some(0) => fail(path, "must be at least 1, got 0"),
-        _ => Ok(()),
-    };
-    at_least_one("render.integrator.photons", p.photons)?;
-    at_least_one("render.integrator.k", p.k)?;
-    at_least_one("render.integrator.max_depth", p.max_depth)?;
-    if ppm && p.k.is_some() {
-        fail("render.integrator.k", "ppm gathers within a shrinking radius: give `radius`, not `k`")?;
-    }
-    if !ppm && p.alpha.is_some() {
-        fail("render.integrator.alpha", "only ppm shrinks its radius: `alpha` applies to ppm")?;
-    }
-    for (path, value) in
-        [("render.integrator.radius", p.radius), ("render.integrator.surface_radius", p.surface_radius)]
-    {
-        if let Some(r) = value {
-            positive(path, r)?;
-        }
-    }
-    if let Some(alpha) = p.alpha {
-        if !(alpha > 0.0 && alpha < 1.0) {
-            fail("render.integrator.alpha", format!("must be in (0, 1), got {alpha}"))?;
-        }
-    }
-    Ok(p.march)
+    finite("render.exposure", render.exposure)
 }
 
 // ---------------------------------------------------------------------------

@@ -30,6 +30,7 @@
 //! specular surfaces by the same walk as `single` and `emission`.
 
 pub mod airlight;
+pub(crate) mod settings;
 
 use crate::color::Rgb;
 use crate::light::{Light, SpotLight};

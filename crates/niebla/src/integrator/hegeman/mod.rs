@@ -38,6 +38,7 @@
 
 pub mod blur;
 pub mod light_volume;
+pub(crate) mod settings;
 
 use std::time::Instant;
 

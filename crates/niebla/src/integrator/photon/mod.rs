@@ -36,6 +36,7 @@ mod estimate;
 mod kdtree;
 mod maps;
 mod passes;
+pub(crate) mod settings;
 mod stored;
 mod trace;
 
@@ -146,43 +147,5 @@ impl PpmSettings {
 impl Default for PpmSettings {
     fn default() -> PpmSettings {
         PpmSettings { photon: PhotonSettings::ppm(), alpha: Self::DEFAULT_ALPHA }
-    }
-}
-
-/// `photon` (`ppm = false`) or `ppm` settings from a scene file's
-/// description, defaults filled in. `photon` gathers the `k` nearest unless
-/// the file gives a `radius` and no `k`.
-pub fn settings_from_desc(desc: &crate::scene::PhotonDesc, ppm: bool) -> super::IntegratorSettings {
-    use crate::scene::{MarchStepDesc, ScatterSamplingDesc};
-    let defaults = if ppm { PhotonSettings::ppm() } else { PhotonSettings::photon() };
-    let gather = match (ppm, desc.k, desc.radius) {
-        (true, _, _) => PhotonGather::Radius,
-        (false, Some(k), _) => PhotonGather::Nearest(k),
-        (false, None, Some(_)) => PhotonGather::Radius,
-        (false, None, None) => defaults.gather,
-    };
-    let photon = PhotonSettings {
-        photons: desc.photons.unwrap_or(defaults.photons),
-        gather,
-        radius: desc.radius,
-        surface_radius: desc.surface_radius,
-        step: match desc.march {
-            MarchStepDesc::Auto => None,
-            MarchStepDesc::Length(l) => Some(MarchStep::Length(l)),
-            MarchStepDesc::PerSegment(n) => Some(MarchStep::Count(n)),
-        },
-        query: if desc.beam { VolumeQuery::Beam } else { VolumeQuery::March },
-        sampling: match desc.sampling {
-            None | Some(ScatterSamplingDesc::Mis) => SingleSampling::Mis,
-            Some(ScatterSamplingDesc::March) => SingleSampling::March,
-            Some(ScatterSamplingDesc::Equiangular) => SingleSampling::Equiangular,
-        },
-        max_depth: desc.max_depth.unwrap_or(defaults.max_depth),
-        store_direct: false,
-    };
-    if ppm {
-        super::IntegratorSettings::Ppm(PpmSettings { photon, alpha: desc.alpha.unwrap_or(PpmSettings::DEFAULT_ALPHA) })
-    } else {
-        super::IntegratorSettings::Photon(photon)
     }
 }

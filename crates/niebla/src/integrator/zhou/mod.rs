@@ -48,6 +48,7 @@ pub mod fit;
 pub mod lattice;
 pub mod lighting;
 pub mod rbf;
+pub(crate) mod settings;
 pub mod sh;
 
 use std::time::Instant;

@@ -21,6 +21,7 @@ use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 use serde::Deserialize;
 
 use crate::color::Rgb;
+use crate::integrator::IntegratorSettings;
 
 /// The scene file format version this build reads.
 pub const SCENE_VERSION: u32 = 1;
@@ -340,7 +341,7 @@ fn default_fov_y() -> f32 {
 pub struct RenderDesc {
     /// The light transport algorithm; default single scattering with defaults.
     #[serde(default)]
-    pub integrator: IntegratorDesc,
+    pub integrator: IntegratorSpec,
     /// Samples per pixel, at least 1; default 16.
     #[serde(default = "default_spp")]
     pub spp: u32,
@@ -360,260 +361,36 @@ fn default_spp() -> u32 {
 
 impl Default for RenderDesc {
     fn default() -> RenderDesc {
-        RenderDesc { integrator: IntegratorDesc::default(), spp: default_spp(), seed: 0, exposure: 0.0 }
+        RenderDesc { integrator: IntegratorSpec::default(), spp: default_spp(), seed: 0, exposure: 0.0 }
     }
 }
 
-/// The integrator, tagged by `type` in the file. New integrators add a
-/// variant here, a name in `IntegratorDesc::TYPES` and an arm in `parse.rs`.
+/// The `render.integrator` object as written (its `type` and that
+/// integrator's fields) and the settings the integrator registry read from
+/// it ([`crate::integrator::registry::parse`]). The object is kept so that
+/// command-line overrides can change a field and read it again.
 #[derive(Clone, Debug, PartialEq)]
-pub enum IntegratorDesc {
-    /// `"type": "single"`: single scattering by ray marching or analytic
-    /// sampling along camera rays, plus medium emission.
-    Single(SingleScatteringDesc),
-    /// `"type": "emission"`: medium emission attenuated by transmittance only
-    /// (no scattering).
-    Emission(EmissionIntegratorDesc),
-    /// `"type": "volpath"`: unbiased volumetric path tracing (all orders of
-    /// scattering).
-    VolPath(VolPathDesc),
-    /// `"type": "analytic"`: closed-form single scattering (Sun et al. 2005)
-    /// in homogeneous media from point and spot lights; no parameters.
-    Analytic,
-    /// `"type": "hegeman"`: single scattering plus the blurred
-    /// multiple-scattering approximation of Hegeman et al. 2005
-    /// (reconstructed), interactive.
-    Hegeman(HegemanDesc),
-    /// `"type": "zhou"`: compensated ray marching (Zhou et al. 2008,
-    /// reconstructed): RBF density fit, SH environment lighting, diffusion.
-    Zhou(ZhouDesc),
-    /// `"type": "photon"`: volumetric photon mapping (Jensen and Christensen
-    /// 1998) with one photon map per render.
-    Photon(PhotonDesc),
-    /// `"type": "ppm"`: progressive photon mapping (Knaus and Zwicker 2011):
-    /// a photon map and a smaller radius per pass; converges to `volpath`.
-    Ppm(PhotonDesc),
+pub struct IntegratorSpec {
+    /// The object as written, `type` included.
+    pub object: serde_json::Map<String, serde_json::Value>,
+    /// The settings read from it, defaults filled in.
+    pub settings: IntegratorSettings,
 }
 
-/// Settings of the `photon` and `ppm` integrators. Every field is optional.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PhotonDesc {
-    /// Photons emitted (`photons`, >= 1; per pass for `ppm`).
-    pub photons: Option<u32>,
-    /// Neighbours of a k-nearest estimate (`k`, >= 1; `photon` only). With
-    /// `radius` and no `k`, `photon` gathers within the fixed radius.
-    pub k: Option<u32>,
-    /// Volume gather radius in scene units (`radius`, > 0): fixed radius, cap
-    /// of the k-nearest search, or `ppm`'s initial radius.
-    pub radius: Option<f32>,
-    /// Surface gather radius in scene units (`surface_radius`, > 0).
-    pub surface_radius: Option<f32>,
-    /// Ray-march step of point queries (`step` or `steps`).
-    pub march: MarchStepDesc,
-    /// `query`: `"march"` (point queries, default) or `"beam"` (beam
-    /// radiance estimate).
-    pub beam: bool,
-    /// Single-scattering sampling along camera rays (`sampling`, default `mis`).
-    pub sampling: Option<ScatterSamplingDesc>,
-    /// Largest number of scattering events on a photon path (`max_depth`, >= 1).
-    pub max_depth: Option<u32>,
-    /// `ppm`'s radius reduction in (0, 1) (`alpha`, default 2/3).
-    pub alpha: Option<f32>,
-}
-
-/// Settings of the `hegeman` integrator (`"type": "hegeman"`).
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct HegemanDesc {
-    /// Include the multiple-scattering term (`multiple_scattering`, default true).
-    #[serde(default = "default_true")]
-    pub multiple_scattering: bool,
-    /// Lattice nodes of the per-light volumes along a grid medium's longest
-    /// side (`resolution`, 2 to 512; default 48).
-    #[serde(default = "default_hegeman_resolution")]
-    pub resolution: u32,
-    /// View-ray march step in lattice cells (`step_cells`, > 0; default 1).
-    #[serde(default = "default_one")]
-    pub step_cells: f32,
-}
-
-/// Settings of the `zhou` integrator (`"type": "zhou"`). Every field is optional.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ZhouDesc {
-    /// RBFs per grid medium (`rbf_count`, 1 to 20000; default 600).
-    #[serde(default = "default_rbf_count")]
-    pub rbf_count: u32,
-    /// L-BFGS iterations of the fit (`fit_iterations`, 0 to 10000; default 60).
-    #[serde(default = "default_fit_iterations")]
-    pub fit_iterations: u32,
-    /// Lattice nodes along a grid medium's longest side (`resolution`, 4 to
-    /// 128; default 48). Memory grows as its cube: about 0.5 KiB per node at
-    /// `sh_order` 4 during the precomputation (measured: 529 MB peak at 96 on
-    /// the smoke scene; 128: about 1.1 GB).
-    #[serde(default = "default_hegeman_resolution")]
-    pub resolution: u32,
-    /// SH order of lighting and source radiance (`sh_order`, 1 to 6; default 4).
-    #[serde(default = "default_sh_order")]
-    pub sh_order: u32,
-    /// Include the diffusion term (`multiple_scattering`, default true).
-    #[serde(default = "default_true")]
-    pub multiple_scattering: bool,
-    /// How the residual enters the view-ray march (`compensation`: `"full"`,
-    /// `"source"` or `"off"`; default `"full"`).
-    #[serde(default)]
-    pub compensation: CompensationDesc,
-    /// Transmittance toward the environment at the RBF centres
-    /// (`transmittance`: `"sh"` (rotated zonal table, default) or `"exact"`).
-    #[serde(default)]
-    pub transmittance: ZhouTransmittanceDesc,
-    /// View-ray march step in lattice cells (`step_cells`, > 0; default 1).
-    #[serde(default = "default_one")]
-    pub step_cells: f32,
-    /// Read and write RBF fits in the cache folder (`cache`, default true).
-    #[serde(default = "default_true")]
-    pub cache: bool,
-}
-
-/// `compensation` of the `zhou` integrator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CompensationDesc {
-    /// The full density for source and attenuation.
-    #[default]
-    Full,
-    /// The full density for the source, the RBF density for attenuation.
-    Source,
-    /// The RBF density everywhere.
-    Off,
-}
-
-/// `transmittance` of the `zhou` integrator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ZhouTransmittanceDesc {
-    /// Rotated zonal optical-depth table.
-    #[default]
-    Sh,
-    /// Closed form per quadrature direction.
-    Exact,
-}
-
-fn default_rbf_count() -> u32 {
-    600
-}
-
-fn default_fit_iterations() -> u32 {
-    60
-}
-
-fn default_sh_order() -> u32 {
-    4
-}
-
-fn default_true() -> bool {
-    true
-}
-
-fn default_hegeman_resolution() -> u32 {
-    48
-}
-
-fn default_one() -> f32 {
-    1.0
-}
-
-impl IntegratorDesc {
-    /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] =
-        &["single", "emission", "volpath", "analytic", "hegeman", "zhou", "photon", "ppm"];
-}
-
-/// Settings of the volumetric path tracer (`"type": "volpath"`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VolPathDesc {
-    /// Largest number of scattering events on a path (`max_depth`, >= 1;
-    /// default 1024).
-    pub max_depth: u32,
-}
-
-impl Default for IntegratorDesc {
-    fn default() -> IntegratorDesc {
-        IntegratorDesc::Single(SingleScatteringDesc::default())
+impl IntegratorSpec {
+    /// The integrator's name (`type`).
+    pub fn name(&self) -> &'static str {
+        self.settings.name()
     }
 }
 
-/// Settings of the single-scattering integrator (`"type": "single"`).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SingleScatteringDesc {
-    /// Ray-march step (`step` or `steps` in the file; default chosen by the
-    /// renderer).
-    pub march: MarchStepDesc,
-    /// How scattering points along a ray are chosen (`sampling`; default
-    /// `march`).
-    pub sampling: ScatterSamplingDesc,
-    /// How transmittance to the light is estimated (`transmittance`; default
-    /// `analytic`).
-    pub transmittance: TransmittanceDesc,
-}
-
-/// Settings of the emission-only integrator (`"type": "emission"`).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct EmissionIntegratorDesc {
-    /// Ray-march step (`step` or `steps` in the file; default chosen by the
-    /// renderer).
-    pub march: MarchStepDesc,
-    /// How transmittance is estimated (`transmittance`; default `analytic`).
-    pub transmittance: TransmittanceDesc,
-}
-
-/// Ray-marching resolution. In the file, `step` (a length) and `steps` (a
-/// count) are mutually exclusive; neither means [`MarchStepDesc::Auto`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum MarchStepDesc {
-    /// The renderer chooses (from the media's extent and coefficients).
-    #[default]
-    Auto,
-    /// `step`: step length in scene units, > 0.
-    Length(f32),
-    /// `steps`: number of steps per medium segment along a ray, >= 1.
-    PerSegment(u32),
-}
-
-/// How single scattering chooses points along a camera ray (`sampling`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ScatterSamplingDesc {
-    /// `"march"`: deterministic-offset ray marching with the integrator's step.
-    #[default]
-    March,
-    /// `"equiangular"`: equiangular sampling toward each point or spot light
-    /// (Kulla and Fajardo 2012).
-    Equiangular,
-    /// `"mis"`: distance (transmittance) sampling and equiangular sampling
-    /// combined with multiple importance sampling.
-    Mis,
-}
-
-/// How transmittance is estimated (`transmittance`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum TransmittanceDesc {
-    /// `"analytic"`: exact Beer-Lambert `exp(-sigma_t d)` in homogeneous media.
-    #[default]
-    Analytic,
-    /// `"ray_march"`: numerical quadrature of the optical depth with the
-    /// integrator's step.
-    RayMarch,
-    /// `"delta"`: delta tracking against the majorant grid (a binary, unbiased
-    /// estimate; Woodcock et al. 1965).
-    Delta,
-    /// `"ratio"`: ratio tracking against the majorant grid (unbiased; Novak
-    /// et al. 2014).
-    Ratio,
-    /// `"residual_ratio"`: residual ratio tracking with a per-cell control
-    /// extinction (unbiased; Novak et al. 2014).
-    ResidualRatio,
+impl Default for IntegratorSpec {
+    fn default() -> IntegratorSpec {
+        let mut object = serde_json::Map::new();
+        object.insert("type".into(), serde_json::Value::String("single".into()));
+        let settings = crate::integrator::registry::parse(&object).expect("the default integrator parses");
+        IntegratorSpec { object, settings }
+    }
 }
 
 mod medium;

@@ -1,0 +1,398 @@
+//! The one list of integrators and the one `match` over their kinds.
+//!
+//! A scene file's `render.integrator` object (a `type` and that
+//! integrator's fields) is turned into [`IntegratorSettings`] by [`parse`];
+//! each integrator's fields, defaults and checks live beside it (its
+//! `settings` module). [`PreparedIntegrator`] runs an integrator's per-scene
+//! precomputation once and renders with the concrete integrator type, so the
+//! render loop is monomorphized per integrator and no sample goes through a
+//! virtual call.
+//!
+//! Adding an integrator: its folder (the integrator, its `settings.rs`), a
+//! variant of [`IntegratorSettings`], an entry of [`INTEGRATORS`] and the
+//! arms of the matches below.
+
+use std::sync::atomic::AtomicBool;
+
+use serde_json::Value;
+
+use super::precompute_memory::{hegeman_memory, photon_map_memory, zhou_memory};
+use super::{
+    analytic, emission_settings, hegeman, photon, single_settings, volpath_settings, zhou, AnalyticIntegrator,
+    EmissionIntegrator, HegemanIntegrator, PrecomputeMemory, SingleIntegrator, SingleSampling, VolPathIntegrator,
+    ZhouIntegrator,
+};
+use crate::film::Image;
+use crate::params::{describe, Located, Object};
+use crate::render::{render_with, ProgressFn, RenderError, RenderOptions};
+use crate::tracking::{MarchStep, TransmittanceMethod};
+use crate::world::Scene;
+
+/// Which integrator to run and its parameters (from a scene file's
+/// `render.integrator` through [`parse`], or built in code).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IntegratorSettings {
+    /// Emission and absorption only (no in-scattering); surfaces lit directly.
+    Emission {
+        /// Ray-march step for the emission integral; `None` picks a default per medium.
+        step: Option<MarchStep>,
+        /// Transmittance estimator.
+        transmittance: TransmittanceMethod,
+    },
+    /// Single scattering with shadow rays to every light; surfaces lit directly.
+    Single {
+        /// Ray-march step along the camera ray; `None` picks a default per medium.
+        step: Option<MarchStep>,
+        /// How scattering points along the camera ray are chosen.
+        sampling: SingleSampling,
+        /// Transmittance estimator.
+        transmittance: TransmittanceMethod,
+    },
+    /// Unbiased volumetric path tracing (multiple scattering).
+    VolPath {
+        /// Largest number of scattering events on a path.
+        max_depth: u32,
+    },
+    /// Closed-form single scattering (Sun et al. 2005) in homogeneous media
+    /// from point and spot lights; surfaces lit directly.
+    Analytic,
+    /// Single scattering plus the blurred multiple-scattering approximation
+    /// of Hegeman et al. 2005 (reconstructed), with per-light precomputed
+    /// volumes; interactive.
+    Hegeman(hegeman::HegemanSettings),
+    /// Compensated ray marching (Zhou et al. 2008, reconstructed): RBF
+    /// density fit, SH environment lighting, diffusion, residual compensated
+    /// along view rays; interactive.
+    Zhou(zhou::ZhouSettings),
+    /// Volumetric photon mapping (Jensen and Christensen 1998): one photon
+    /// map per render, single scattering by shadow rays.
+    Photon(photon::PhotonSettings),
+    /// Progressive photon mapping (Knaus and Zwicker 2011): one photon map
+    /// and a smaller radius per sample index; converges to `volpath`.
+    Ppm(photon::PpmSettings),
+}
+
+/// One integrator as the user selects it: its name (the `type` in a scene
+/// file, the value of `--integrator`), a one-line summary, and whether it
+/// is fast enough for `niebla preview`.
+#[derive(Clone, Copy, Debug)]
+pub struct IntegratorEntry {
+    /// The `type` name.
+    pub name: &'static str,
+    /// What it computes, in one line (command-line help).
+    pub summary: &'static str,
+    /// Renders a frame in well under a second after its precomputation.
+    pub interactive: bool,
+    /// Its settings from the object's fields (the `type` taken out).
+    parse: fn(Object) -> Result<IntegratorSettings, Located>,
+}
+
+/// Every integrator, in the order they are listed to users. The default
+/// (`render.integrator` absent) is the first, `single`.
+pub const INTEGRATORS: &[IntegratorEntry] = &[
+    IntegratorEntry {
+        name: "single",
+        summary: "Single scattering with shadow rays (march, equiangular or MIS sampling)",
+        interactive: true,
+        parse: |o| {
+            single_settings::parse(o).map(|(step, sampling, transmittance)| IntegratorSettings::Single {
+                step,
+                sampling,
+                transmittance,
+            })
+        },
+    },
+    IntegratorEntry {
+        name: "emission",
+        summary: "Emission and absorption only",
+        interactive: false,
+        parse: |o| {
+            emission_settings::parse(o)
+                .map(|(step, transmittance)| IntegratorSettings::Emission { step, transmittance })
+        },
+    },
+    IntegratorEntry {
+        name: "volpath",
+        summary: "Volumetric path tracing (multiple scattering, unbiased)",
+        interactive: false,
+        parse: |o| volpath_settings::parse(o).map(|max_depth| IntegratorSettings::VolPath { max_depth }),
+    },
+    IntegratorEntry {
+        name: "analytic",
+        summary: "Closed-form single scattering (Sun et al. 2005) in homogeneous media",
+        interactive: true,
+        parse: |o| analytic::settings::parse(o).map(|()| IntegratorSettings::Analytic),
+    },
+    IntegratorEntry {
+        name: "hegeman",
+        summary: "Single + approximate multiple scattering (Hegeman et al. 2005), interactive",
+        interactive: true,
+        parse: |o| hegeman::settings::parse(o).map(IntegratorSettings::Hegeman),
+    },
+    IntegratorEntry {
+        name: "zhou",
+        summary: "Compensated ray marching (Zhou et al. 2008): RBF fit, SH lighting, diffusion; interactive",
+        interactive: true,
+        parse: |o| zhou::settings::parse(o).map(IntegratorSettings::Zhou),
+    },
+    IntegratorEntry {
+        name: "photon",
+        summary: "Volumetric photon mapping (one photon map per render)",
+        interactive: false,
+        parse: |o| photon::settings::parse_photon(o).map(IntegratorSettings::Photon),
+    },
+    IntegratorEntry {
+        name: "ppm",
+        summary: "Progressive photon mapping (converges to volpath)",
+        interactive: false,
+        parse: |o| photon::settings::parse_ppm(o).map(IntegratorSettings::Ppm),
+    },
+];
+
+/// The names of [`INTEGRATORS`], in their order.
+pub const NAMES: [&str; INTEGRATORS.len()] = {
+    let mut names = [""; INTEGRATORS.len()];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = INTEGRATORS[i].name;
+        i += 1;
+    }
+    names
+};
+
+/// The entry named `name`.
+pub fn entry(name: &str) -> Option<&'static IntegratorEntry> {
+    INTEGRATORS.iter().find(|e| e.name == name)
+}
+
+/// Settings from a `render.integrator` object: its `type` (one of
+/// [`NAMES`]) and that integrator's fields, defaults filled in and every
+/// value checked. Errors carry the path relative to the object (`type`,
+/// `max_depth`, `steps`, ...).
+///
+/// ```
+/// use niebla::integrator::{registry, IntegratorSettings};
+/// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
+/// let settings = registry::parse(object.as_object().unwrap()).unwrap();
+/// assert_eq!(settings, IntegratorSettings::VolPath { max_depth: 64 });
+/// let object = serde_json::json!({"type": "volpath", "max_depth": 0});
+/// let e = registry::parse(object.as_object().unwrap()).unwrap_err();
+/// assert_eq!((e.path.as_str(), e.message.as_str()), ("max_depth", "must be at least 1, got 0"));
+/// ```
+pub fn parse(object: &Object) -> Result<IntegratorSettings, Located> {
+    let mut object = object.clone();
+    let list = NAMES.join(", ");
+    let name = match object.remove("type") {
+        Some(Value::String(name)) => name,
+        Some(other) => {
+            return Err(Located::new(
+                "type",
+                format!("expected a string naming the integrator type, one of: {list}; got {}", describe(&other)),
+            ))
+        }
+        None => return Err(Located::new("type", format!("missing required field `type`; expected one of: {list}"))),
+    };
+    match entry(&name) {
+        Some(entry) => (entry.parse)(object),
+        None => Err(Located::new("type", format!("unknown integrator type {name:?}; expected one of: {list}"))),
+    }
+}
+
+/// The settings of integrator `name` with every field at its default
+/// (`None` for an unknown name).
+///
+/// ```
+/// use niebla::integrator::{registry, IntegratorSettings};
+/// assert_eq!(registry::defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024 }));
+/// ```
+pub fn defaults(name: &str) -> Option<IntegratorSettings> {
+    entry(name).map(|e| (e.parse)(Object::new()).expect("every integrator has valid defaults"))
+}
+
+impl IntegratorSettings {
+    /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
+    pub const DEFAULT_MAX_DEPTH: u32 = volpath_settings::DEFAULT_MAX_DEPTH;
+
+    /// Names of all integrators that can be selected ([`NAMES`]).
+    pub const NAMES: &'static [&'static str] = &NAMES;
+
+    /// The name used on the command line and in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            IntegratorSettings::Emission { .. } => "emission",
+            IntegratorSettings::Single { .. } => "single",
+            IntegratorSettings::VolPath { .. } => "volpath",
+            IntegratorSettings::Analytic => "analytic",
+            IntegratorSettings::Hegeman(_) => "hegeman",
+            IntegratorSettings::Zhou(_) => "zhou",
+            IntegratorSettings::Photon(_) => "photon",
+            IntegratorSettings::Ppm(_) => "ppm",
+        }
+    }
+
+    /// A stable text naming the integrator and every setting, e.g.
+    /// `volpath(max_depth=1024)`: equal keys mean equal settings. Checkpoints
+    /// record it, so it does not depend on how Rust formats the types.
+    ///
+    /// ```
+    /// use niebla::integrator::registry;
+    /// assert_eq!(
+    ///     registry::defaults("single").unwrap().key(),
+    ///     "single(step=auto, sampling=march, transmittance=analytic)"
+    /// );
+    /// ```
+    pub fn key(&self) -> String {
+        match self {
+            IntegratorSettings::Emission { step, transmittance } => emission_settings::key(*step, *transmittance),
+            IntegratorSettings::Single { step, sampling, transmittance } => {
+                single_settings::key(*step, *sampling, *transmittance)
+            }
+            IntegratorSettings::VolPath { max_depth } => volpath_settings::key(*max_depth),
+            IntegratorSettings::Analytic => "analytic".to_string(),
+            IntegratorSettings::Hegeman(h) => hegeman::settings::key(h),
+            IntegratorSettings::Zhou(z) => zhou::settings::key(z),
+            IntegratorSettings::Photon(p) => photon::settings::photon_key(p),
+            IntegratorSettings::Ppm(p) => photon::settings::ppm_key(p),
+        }
+    }
+
+    /// Upper estimate of the memory this integrator's precomputation takes
+    /// on `scene` (photon maps, light volumes, SH lattices); `None` for
+    /// integrators without one.
+    pub fn precompute_memory(&self, scene: &Scene) -> Option<PrecomputeMemory> {
+        match self {
+            IntegratorSettings::Hegeman(h) => Some(hegeman_memory(h, scene)),
+            IntegratorSettings::Zhou(z) => Some(zhou_memory(z, scene)),
+            IntegratorSettings::Photon(p) => Some(photon_map_memory(scene, p.photons, p.max_depth, "the photon map")),
+            IntegratorSettings::Ppm(p) => {
+                Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
+            }
+            IntegratorSettings::Emission { .. }
+            | IntegratorSettings::Single { .. }
+            | IntegratorSettings::VolPath { .. }
+            | IntegratorSettings::Analytic => None,
+        }
+    }
+}
+
+/// An integrator with its per-scene work done (the interactive methods'
+/// volumes and fits, volpath's light guide), so that progressive passes and
+/// preview frames reuse it.
+pub enum PreparedIntegrator {
+    /// `emission`.
+    Emission(EmissionIntegrator),
+    /// `single`.
+    Single(SingleIntegrator),
+    /// `volpath` with its per-scene constants.
+    VolPath(Box<VolPathIntegrator>),
+    /// `analytic` with its airlight table.
+    Analytic(AnalyticIntegrator),
+    /// `hegeman` with its light volumes.
+    Hegeman(Box<HegemanIntegrator>),
+    /// `zhou` with its RBF fit and source radiance.
+    Zhou(Box<ZhouIntegrator>),
+    /// `photon` (its photon map is traced per pass).
+    Photon(photon::PhotonSettings),
+    /// `ppm` (a photon map per pass).
+    Ppm(photon::PpmSettings),
+}
+
+impl PreparedIntegrator {
+    /// Run the precomputation of `settings` for `scene`.
+    pub fn new(scene: &Scene, settings: &IntegratorSettings) -> PreparedIntegrator {
+        match *settings {
+            IntegratorSettings::Emission { step, transmittance } => {
+                PreparedIntegrator::Emission(EmissionIntegrator { step, transmittance })
+            }
+            IntegratorSettings::Single { step, sampling, transmittance } => {
+                PreparedIntegrator::Single(SingleIntegrator { step, sampling, transmittance })
+            }
+            IntegratorSettings::VolPath { max_depth } => {
+                PreparedIntegrator::VolPath(Box::new(VolPathIntegrator::for_scene(scene, max_depth)))
+            }
+            IntegratorSettings::Analytic => PreparedIntegrator::Analytic(AnalyticIntegrator::new()),
+            IntegratorSettings::Hegeman(h) => PreparedIntegrator::Hegeman(Box::new(HegemanIntegrator::new(scene, h))),
+            IntegratorSettings::Zhou(z) => PreparedIntegrator::Zhou(Box::new(ZhouIntegrator::new(scene, z))),
+            IntegratorSettings::Photon(p) => PreparedIntegrator::Photon(p),
+            IntegratorSettings::Ppm(p) => PreparedIntegrator::Ppm(p),
+        }
+    }
+
+    /// Render `options.spp` samples per pixel of `scene` (the scene the
+    /// integrator was prepared for).
+    pub fn render(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        progress: ProgressFn,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Image, RenderError> {
+        match self {
+            PreparedIntegrator::Emission(i) => render_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::Single(i) => render_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::VolPath(i) => render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Analytic(i) => render_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::Hegeman(i) => render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Zhou(i) => render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Photon(p) => photon::render_photon(scene, p, options, progress, cancel),
+            PreparedIntegrator::Ppm(p) => photon::render_ppm(scene, p, options, progress, cancel),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_equal_the_integrators_own_defaults() {
+        use crate::integrator::photon::{PhotonSettings, PpmSettings};
+        use crate::integrator::{HegemanSettings, ZhouSettings};
+        assert_eq!(
+            defaults("single"),
+            Some(IntegratorSettings::Single {
+                step: None,
+                sampling: SingleSampling::March,
+                transmittance: TransmittanceMethod::Analytic
+            })
+        );
+        assert_eq!(
+            defaults("emission"),
+            Some(IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic })
+        );
+        assert_eq!(defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024 }));
+        assert_eq!(defaults("analytic"), Some(IntegratorSettings::Analytic));
+        assert_eq!(defaults("hegeman"), Some(IntegratorSettings::Hegeman(HegemanSettings::default())));
+        assert_eq!(defaults("zhou"), Some(IntegratorSettings::Zhou(ZhouSettings::default())));
+        assert_eq!(defaults("photon"), Some(IntegratorSettings::Photon(PhotonSettings::photon())));
+        assert_eq!(defaults("ppm"), Some(IntegratorSettings::Ppm(PpmSettings::default())));
+        assert_eq!(defaults("bidirectional"), None);
+    }
+
+    #[test]
+    fn every_entry_parses_its_own_name_and_keys_are_distinct() {
+        let mut keys = std::collections::HashSet::new();
+        for name in NAMES {
+            let settings = defaults(name).unwrap();
+            assert_eq!(settings.name(), name);
+            assert!(keys.insert(settings.key()), "{name}: key {} repeated", settings.key());
+        }
+        assert_eq!(NAMES.len(), 8);
+    }
+
+    #[test]
+    fn keys_name_every_setting() {
+        let a = IntegratorSettings::Single {
+            step: Some(MarchStep::Count(32)),
+            sampling: SingleSampling::Mis,
+            transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+        };
+        assert_eq!(a.key(), "single(steps=32, sampling=mis, transmittance=ray_march(step=0.25))");
+        let b = IntegratorSettings::Single {
+            step: Some(MarchStep::Count(33)),
+            sampling: SingleSampling::Mis,
+            transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+        };
+        assert_ne!(a.key(), b.key());
+    }
+}

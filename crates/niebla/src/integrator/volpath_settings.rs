@@ -1,0 +1,32 @@
+//! Settings of the `volpath` integrator (`"type": "volpath"`): its fields
+//! in a scene file, their defaults and checks, and their stable key.
+
+use serde::Deserialize;
+
+use crate::params::{rest, Located, Object};
+
+/// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
+pub const DEFAULT_MAX_DEPTH: u32 = 1024;
+
+/// The fields of a `volpath` object.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolPathFields {
+    /// Largest number of scattering events on a path (>= 1; default 1024).
+    #[serde(default)]
+    max_depth: Option<u32>,
+}
+
+/// `volpath`'s `max_depth` from its object (the `type` taken out).
+pub(crate) fn parse(object: Object) -> Result<u32, Located> {
+    let fields: VolPathFields = rest(object)?;
+    match fields.max_depth {
+        Some(0) => Err(Located::new("max_depth", "must be at least 1, got 0")),
+        depth => Ok(depth.unwrap_or(DEFAULT_MAX_DEPTH)),
+    }
+}
+
+/// The stable key of `volpath`'s settings, e.g. `volpath(max_depth=1024)`.
+pub(crate) fn key(max_depth: u32) -> String {
+    format!("volpath(max_depth={max_depth})")
+}
