@@ -27,6 +27,11 @@ pub struct BuiltScene {
     pub scene: Scene,
     /// Integrator, spp, seed and exposure from the file.
     pub settings: RenderSettings,
+    /// Things in the file that are valid but almost surely not what was
+    /// meant (a medium nothing refers to), each a whole message naming the
+    /// file and the JSON path. Shown by `niebla render` and `niebla info`,
+    /// raised as Python warnings.
+    pub warnings: Vec<String>,
 }
 
 /// Limits of a scene build.
@@ -253,7 +258,41 @@ pub fn build_scene_with_options(
         seed: desc.render.seed,
         exposure: desc.render.exposure,
     };
-    Ok(BuiltScene { scene, settings })
+    Ok(BuiltScene { scene, settings, warnings: unused_media_warnings(desc, source) })
+}
+
+/// A warning for each medium that no shape names as `interior` or
+/// `exterior` and that is not the `ambient_medium`: it fills no region of
+/// space, so the render shows nothing of it.
+///
+/// ```
+/// use niebla::scene::{build_scene, parse_scene_str};
+/// let text = r#"{"version": 1,
+///     "camera": {"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 8, "height": 8},
+///     "media": {"smoke": {"sigma_a": 0.1, "sigma_s": 1}}}"#;
+/// let built = build_scene(&parse_scene_str(text, "s.json").unwrap(), "s.json", ".".as_ref()).unwrap();
+/// assert_eq!(built.warnings.len(), 1);
+/// assert!(built.warnings[0].starts_with("s.json: media.smoke: medium \"smoke\" is not used"));
+/// ```
+pub fn unused_media_warnings(desc: &SceneDesc, source: &str) -> Vec<String> {
+    let used = |name: &str| {
+        desc.ambient_medium.as_deref() == Some(name)
+            || desc
+                .shapes
+                .iter()
+                .any(|s| s.interior.as_deref() == Some(name) || s.exterior.as_deref() == Some(name))
+    };
+    desc.media
+        .keys()
+        .filter(|name| !used(name))
+        .map(|name| {
+            format!(
+                "{source}: media.{name}: medium {name:?} is not used: no shape has it as \"interior\" or \"exterior\" \
+                 and it is not the \"ambient_medium\", so it fills no space and renders nothing; add a shape around it \
+                 with \"interior\": {name:?} (e.g. a box over its bounds) or set \"ambient_medium\": {name:?}"
+            )
+        })
+        .collect()
 }
 
 /// Give each medium-bounding shape without an explicit `exterior` the medium

@@ -18,7 +18,8 @@ mod validate;
 
 pub use crate::world::{offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS};
 pub use build::{
-    build_scene, build_scene_with_options, build_transform, integrator_settings, BuildOptions, BuiltScene,
+    build_scene, build_scene_with_options, build_transform, integrator_settings, unused_media_warnings, BuildOptions,
+    BuiltScene,
 };
 pub use desc::*;
 pub use error::SceneError;

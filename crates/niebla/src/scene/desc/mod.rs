@@ -393,8 +393,10 @@ impl Default for IntegratorSpec {
     }
 }
 
+mod lights;
 mod medium;
 mod shapes;
 
+pub use lights::*;
 pub use medium::*;
 pub use shapes::*;
