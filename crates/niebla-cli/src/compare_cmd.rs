@@ -28,7 +28,7 @@ use niebla::color::{rgb_to_srgb8, Rgb};
 use niebla::film::{render_memory, write_atomically, write_exr, Image};
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
-use niebla::progressive::{render_progressive, Budget, PassInfo};
+use niebla::progressive::{render_progressive, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::{integrator_settings, parse_scene_str, DEFAULT_SCENE};
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
@@ -194,19 +194,15 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
             let bar = progress_bar(args.quiet, "reference (volpath)", budget);
             let start = Instant::now();
             let mut spp = 0;
-            let image = render_progressive(
-                scene,
-                &settings,
-                seed.wrapping_add(REFERENCE_SEED_OFFSET),
-                args.threads,
-                budget,
-                &|_, _| tick(&bar, budget, start),
-                None,
-                |_: &Image, info: PassInfo| {
-                    spp = info.spp;
-                    true
-                },
-            )
+            let options = ProgressiveOptions {
+                threads: args.threads,
+                progress: &|_, _| tick(&bar, budget, start),
+                ..ProgressiveOptions::new(&settings, seed.wrapping_add(REFERENCE_SEED_OFFSET), budget)
+            };
+            let image = render_progressive(scene, &options, |_: &Image, info: PassInfo| {
+                spp = info.spp;
+                true
+            })
             .map_err(|e| e.to_string())?;
             bar.finish_and_clear();
             let seconds = start.elapsed().as_secs_f64();
@@ -231,26 +227,22 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
         let start = Instant::now();
         let mut curve = Vec::new();
         let mut measuring = Duration::ZERO;
-        let image = render_progressive(
-            scene,
-            &settings,
-            seed,
-            args.threads,
-            budget,
-            &|_, _| tick(&bar, budget, start),
-            None,
-            |image: &Image, info: PassInfo| {
-                let t0 = Instant::now();
-                let relative_mse = image.relative_mse(&reference.image);
-                curve.push(ConvergencePoint {
-                    seconds: info.elapsed.saturating_sub(measuring).as_secs_f64(),
-                    spp: info.spp,
-                    relative_mse,
-                });
-                measuring += t0.elapsed();
-                true
-            },
-        )
+        let options = ProgressiveOptions {
+            threads: args.threads,
+            progress: &|_, _| tick(&bar, budget, start),
+            ..ProgressiveOptions::new(&settings, seed, budget)
+        };
+        let image = render_progressive(scene, &options, |image: &Image, info: PassInfo| {
+            let t0 = Instant::now();
+            let relative_mse = image.relative_mse(&reference.image);
+            curve.push(ConvergencePoint {
+                seconds: info.elapsed.saturating_sub(measuring).as_secs_f64(),
+                spp: info.spp,
+                relative_mse,
+            });
+            measuring += t0.elapsed();
+            true
+        })
         .map_err(|e| e.to_string())?;
         bar.finish_and_clear();
         let run = Run { label, settings, image, curve };

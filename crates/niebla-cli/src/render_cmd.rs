@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use niebla::film::{read_checkpoint, render_memory, scene_hash, write_checkpoint, write_image, CheckpointInfo};
 use niebla::integrator::{IntegratorSettings, SingleSampling};
 use niebla::limits::{default_memory_limit, format_bytes, parse_memory_size};
-use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo};
+use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
 use niebla::tracking::TransmittanceMethod;
 
@@ -348,8 +348,12 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         last_write = Instant::now();
         true
     };
-    let image = resume_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, start_acc, on_pass)
-        .map_err(|e| e.to_string())?;
+    let options = ProgressiveOptions {
+        threads: args.threads,
+        progress: &progress,
+        ..ProgressiveOptions::new(&integrator, seed, budget)
+    };
+    let image = resume_progressive(scene, &options, start_acc, on_pass).map_err(|e| e.to_string())?;
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
     let seconds = start.elapsed().as_secs_f64();
