@@ -56,7 +56,7 @@ pub(crate) fn timed(
 
 /// `niebla bench`.
 pub fn run(args: &BenchArgs) -> Result<(), String> {
-    let (built, _) = crate::render_cmd::load(args.scene.as_deref())?;
+    let (built, _) = crate::load::load(args.scene.as_deref())?;
     let mut scene = built.scene;
     if args.width == 0 || args.width > 16384 {
         return Err("--width: must be between 1 and 16384".into());

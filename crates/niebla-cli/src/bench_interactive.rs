@@ -85,7 +85,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
         return Err("--frames, --spp, --reference-spp and --error-width must be at least 1".into());
     }
     for path in &args.scenes {
-        let (built, _) = crate::render_cmd::load(Some(path))?;
+        let (built, _) = crate::load::load(Some(path))?;
         let scene = built.scene;
         let small = resized(&scene, args.error_width, None);
         let start = Instant::now();

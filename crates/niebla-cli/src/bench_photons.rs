@@ -62,7 +62,7 @@ pub fn run(args: &PhotonBenchArgs) -> Result<(), String> {
         args.scenes.clone()
     };
     for path in &scenes {
-        let (built, _) = crate::render_cmd::load(Some(path))?;
+        let (built, _) = crate::load::load(Some(path))?;
         let scene_integrator = built.settings.integrator;
         let mut scene = built.scene;
         let aspect = scene.camera.height as f64 / scene.camera.width as f64;

@@ -93,7 +93,7 @@ fn rays(scene: &Scene, g: &GridMedium, n: u32) -> Vec<(Ray, f32, f32)> {
 /// `niebla bench trackers`.
 pub fn run(args: &TrackerBenchArgs) -> Result<(), String> {
     let path = args.scene.clone().unwrap_or_else(|| PathBuf::from("scenes/smoke.json"));
-    let (built, _) = crate::render_cmd::load(Some(&path))?;
+    let (built, _) = crate::load::load(Some(&path))?;
     let scene = built.scene;
     let Some(grid) = first_grid(&scene) else {
         return Err(format!("{}: the scene has no grid medium to measure", path.display()));

@@ -156,7 +156,7 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
             let checked = load_scene(&args.scene).map_err(|e| e.to_string()).and_then(|built| {
                 let settings = Prepared::settings(args.integrator, built.settings.integrator);
                 let limit = args.max_memory.unwrap_or_else(default_memory_limit);
-                crate::render_cmd::check_precompute_memory(&label, &settings, &built.scene, limit)?;
+                crate::load::check_precompute_memory(&label, &settings, &built.scene, limit)?;
                 Ok(built)
             });
             match checked {

@@ -1,4 +1,4 @@
-//! `niebla render` and `niebla info`.
+//! `niebla render`.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -6,11 +6,10 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use niebla::film::{read_checkpoint, render_memory, scene_hash, write_checkpoint, write_image, CheckpointInfo};
+use niebla::film::{read_checkpoint, render_memory, write_checkpoint, write_image, CheckpointInfo};
 use niebla::integrator::{IntegratorSettings, SingleSampling};
-use niebla::limits::{default_memory_limit, format_bytes, parse_memory_size};
+use niebla::limits::{default_memory_limit, parse_memory_size};
 use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
-use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
 use niebla::tracking::TransmittanceMethod;
 
 /// Options of `niebla render`.
@@ -101,87 +100,6 @@ pub enum SamplingName {
     Mis,
 }
 
-/// Load the scene named on the command line, or the built-in default, within
-/// the default memory limit.
-pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
-    load_limited(scene, default_memory_limit()).map(|l| (l.built, l.stem))
-}
-
-/// A scene loaded for rendering.
-pub struct LoadedScene {
-    /// The built scene and its render settings.
-    pub built: BuiltScene,
-    /// Output file stem: the scene file's, or `niebla`.
-    pub stem: String,
-    /// [`scene_hash`] of the scene text (recorded in checkpoints).
-    pub hash: String,
-}
-
-/// Load the scene (or the built-in default), refusing before allocating
-/// anything large an image whose render buffers, or grids and files, would
-/// take more than `max_memory` bytes together.
-pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, String> {
-    let (text, source, base, stem) = match scene {
-        Some(path) => {
-            if !path.exists() {
-                return Err(format!("{}: scene file not found", path.display()));
-            }
-            let source = path.display().to_string();
-            let text = std::fs::read_to_string(path).map_err(|e| format!("{source}: cannot read scene file: {e}"))?;
-            let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
-            (text, source, base, stem)
-        }
-        None => (DEFAULT_SCENE.to_string(), "<default scene>".to_string(), PathBuf::from("."), "niebla".to_string()),
-    };
-    let desc = parse_scene_str(&text, &source).map_err(|e| e.to_string())?;
-    let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
-    let image_bytes = render_memory(camera.width, camera.height);
-    if image_bytes > max_memory {
-        return Err(format!(
-            "{source}: camera.width, camera.height: rendering {} x {} pixels would need about {} for the image and \
-             its output buffers, over the memory limit of {} (lower the resolution or raise --max-memory)",
-            camera.width,
-            camera.height,
-            format_bytes(image_bytes),
-            format_bytes(max_memory)
-        ));
-    }
-    let options = BuildOptions { max_memory: max_memory - image_bytes };
-    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|e| {
-        let hint = if e.message.contains("memory limit") { " (raise it with --max-memory)" } else { "" };
-        format!("{e}{hint}")
-    })?;
-    Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
-}
-
-/// Refuse `settings` when its precomputation (photon maps, lattices) would
-/// take more than `left` bytes: the error names the scene (`source`), the
-/// field to lower and the estimated size.
-pub fn check_precompute_memory(
-    source: &str,
-    settings: &IntegratorSettings,
-    scene: &niebla::scene::Scene,
-    left: u64,
-) -> Result<(), String> {
-    match niebla::integrator::precompute_memory(settings, scene) {
-        Some(m) if m.bytes > left => Err(format!(
-            "{source}: render.integrator.{field}: {what} would need about {}, over the {} left of the memory limit \
-             (lower render.integrator.{field} or raise --max-memory)",
-            format_bytes(m.bytes),
-            format_bytes(left),
-            field = m.field,
-            what = m.what,
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// The name of a scene in messages: its path, or `<default scene>`.
-pub fn scene_label(scene: Option<&Path>) -> String {
-    scene.map_or_else(|| "<default scene>".to_string(), |p| p.display().to_string())
-}
-
 /// Apply command-line overrides to the scene's integrator settings.
 pub fn override_integrator(
     settings: IntegratorSettings,
@@ -243,10 +161,15 @@ pub fn override_integrator(
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), String> {
     let max_memory = args.max_memory.unwrap_or_else(default_memory_limit);
-    let LoadedScene { built, stem, hash } = load_limited(args.scene.as_deref(), max_memory)?;
+    let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
     let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
     let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
-    check_precompute_memory(&scene_label(args.scene.as_deref()), &integrator, &built.scene, left)?;
+    crate::load::check_precompute_memory(
+        &crate::load::scene_label(args.scene.as_deref()),
+        &integrator,
+        &built.scene,
+        left,
+    )?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
         return Err("--spp: must be at least 1".into());
@@ -418,89 +341,4 @@ fn resume_state(
         return Err(format!("--resume: {at} holds no samples or non-finite pixels; start a new render"));
     }
     Ok((Accumulator::from_mean(image, info.spp), info.seed))
-}
-
-/// `niebla info`.
-pub fn info(scene: Option<&Path>) -> Result<(), String> {
-    let (built, _) = load(scene)?;
-    let s = &built.scene;
-    let c = &s.camera;
-    println!("scene: {}", scene.map_or("<default scene>".into(), |p| p.display().to_string()));
-    println!(
-        "camera: perspective at {:?} looking {:?}, {}x{} pixels, fov_y {:.1} deg",
-        c.position.to_array(),
-        c.forward.to_array(),
-        c.width,
-        c.height,
-        2.0 * c.tan_half_fov_y.atan().to_degrees()
-    );
-    println!(
-        "render: {:?}, {} spp, seed {}, exposure {}",
-        built.settings.integrator, built.settings.spp, built.settings.seed, built.settings.exposure
-    );
-    println!("media ({}):", s.media.len());
-    for (name, m) in s.medium_names.iter().zip(&s.media) {
-        match m.as_homogeneous() {
-            Some(h) => println!(
-                "  {name}: homogeneous, sigma_a {:?}, sigma_s {:?} (per unit length), L_ve {:?}, phase {} (mean cosine {:.3})",
-                h.sigma_a.0,
-                h.sigma_s.0,
-                h.l_ve.0,
-                h.phase.name(),
-                h.phase.mean_cosine()
-            ),
-            None => {
-                if let niebla::medium::Medium::Grid(g) = m {
-                    let kind = match &g.density {
-                        niebla::medium::DensityGrid::Dense(d) => format!("dense grid {:?} voxels", d.dims()),
-                        niebla::medium::DensityGrid::Sparse(sp) => format!("sparse grid, {} leaves", sp.leaf_count()),
-                    };
-                    let emission = match &g.emission {
-                        niebla::medium::GridEmission::None => "none".to_string(),
-                        niebla::medium::GridEmission::ProportionalToDensity(l) => format!("L_ve {:?} x density", l.0),
-                        niebla::medium::GridEmission::Field { scale, .. } => format!("grid x {:?}", scale.0),
-                        niebla::medium::GridEmission::Temperature { scale, .. } => {
-                            format!("blackbody of a temperature grid x {scale}")
-                        }
-                    };
-                    println!(
-                        "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \
-                         world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
-                        g.sigma_a.0,
-                        g.sigma_s.0,
-                        g.max_sigma_t(),
-                        g.world_bounds.0.to_array(),
-                        g.world_bounds.1.to_array(),
-                        g.majorant.res(),
-                        g.phase.name()
-                    );
-                }
-            }
-        }
-    }
-    let name_of = |id: Option<niebla::medium::MediumId>| {
-        id.map_or("vacuum".to_string(), |i| s.medium_names[i.0 as usize].clone())
-    };
-    println!("shapes ({}):", s.objects.len());
-    for (i, o) in s.objects.iter().enumerate() {
-        let (lo, hi) = o.shape.bounds();
-        let kind = match o.shape {
-            niebla::geometry::Shape::Sphere(_) => "sphere",
-            niebla::geometry::Shape::Box(_) => "box",
-            niebla::geometry::Shape::Rectangle(_) => "rectangle",
-        };
-        let media = if o.bounds_medium {
-            format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))
-        } else {
-            String::new()
-        };
-        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}", lo.to_array(), hi.to_array(), o.bsdf);
-    }
-    println!("lights ({}):", s.lights.len());
-    for (i, l) in s.lights.iter().enumerate() {
-        println!("  [{i}] {l:?}");
-    }
-    println!("ambient medium: {}", name_of(s.ambient_medium));
-    println!("camera medium: {}", name_of(s.camera_medium));
-    Ok(())
 }
