@@ -3,8 +3,10 @@
 
 use std::path::Path;
 
+use crate::error::CliError;
+
 /// `niebla info`.
-pub fn run(scene: Option<&Path>) -> Result<(), String> {
+pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
     let (built, _) = crate::load::load(scene)?;
     let s = &built.scene;
     let c = &s.camera;

@@ -6,12 +6,14 @@ use std::path::{Path, PathBuf};
 
 use niebla::film::{render_memory, scene_hash};
 use niebla::integrator::IntegratorSettings;
-use niebla::limits::{default_memory_limit, format_bytes};
+use niebla::limits::default_memory_limit;
 use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
+
+use crate::error::CliError;
 
 /// Load the scene named on the command line, or the built-in default, within
 /// the default memory limit.
-pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
+pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), CliError> {
     load_limited(scene, default_memory_limit()).map(|l| (l.built, l.stem))
 }
 
@@ -28,37 +30,39 @@ pub struct LoadedScene {
 /// Load the scene (or the built-in default), refusing before allocating
 /// anything large an image whose render buffers, or grids and files, would
 /// take more than `max_memory` bytes together.
-pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, String> {
+pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, CliError> {
     let (text, source, base, stem) = match scene {
         Some(path) => {
             if !path.exists() {
-                return Err(format!("{}: scene file not found", path.display()));
+                return Err(CliError::SceneNotFound(path.to_path_buf()));
             }
             let source = path.display().to_string();
-            let text = std::fs::read_to_string(path).map_err(|e| format!("{source}: cannot read scene file: {e}"))?;
+            let text = std::fs::read_to_string(path)
+                .map_err(|error| CliError::SceneUnreadable { scene: source.clone(), error })?;
             let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
             let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
             (text, source, base, stem)
         }
         None => (DEFAULT_SCENE.to_string(), "<default scene>".to_string(), PathBuf::from("."), "niebla".to_string()),
     };
-    let desc = parse_scene_str(&text, &source).map_err(|e| e.to_string())?;
+    let desc = parse_scene_str(&text, &source).map_err(|error| CliError::Scene { error, over_memory_limit: false })?;
     let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
     let image_bytes = render_memory(camera.width, camera.height);
     if image_bytes > max_memory {
-        return Err(format!(
-            "{source}: camera.width, camera.height: rendering {} x {} pixels would need about {} for the image and \
-             its output buffers, over the memory limit of {} (lower the resolution or raise --max-memory)",
-            camera.width,
-            camera.height,
-            format_bytes(image_bytes),
-            format_bytes(max_memory)
-        ));
+        return Err(CliError::ImageOverMemoryLimit {
+            scene: source,
+            width: camera.width,
+            height: camera.height,
+            bytes: image_bytes,
+            limit: max_memory,
+        });
     }
     let options = BuildOptions { max_memory: max_memory - image_bytes };
-    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|e| {
-        let hint = if e.message.contains("memory limit") { " (raise it with --max-memory)" } else { "" };
-        format!("{e}{hint}")
+    // The scene builder reports the memory limit in its message only (its
+    // MemoryBudget's words), so that is where the hint's condition is read.
+    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|error| {
+        let over_memory_limit = error.message.contains("memory limit");
+        CliError::Scene { error, over_memory_limit }
     })?;
     Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
 }
@@ -71,16 +75,15 @@ pub fn check_precompute_memory(
     settings: &IntegratorSettings,
     scene: &niebla::scene::Scene,
     left: u64,
-) -> Result<(), String> {
+) -> Result<(), CliError> {
     match niebla::integrator::precompute_memory(settings, scene) {
-        Some(m) if m.bytes > left => Err(format!(
-            "{source}: render.integrator.{field}: {what} would need about {}, over the {} left of the memory limit \
-             (lower render.integrator.{field} or raise --max-memory)",
-            format_bytes(m.bytes),
-            format_bytes(left),
-            field = m.field,
-            what = m.what,
-        )),
+        Some(m) if m.bytes > left => Err(CliError::PrecomputeOverMemoryLimit {
+            scene: source.to_string(),
+            field: m.field,
+            what: m.what,
+            bytes: m.bytes,
+            left,
+        }),
         _ => Ok(()),
     }
 }

@@ -5,6 +5,8 @@ mod bench_interactive;
 mod bench_photons;
 mod bench_trackers;
 mod compare;
+mod error;
+mod flags;
 mod info_cmd;
 mod load;
 mod preview_cmd;
@@ -71,9 +73,9 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::FAILURE
+        Err(error) => {
+            eprintln!("error: {error}");
+            ExitCode::from(error.exit_code())
         }
     }
 }

@@ -8,9 +8,13 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use niebla::film::{read_checkpoint, render_memory, write_checkpoint, write_image, CheckpointInfo};
 use niebla::integrator::{IntegratorSettings, SingleSampling};
-use niebla::limits::{default_memory_limit, parse_memory_size};
 use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
 use niebla::tracking::TransmittanceMethod;
+
+use crate::error::CliError;
+use crate::flags::{
+    check_output_folder, positive_seconds, ExposureFlag, MaxMemoryFlag, QuietFlag, SeedFlag, ThreadsFlag,
+};
 
 /// Options of `niebla render`.
 #[derive(Args, Debug)]
@@ -42,24 +46,21 @@ pub struct RenderArgs {
     /// (equiangular + distance sampling).
     #[arg(long, value_enum)]
     pub sampling: Option<SamplingName>,
-    /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Sampler seed (overrides the scene's `render.seed`).
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// PNG exposure in stops: the PNG shows the radiance times 2^E (overrides
-    /// the scene's `render.exposure`). The EXR is never scaled.
-    #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
-    /// Do not draw a progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-    /// Most memory the render may take for its image, grids and files, e.g.
-    /// 8G, 512M (binary units); a scene needing more is refused before
-    /// anything large is allocated. Default: half of the machine's memory.
-    #[arg(long, value_parser = parse_memory_size)]
-    pub max_memory: Option<u64>,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
+    /// `--seed`: the sampler seed.
+    #[command(flatten)]
+    pub seed: SeedFlag,
+    /// `--exposure`: exposure of the images, in stops.
+    #[command(flatten)]
+    pub exposure: ExposureFlag,
+    /// `--quiet`: no progress bars.
+    #[command(flatten)]
+    pub quiet: QuietFlag,
+    /// `--max-memory`: the memory limit.
+    #[command(flatten)]
+    pub max_memory: MaxMemoryFlag,
     /// Continue the progressive render whose EXR checkpoint (an output of an
     /// earlier `niebla render`, rewritten between passes) is given, up to
     /// --spp samples in all: same scene, integrator and seed required, and
@@ -159,10 +160,11 @@ pub fn override_integrator(
 }
 
 /// `niebla render`.
-pub fn run(args: &RenderArgs) -> Result<(), String> {
-    let max_memory = args.max_memory.unwrap_or_else(default_memory_limit);
+pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+    let max_memory = args.max_memory.limit();
     let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
-    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
+    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)
+        .map_err(CliError::Integrator)?;
     let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
     crate::load::check_precompute_memory(
         &crate::load::scene_label(args.scene.as_deref()),
@@ -172,45 +174,33 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     )?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
-        return Err("--spp: must be at least 1".into());
+        return Err(CliError::invalid_option("--spp", "must be at least 1"));
     }
     let budget = match args.time {
-        Some(t) if !(t.is_finite() && t > 0.0 && t < 1e7) => {
-            return Err(format!("--time: expected a positive number of seconds, got {t}"));
-        }
-        Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+        Some(t) => Budget::Time(Duration::from_secs_f64(positive_seconds("--time", t)?)),
         None => Budget::Samples(spp),
     };
-    if args.threads == Some(0) {
-        return Err("--threads: must be at least 1".into());
-    }
-    let exposure = args.exposure.unwrap_or(built.settings.exposure);
-    if !exposure.is_finite() {
-        return Err("--exposure: must be a finite number of stops".into());
-    }
+    let threads = args.threads.get()?;
+    let exposure = args.exposure.or(built.settings.exposure)?;
     let outputs: Vec<PathBuf> = match &args.output {
         Some(p) => {
             let ext = p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
             if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-                return Err(format!("{}: output must end in .exr or .png", p.display()));
+                return Err(CliError::OutputFormat(p.clone()));
             }
             vec![p.clone()]
         }
         None => vec![PathBuf::from(format!("{stem}.exr")), PathBuf::from(format!("{stem}.png"))],
     };
     for out in &outputs {
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if !dir.is_dir() {
-                return Err(format!("{}: output folder {} does not exist", out.display(), dir.display()));
-            }
-        }
+        check_output_folder(out)?;
     }
 
     let scene = &built.scene;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let (start_acc, seed) = match &args.resume {
-        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.unwrap_or(built.settings.seed)),
-        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed)?,
+        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.or(built.settings.seed)),
+        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed.seed)?,
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
@@ -218,7 +208,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             return Ok(());
         }
     }
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
+    let bar = if args.quiet.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
     let template = match budget {
         Budget::Samples(_) => {
             bar.set_length(pixels * spp as u64);
@@ -229,7 +219,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% of the time budget {msg}"
         }
     };
-    bar.set_style(ProgressStyle::with_template(template).map_err(|e| e.to_string())?);
+    bar.set_style(ProgressStyle::with_template(template).expect("the progress bar templates are valid"));
     let start = Instant::now();
     let samples_before_pass = AtomicU64::new(start_acc.spp * pixels);
     let progress = |done: u64, _total: u64| match budget {
@@ -243,16 +233,15 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     // Checkpoints are at most CHECKPOINT_INTERVAL apart: the first passes take
     // milliseconds, and compressing and writing an image after each of them
     // took up to a third of a short render. The final image is always written.
-    let mut write_error: Option<String> = None;
+    let mut write_error: Option<CliError> = None;
     let mut spp_done = start_acc.spp;
     let mut spp_written = start_acc.spp;
     let mut last_write = Instant::now();
-    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), String> {
+    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), CliError> {
         let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }
-                .map_err(|e| e.to_string())?;
+            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }?;
         }
         Ok(())
     };
@@ -271,12 +260,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         last_write = Instant::now();
         true
     };
-    let options = ProgressiveOptions {
-        threads: args.threads,
-        progress: &progress,
-        ..ProgressiveOptions::new(&integrator, seed, budget)
-    };
-    let image = resume_progressive(scene, &options, start_acc, on_pass).map_err(|e| e.to_string())?;
+    let options =
+        ProgressiveOptions { threads, progress: &progress, ..ProgressiveOptions::new(&integrator, seed, budget) };
+    let image = resume_progressive(scene, &options, start_acc, on_pass)?;
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
     let seconds = start.elapsed().as_secs_f64();
@@ -314,31 +300,28 @@ fn resume_state(
     hash: &str,
     integrator: &IntegratorSettings,
     seed: Option<u64>,
-) -> Result<(Accumulator, u64), String> {
-    let (image, info) = read_checkpoint(path).map_err(|e| format!("--resume: {e}"))?;
-    let at = path.display();
+) -> Result<(Accumulator, u64), CliError> {
+    let (image, info) = read_checkpoint(path).map_err(CliError::CheckpointUnreadable)?;
+    let mismatch = |problem: String| CliError::CheckpointMismatch { path: path.to_path_buf(), problem };
     if info.scene_hash != hash {
-        return Err(format!(
-            "--resume: {at} was rendered from another scene (scene hash {}, this scene's {hash})",
+        return Err(mismatch(format!(
+            "was rendered from another scene (scene hash {}, this scene's {hash})",
             info.scene_hash
-        ));
+        )));
     }
     let settings = format!("{integrator:?}");
     if info.integrator != settings {
-        return Err(format!("--resume: {at} was rendered with {}, not {settings}", info.integrator));
+        return Err(mismatch(format!("was rendered with {}, not {settings}", info.integrator)));
     }
     if let Some(s) = seed.filter(|&s| s != info.seed) {
-        return Err(format!("--resume: {at} was rendered with seed {}, not --seed {s}", info.seed));
+        return Err(mismatch(format!("was rendered with seed {}, not --seed {s}", info.seed)));
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
     if (image.width, image.height) != (w, h) {
-        return Err(format!(
-            "--resume: {at} is {} x {} pixels, the scene's camera {w} x {h}",
-            image.width, image.height
-        ));
+        return Err(mismatch(format!("is {} x {} pixels, the scene's camera {w} x {h}", image.width, image.height)));
     }
     if info.spp == 0 || image.pixels.iter().any(|p| !p.is_finite()) {
-        return Err(format!("--resume: {at} holds no samples or non-finite pixels; start a new render"));
+        return Err(mismatch("holds no samples or non-finite pixels; start a new render".to_string()));
     }
     Ok((Accumulator::from_mean(image, info.spp), info.seed))
 }

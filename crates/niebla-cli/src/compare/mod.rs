@@ -17,18 +17,20 @@
 //! error maps show its per-pixel root, `sqrt(mean_c (x - r)^2 / (r^2 +
 //! eps))`, on a logarithmic color scale shared by all maps.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use niebla::color::Rgb;
-use niebla::film::{render_memory, write_atomically, write_exr, Image};
+use niebla::film::{read_exr, render_memory, write_atomically, write_exr, ExrReadError, Image};
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
 use niebla::progressive::{render_progressive, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::{integrator_settings, parse_scene_str, DEFAULT_SCENE};
 use serde_json::{json, Value};
+
+use crate::error::CliError;
+use crate::flags::{check_output_folder, positive_seconds, ExposureFlag, QuietFlag, SeedFlag, ThreadsFlag};
 
 mod report;
 
@@ -66,18 +68,18 @@ pub struct CompareArgs {
     /// The HTML report to write.
     #[arg(short, long, default_value = "report.html")]
     pub output: PathBuf,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Sampler seed of the integrators (overrides the scene's `render.seed`).
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Exposure of every image in the report, in stops (default: the scene's).
-    #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
-    /// Do not draw progress bars.
-    #[arg(long)]
-    pub quiet: bool,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
+    /// `--seed`: the sampler seed.
+    #[command(flatten)]
+    pub seed: SeedFlag,
+    /// `--exposure`: exposure of the images, in stops.
+    #[command(flatten)]
+    pub exposure: ExposureFlag,
+    /// `--quiet`: no progress bars.
+    #[command(flatten)]
+    pub quiet: QuietFlag,
 }
 
 /// Added to the seed of a rendered reference, so that its random numbers are
@@ -118,37 +120,33 @@ struct Reference {
 }
 
 /// `niebla compare`.
-pub fn run(args: &CompareArgs) -> Result<(), String> {
+pub fn run(args: &CompareArgs) -> Result<(), CliError> {
     let budget_seconds = positive_seconds("--time-budget", args.time_budget)?;
-    if args.threads == Some(0) {
-        return Err("--threads: must be at least 1".into());
-    }
+    let threads = args.threads.get()?;
     if args.reference_spp == Some(0) {
-        return Err("--reference-spp: must be at least 1".into());
+        return Err(CliError::invalid_option("--reference-spp", "must be at least 1"));
     }
     if args.integrators.iter().all(|s| s.trim().is_empty()) {
-        return Err("--integrators: name at least one integrator".into());
+        return Err(CliError::invalid_option("--integrators", "name at least one integrator"));
     }
     check_output_folder(&args.output)?;
     let (built, _) = crate::load::load(args.scene.as_deref())?;
     let scene_text = match &args.scene {
-        Some(path) => std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?,
+        Some(path) => std::fs::read_to_string(path).map_err(|error| CliError::Io { path: path.clone(), error })?,
         None => DEFAULT_SCENE.to_string(),
     };
-    let scene_value: Value = serde_json::from_str(&scene_text).map_err(|e| format!("scene: invalid JSON: {e}"))?;
+    let scene_value: Value = serde_json::from_str(&scene_text).map_err(CliError::SceneJson)?;
     let scene_settings = built.settings.integrator;
-    let seed = args.seed.unwrap_or(built.settings.seed);
-    let exposure = args.exposure.unwrap_or(built.settings.exposure);
-    if !exposure.is_finite() {
-        return Err("--exposure: must be a finite number of stops".into());
-    }
+    let seed = args.seed.or(built.settings.seed);
+    let exposure = args.exposure.or(built.settings.exposure)?;
     let candidates = args
         .integrators
         .iter()
         .map(|s| s.trim())
         .filter(|s| !s.is_empty())
         .map(|spec| Ok((spec.to_string(), parse_integrator(spec, &scene_value, &scene_settings)?)))
-        .collect::<Result<Vec<_>, String>>()?;
+        .collect::<Result<Vec<_>, String>>()
+        .map_err(CliError::Integrator)?;
     let scene = &built.scene;
     let left = default_memory_limit().saturating_sub(render_memory(scene.camera.width, scene.camera.height));
     for (_, settings) in &candidates {
@@ -158,16 +156,13 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     // The reference.
     let reference = match &args.reference {
         Some(path) => {
-            let image = read_exr(path)?;
+            let image = read_reference(path)?;
             if (image.width, image.height) != (scene.camera.width, scene.camera.height) {
-                return Err(format!(
-                    "{}: the reference is {}x{} but the scene renders {}x{}",
-                    path.display(),
-                    image.width,
-                    image.height,
-                    scene.camera.width,
-                    scene.camera.height
-                ));
+                return Err(CliError::ReferenceSize {
+                    path: path.clone(),
+                    size: (image.width, image.height),
+                    scene_size: (scene.camera.width, scene.camera.height),
+                });
             }
             Reference { image, description: format!("{} (given)", path.display()) }
         }
@@ -181,25 +176,24 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
                 (None, Some(t)) => Budget::Time(Duration::from_secs_f64(positive_seconds("--reference-time", t)?)),
                 (None, None) => Budget::Time(Duration::from_secs_f64(4.0 * budget_seconds)),
             };
-            let bar = progress_bar(args.quiet, "reference (volpath)", budget);
+            let bar = progress_bar(args.quiet.quiet, "reference (volpath)", budget);
             let start = Instant::now();
             let mut spp = 0;
             let options = ProgressiveOptions {
-                threads: args.threads,
+                threads,
                 progress: &|_, _| tick(&bar, budget, start),
                 ..ProgressiveOptions::new(&settings, seed.wrapping_add(REFERENCE_SEED_OFFSET), budget)
             };
             let image = render_progressive(scene, &options, |_: &Image, info: PassInfo| {
                 spp = info.spp;
                 true
-            })
-            .map_err(|e| e.to_string())?;
+            })?;
             bar.finish_and_clear();
             let seconds = start.elapsed().as_secs_f64();
             if let Some(path) = &args.save_reference {
-                write_exr(&image, path).map_err(|e| e.to_string())?;
+                write_exr(&image, path)?;
             }
-            if !args.quiet {
+            if !args.quiet.quiet {
                 eprintln!("reference: volpath, {spp} spp in {seconds:.1} s");
             }
             Reference {
@@ -213,12 +207,12 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
     let budget = Budget::Time(Duration::from_secs_f64(budget_seconds));
     let mut runs = Vec::new();
     for (label, settings) in candidates {
-        let bar = progress_bar(args.quiet, &label, budget);
+        let bar = progress_bar(args.quiet.quiet, &label, budget);
         let start = Instant::now();
         let mut curve = Vec::new();
         let mut measuring = Duration::ZERO;
         let options = ProgressiveOptions {
-            threads: args.threads,
+            threads,
             progress: &|_, _| tick(&bar, budget, start),
             ..ProgressiveOptions::new(&settings, seed, budget)
         };
@@ -232,8 +226,7 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
             });
             measuring += t0.elapsed();
             true
-        })
-        .map_err(|e| e.to_string())?;
+        })?;
         bar.finish_and_clear();
         let run = Run { label, settings, image, curve };
         let last = run.last();
@@ -243,27 +236,9 @@ pub fn run(args: &CompareArgs) -> Result<(), String> {
 
     let title = args.scene.as_ref().map_or("<default scene>".to_string(), |p| p.display().to_string());
     let html = report::report_html(&title, &reference, &runs, exposure, budget_seconds)?;
-    write_atomically(&args.output, html.as_bytes()).map_err(|e| e.to_string())?;
+    write_atomically(&args.output, html.as_bytes())?;
     println!("report -> {}", args.output.display());
     Ok(())
-}
-
-/// A positive, finite number of seconds.
-fn positive_seconds(option: &str, t: f64) -> Result<f64, String> {
-    if t.is_finite() && t > 0.0 && t < 1e7 {
-        Ok(t)
-    } else {
-        Err(format!("{option}: expected a positive number of seconds, got {t}"))
-    }
-}
-
-fn check_output_folder(path: &Path) -> Result<(), String> {
-    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) if !dir.is_dir() => {
-            Err(format!("{}: output folder {} does not exist", path.display(), dir.display()))
-        }
-        _ => Ok(()),
-    }
 }
 
 /// `NAME` or `NAME:SAMPLING` as integrator settings, read by the scene
@@ -292,22 +267,12 @@ fn parse_integrator(
     Ok(integrator_settings(&desc.render.integrator))
 }
 
-/// Reads the RGB channels of an EXR file's first layer.
-fn read_exr(path: &Path) -> Result<Image, String> {
-    use exr::prelude::read_first_rgba_layer_from_file;
-    if !path.exists() {
-        return Err(format!("{}: reference image not found", path.display()));
-    }
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |resolution, _| Image::new(resolution.width() as u32, resolution.height() as u32),
-        |image: &mut Image, pos: exr::math::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
-            let i = pos.y() * image.width as usize + pos.x();
-            image.pixels[i] = Rgb::new(r, g, b);
-        },
-    )
-    .map_err(|e| format!("{}: could not read the reference EXR: {e}", path.display()))?;
-    Ok(image.layer_data.channel_data.pixels)
+/// The reference image at `path`: an EXR's RGB channels.
+fn read_reference(path: &std::path::Path) -> Result<Image, CliError> {
+    read_exr(path).map(|exr| exr.image).map_err(|e| match e {
+        ExrReadError::Missing { path } => CliError::ReferenceNotFound(path),
+        other => CliError::ReferenceUnreadable { path: path.to_path_buf(), reason: other.reason() },
+    })
 }
 
 fn progress_bar(quiet: bool, label: &str, budget: Budget) -> ProgressBar {

@@ -13,6 +13,7 @@ use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;
 
 use super::{Reference, Run};
+use crate::error::CliError;
 
 /// Decades of relative error the error maps' color scale spans.
 const ERROR_MAP_DECADES: f64 = 3.0;
@@ -24,7 +25,7 @@ pub(super) fn report_html(
     runs: &[Run],
     exposure: f32,
     budget_seconds: f64,
-) -> Result<String, String> {
+) -> Result<String, CliError> {
     let (w, h) = (reference.image.width, reference.image.height);
     let maps: Vec<Vec<f64>> = runs.iter().map(|r| relative_error_map(&r.image, &reference.image)).collect();
     let (error_low, error_high) = error_range(&maps);
@@ -92,7 +93,7 @@ reference: {reference}. Images at exposure {exposure:+} stops (sRGB).</p>
 
     // Images.
     html.push_str("<h2>Images</h2>\n<div class=\"row\">\n");
-    let figure = |html: &mut String, image: &Image, caption: &str, alt: &str| -> Result<(), String> {
+    let figure = |html: &mut String, image: &Image, caption: &str, alt: &str| -> Result<(), CliError> {
         let png = png_base64(image.width, image.height, &srgb_bytes(image, exposure))?;
         let _ = writeln!(
             html,
@@ -169,15 +170,15 @@ fn srgb_bytes(image: &Image, exposure: f32) -> Vec<u8> {
 }
 
 /// An RGB8 image as a base64 PNG.
-fn png_base64(width: u32, height: u32, rgb: &[u8]) -> Result<String, String> {
+fn png_base64(width: u32, height: u32, rgb: &[u8]) -> Result<String, CliError> {
     let mut bytes = Vec::new();
     {
         let mut encoder = png::Encoder::new(&mut bytes, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-        writer.write_image_data(rgb).map_err(|e| e.to_string())?;
-        writer.finish().map_err(|e| e.to_string())?;
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(rgb)?;
+        writer.finish()?;
     }
     Ok(base64::engine::general_purpose::STANDARD.encode(bytes))
 }
@@ -261,12 +262,12 @@ fn mark_plot(svg: String) -> String {
     svg.replacen("<svg ", "<svg class=\"plot\" ", 1)
 }
 
-fn plot_error<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
-    format!("could not draw the plot: {e}")
+fn plot_error<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> CliError {
+    CliError::Plot(e.to_string())
 }
 
 /// The color bar of the error maps.
-fn colorbar_svg(low: f64, high: f64, width: u32) -> Result<String, String> {
+fn colorbar_svg(low: f64, high: f64, width: u32) -> Result<String, CliError> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width, 86)).into_drawing_area();
@@ -320,7 +321,7 @@ const SERIES_COLORS: [(u8, u8, u8); 10] = [
 ];
 
 /// Relative MSE against time, log-log, one line per integrator.
-fn convergence_svg(runs: &[Run]) -> Result<String, String> {
+fn convergence_svg(runs: &[Run]) -> Result<String, CliError> {
     let points: Vec<Vec<(f64, f64)>> = runs
         .iter()
         .map(|r| {
