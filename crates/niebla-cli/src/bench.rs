@@ -14,6 +14,9 @@ use niebla::render::{render, RenderOptions};
 use niebla::scene::Scene;
 use niebla::tracking::TransmittanceMethod;
 
+use crate::error::CliError;
+use crate::flags::ThreadsFlag;
+
 /// Options of `niebla bench`.
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -31,9 +34,9 @@ pub struct BenchArgs {
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
 }
 
 fn single(sampling: SingleSampling) -> IntegratorSettings {
@@ -47,19 +50,20 @@ pub(crate) fn timed(
     spp: u32,
     seed: u64,
     threads: Option<usize>,
-) -> Result<(Image, f64), String> {
+) -> Result<(Image, f64), CliError> {
     let options = RenderOptions { spp, seed, first_sample: 0, threads };
     let start = Instant::now();
-    let image = render(scene, settings, &options, &|_, _| {}, None).map_err(|e| e.to_string())?;
+    let image = render(scene, settings, &options, &|_, _| {}, None)?;
     Ok((image, start.elapsed().as_secs_f64()))
 }
 
 /// `niebla bench`.
-pub fn run(args: &BenchArgs) -> Result<(), String> {
-    let (built, _) = crate::render_cmd::load(args.scene.as_deref())?;
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    let threads = args.threads.get()?;
+    let (built, _) = crate::load::load(args.scene.as_deref())?;
     let mut scene = built.scene;
     if args.width == 0 || args.width > 16384 {
-        return Err("--width: must be between 1 and 16384".into());
+        return Err(CliError::invalid_option("--width", "must be between 1 and 16384"));
     }
     let aspect = scene.camera.height as f64 / scene.camera.width as f64;
     scene.camera.width = args.width;
@@ -69,11 +73,10 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         "bench: {}x{} pixels, threads {}, reference {} spp (single, mis)",
         scene.camera.width,
         scene.camera.height,
-        args.threads.map_or("all".to_string(), |t| t.to_string()),
+        threads.map_or("all".to_string(), |t| t.to_string()),
         args.reference_spp
     );
-    let (reference, ref_time) =
-        timed(&scene, &single(SingleSampling::Mis), args.reference_spp, 1_000_003, args.threads)?;
+    let (reference, ref_time) = timed(&scene, &single(SingleSampling::Mis), args.reference_spp, 1_000_003, threads)?;
     println!("reference rendered in {ref_time:.2} s");
     println!("{:<12} {:>6} {:>10} {:>14} {:>12}", "sampling", "spp", "time s", "samples/s", "rel MSE");
     for (name, sampling) in
@@ -82,7 +85,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let mut points: Vec<(f64, f64)> = Vec::new();
         let mut spp = 1;
         while spp <= args.max_spp {
-            let (image, seconds) = timed(&scene, &single(sampling), spp, 7, args.threads)?;
+            let (image, seconds) = timed(&scene, &single(sampling), spp, 7, threads)?;
             let error = image.relative_mse(&reference);
             println!("{name:<12} {spp:>6} {seconds:>10.3} {:>14.3e} {error:>12.3e}", pixels * spp as f64 / seconds);
             points.push((seconds, error));

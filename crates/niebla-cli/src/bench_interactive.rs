@@ -15,6 +15,9 @@ use niebla::integrator::{
 use niebla::render::{render_with, RenderOptions};
 use niebla::scene::Scene;
 
+use crate::error::CliError;
+use crate::flags::ThreadsFlag;
+
 /// Options of `niebla bench interactive`.
 #[derive(Args, Debug)]
 pub struct InteractiveBenchArgs {
@@ -33,9 +36,9 @@ pub struct InteractiveBenchArgs {
     /// Samples per pixel of the methods' error images.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
 }
 
 fn resized(scene: &Scene, width: u32, height: Option<u32>) -> Scene {
@@ -80,16 +83,20 @@ fn zhou_settings(file: IntegratorSettings) -> ZhouSettings {
 }
 
 /// `niebla bench interactive`.
-pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
+pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
     if args.frames == 0 || args.spp == 0 || args.reference_spp == 0 || args.error_width == 0 {
-        return Err("--frames, --spp, --reference-spp and --error-width must be at least 1".into());
+        return Err(CliError::invalid_option(
+            "--frames, --spp, --reference-spp and --error-width",
+            "must be at least 1",
+        ));
     }
+    let threads = args.threads.get()?;
     for path in &args.scenes {
-        let (built, _) = crate::render_cmd::load(Some(path))?;
+        let (built, _) = crate::load::load(Some(path))?;
         let scene = built.scene;
         let small = resized(&scene, args.error_width, None);
         let start = Instant::now();
-        let reference = frame(&small, &VolPathIntegrator::new(256), args.reference_spp, 1_000_003, args.threads);
+        let reference = frame(&small, &VolPathIntegrator::new(256), args.reference_spp, 1_000_003, threads);
         println!(
             "\n{}: reference volpath {}x{} at {} spp in {:.1} s",
             path.display(),
@@ -103,12 +110,12 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
             "method", "fps 256^2", "fps 512^2", "precompute s", "memory MiB", "rel MSE"
         );
         let single = crate::preview_cmd::interactive_single();
-        let single_error = frame(&small, &single, args.spp, 7, args.threads).relative_mse(&reference);
+        let single_error = frame(&small, &single, args.spp, 7, threads).relative_mse(&reference);
         println!(
             "{:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
             "single (ray march)",
-            fps(&scene, &single, 256, args.frames, args.threads),
-            fps(&scene, &single, 512, args.frames, args.threads),
+            fps(&scene, &single, 256, args.frames, threads),
+            fps(&scene, &single, 512, args.frames, threads),
             0.0,
             0.0,
             single_error
@@ -117,11 +124,11 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
             let settings =
                 HegemanSettings { multiple_scattering: multiple, ..hegeman_settings(built.settings.integrator) };
             let hegeman = HegemanIntegrator::new(&scene, settings);
-            let error = frame(&small, &hegeman, args.spp, 7, args.threads).relative_mse(&reference);
+            let error = frame(&small, &hegeman, args.spp, 7, threads).relative_mse(&reference);
             println!(
                 "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
-                fps(&scene, &hegeman, 256, args.frames, args.threads),
-                fps(&scene, &hegeman, 512, args.frames, args.threads),
+                fps(&scene, &hegeman, 256, args.frames, threads),
+                fps(&scene, &hegeman, 512, args.frames, threads),
                 hegeman.precompute_seconds,
                 hegeman.memory_bytes() as f64 / (1024.0 * 1024.0),
                 error
@@ -136,11 +143,11 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), String> {
         ];
         for (name, settings) in variants {
             let zhou = ZhouIntegrator::new(&scene, settings);
-            let error = frame(&small, &zhou, args.spp, 7, args.threads).relative_mse(&reference);
+            let error = frame(&small, &zhou, args.spp, 7, threads).relative_mse(&reference);
             println!(
                 "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}   (fit error {:.3})",
-                fps(&scene, &zhou, 256, args.frames, args.threads),
-                fps(&scene, &zhou, 512, args.frames, args.threads),
+                fps(&scene, &zhou, 256, args.frames, threads),
+                fps(&scene, &zhou, 512, args.frames, threads),
                 zhou.fit_seconds + zhou.lighting_seconds,
                 zhou.memory_bytes() as f64 / (1024.0 * 1024.0),
                 error,

@@ -19,6 +19,9 @@ use niebla::integrator::photon::{
 use niebla::integrator::IntegratorSettings;
 use niebla::scene::Scene;
 
+use crate::error::CliError;
+use crate::flags::ThreadsFlag;
+
 /// Options of `niebla bench photons`.
 #[derive(Args, Debug)]
 pub struct PhotonBenchArgs {
@@ -48,21 +51,21 @@ pub struct PhotonBenchArgs {
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
-    /// Worker threads of the renders (default: all cores; the tracing
-    /// figure always uses all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
+    /// Worker threads of the renders (the tracing figure always uses all cores).
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
 }
 
 /// `niebla bench photons`.
-pub fn run(args: &PhotonBenchArgs) -> Result<(), String> {
+pub fn run(args: &PhotonBenchArgs) -> Result<(), CliError> {
+    args.threads.get()?;
     let scenes = if args.scenes.is_empty() {
         vec![PathBuf::from("scenes/caustic_fog_area.json"), PathBuf::from("scenes/cloud_photons.json")]
     } else {
         args.scenes.clone()
     };
     for path in &scenes {
-        let (built, _) = crate::render_cmd::load(Some(path))?;
+        let (built, _) = crate::load::load(Some(path))?;
         let scene_integrator = built.settings.integrator;
         let mut scene = built.scene;
         let aspect = scene.camera.height as f64 / scene.camera.width as f64;
@@ -123,14 +126,14 @@ fn tracing_and_queries(scene: &Scene, photons: u32) {
 /// about `seconds` in all, sized by a 16-spp probe, and the reference's own
 /// relative MSE estimated from the halves (their relative MSE is twice each
 /// half's, four times the mean's).
-fn reference(scene: &Scene, args: &PhotonBenchArgs) -> Result<(Image, f64), String> {
+fn reference(scene: &Scene, args: &PhotonBenchArgs) -> Result<(Image, f64), CliError> {
     let volpath = IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH };
-    let (_, probe_s) = timed(scene, &volpath, 16, 100, args.threads)?;
+    let (_, probe_s) = timed(scene, &volpath, 16, 100, args.threads.threads)?;
     let half = (args.reference_seconds / 2.0 / probe_s.max(1e-6) * 16.0).clamp(16.0, 1e8);
     let half = 1u32 << (half.log2().floor() as u32).min(30);
     let start = Instant::now();
-    let (a, _) = timed(scene, &volpath, half, 101, args.threads)?;
-    let (b, _) = timed(scene, &volpath, half, 102, args.threads)?;
+    let (a, _) = timed(scene, &volpath, half, 101, args.threads.threads)?;
+    let (b, _) = timed(scene, &volpath, half, 102, args.threads.threads)?;
     let noise = a.relative_mse(&b) / 4.0;
     let pixels = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x + *y) * 0.5).collect();
     let mean = Image { width: a.width, height: a.height, pixels };
@@ -169,7 +172,7 @@ fn photon_settings(
 /// `volpath` reference with the reference's own error subtracted (the two
 /// are independent, so their relative MSEs add); a sweep that stops short
 /// is extrapolated as error ~ 1 / time and marked `~`.
-fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> Result<(), String> {
+fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> Result<(), CliError> {
     let (reference, noise) = reference(scene, args)?;
     let volpath = IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH };
     println!("{:<12} {:>7} {:>10} {:>12} {:>12}", "integrator", "spp", "time s", "rel MSE", "- ref noise");
@@ -183,7 +186,7 @@ fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &Phot
         let mut points: Vec<(f64, f64)> = Vec::new();
         let mut spp = 1u32;
         loop {
-            let (image, seconds) = timed(scene, &settings, spp, 7, args.threads)?;
+            let (image, seconds) = timed(scene, &settings, spp, 7, args.threads.threads)?;
             let measured = image.relative_mse(&reference);
             let error = (measured - noise).max(measured * 1e-3);
             println!("{name:<12} {spp:>7} {seconds:>10.3} {measured:>12.3e} {error:>12.3e}");

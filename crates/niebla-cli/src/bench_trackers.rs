@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::error::CliError;
 use clap::Args;
 use niebla::math::{Ray, Vec3};
 use niebla::medium::{DensityGrid, GridMedium, Medium};
@@ -91,16 +92,16 @@ fn rays(scene: &Scene, g: &GridMedium, n: u32) -> Vec<(Ray, f32, f32)> {
 }
 
 /// `niebla bench trackers`.
-pub fn run(args: &TrackerBenchArgs) -> Result<(), String> {
+pub fn run(args: &TrackerBenchArgs) -> Result<(), CliError> {
     let path = args.scene.clone().unwrap_or_else(|| PathBuf::from("scenes/smoke.json"));
-    let (built, _) = crate::render_cmd::load(Some(&path))?;
+    let (built, _) = crate::load::load(Some(&path))?;
     let scene = built.scene;
     let Some(grid) = first_grid(&scene) else {
-        return Err(format!("{}: the scene has no grid medium to measure", path.display()));
+        return Err(CliError::SceneUnsuitable { scene: path, problem: "the scene has no grid medium to measure" });
     };
     let rays = rays(&scene, grid, args.rays);
     if rays.is_empty() {
-        return Err(format!("{}: no ray passes through the grid medium", path.display()));
+        return Err(CliError::SceneUnsuitable { scene: path, problem: "no ray passes through the grid medium" });
     }
     println!(
         "bench trackers: {} rays ({} camera, {} toward the light) x {} estimates, majorant grid {:?}",

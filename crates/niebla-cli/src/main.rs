@@ -4,7 +4,11 @@ mod bench;
 mod bench_interactive;
 mod bench_photons;
 mod bench_trackers;
-mod compare_cmd;
+mod compare;
+mod error;
+mod flags;
+mod info_cmd;
+mod load;
 mod preview_cmd;
 mod render_cmd;
 
@@ -27,7 +31,7 @@ enum Command {
     /// Render a scene file (or the built-in default scene) to EXR and/or PNG.
     Render(render_cmd::RenderArgs),
     /// Render a scene with several integrators under one time budget and write an HTML report.
-    Compare(compare_cmd::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Print what a scene holds: camera, media, shapes, lights, render settings.
     Info {
         /// Scene file (JSON, version 1). Without it, describes the built-in default scene.
@@ -59,8 +63,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
-        Command::Compare(args) => compare_cmd::run(&args),
-        Command::Info { scene } => render_cmd::info(scene.as_deref()),
+        Command::Compare(args) => compare::run(&args),
+        Command::Info { scene } => info_cmd::run(scene.as_deref()),
         Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
         Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),
         Command::Preview(args) => preview_cmd::run(&args),
@@ -69,9 +73,9 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("error: {message}");
-            ExitCode::FAILURE
+        Err(error) => {
+            eprintln!("error: {error}");
+            ExitCode::from(error.exit_code())
         }
     }
 }

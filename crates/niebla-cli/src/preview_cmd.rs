@@ -13,10 +13,12 @@ use niebla::integrator::{
     AnalyticIntegrator, HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, SingleIntegrator,
     SingleSampling, ZhouIntegrator, ZhouSettings,
 };
-use niebla::limits::default_memory_limit;
 use niebla::render::{render_with, RenderOptions};
 use niebla::scene::{load_scene, Scene};
 use niebla::tracking::{MarchStep, TransmittanceMethod};
+
+use crate::error::CliError;
+use crate::flags::{ExposureFlag, MaxMemoryFlag, ThreadsFlag};
 
 /// Integrators fast enough to preview.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -48,11 +50,9 @@ pub struct PreviewArgs {
     /// Samples per pixel per frame.
     #[arg(long, default_value_t = 1)]
     pub spp: u32,
-    /// Most memory the precomputation may take, e.g. 8G, 512M (binary
-    /// units); a lattice needing more is refused before it is allocated.
-    /// Default: half of the machine's memory.
-    #[arg(long, value_parser = niebla::limits::parse_memory_size)]
-    pub max_memory: Option<u64>,
+    /// `--max-memory`: the memory limit.
+    #[command(flatten)]
+    pub max_memory: MaxMemoryFlag,
     /// Stop after this many frames (default: run until interrupted).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -62,12 +62,12 @@ pub struct PreviewArgs {
     /// Folder for a numbered sequence `frame_00000.png`, ...
     #[arg(long, conflicts_with = "output")]
     pub sequence: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// PNG exposure in stops (default: the scene's).
-    #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
+    /// `--exposure`: exposure of the images, in stops.
+    #[command(flatten)]
+    pub exposure: ExposureFlag,
 }
 
 /// A prepared integrator (precomputation done), one per scene version.
@@ -106,9 +106,9 @@ impl Prepared {
         }
     }
 
-    fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, String> {
-        fn go<I: Integrator>(scene: &Scene, i: &I, options: &RenderOptions) -> Result<Image, String> {
-            render_with(scene, i, options, &|_, _| {}, None).map_err(|e| e.to_string())
+    fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, CliError> {
+        fn go<I: Integrator>(scene: &Scene, i: &I, options: &RenderOptions) -> Result<Image, CliError> {
+            Ok(render_with(scene, i, options, &|_, _| {}, None)?)
         }
         match self {
             Prepared::Hegeman(i) => go(scene, i.as_ref(), options),
@@ -134,15 +134,16 @@ fn modified(path: &Path) -> Option<SystemTime> {
 }
 
 /// `niebla preview`.
-pub fn run(args: &PreviewArgs) -> Result<(), String> {
+pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
     if args.spp == 0 {
-        return Err("--spp: must be at least 1".into());
+        return Err(CliError::invalid_option("--spp", "must be at least 1"));
     }
     if args.width == Some(0) || args.height == Some(0) {
-        return Err("--width/--height: must be at least 1".into());
+        return Err(CliError::invalid_option("--width/--height", "must be at least 1"));
     }
+    let threads = args.threads.get()?;
     if let Some(dir) = &args.sequence {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(|error| CliError::Io { path: dir.clone(), error })?;
     }
     let mut loaded: Option<(SystemTime, Scene, Prepared, f32)> = None;
     let mut frame = 0u64;
@@ -150,13 +151,15 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
     let mut frames_since_report = 0u32;
     while args.frames.is_none_or(|n| frame < n) {
         // Reload and precompute again when the file changed.
-        let stamp = modified(&args.scene).ok_or_else(|| format!("{}: scene file not found", args.scene.display()))?;
+        let stamp = modified(&args.scene).ok_or_else(|| CliError::SceneNotFound(args.scene.clone()))?;
         if loaded.as_ref().is_none_or(|(t, ..)| *t != stamp) {
             let label = args.scene.display().to_string();
-            let checked = load_scene(&args.scene).map_err(|e| e.to_string()).and_then(|built| {
+            let loaded_scene =
+                load_scene(&args.scene).map_err(|error| CliError::Scene { error, over_memory_limit: false });
+            let checked = loaded_scene.and_then(|built| {
                 let settings = Prepared::settings(args.integrator, built.settings.integrator);
-                let limit = args.max_memory.unwrap_or_else(default_memory_limit);
-                crate::render_cmd::check_precompute_memory(&label, &settings, &built.scene, limit)?;
+                let limit = args.max_memory.limit();
+                crate::load::check_precompute_memory(&label, &settings, &built.scene, limit)?;
                 Ok(built)
             });
             match checked {
@@ -169,7 +172,7 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
                     scene.camera.height = height;
                     let start = Instant::now();
                     let prepared = Prepared::new(args.integrator, &scene, built.settings.integrator);
-                    let exposure = args.exposure.unwrap_or(built.settings.exposure);
+                    let exposure = args.exposure.or(built.settings.exposure)?;
                     eprintln!(
                         "preview: {} at {width}x{height}, {:?}, precomputed in {:.3} s",
                         args.scene.display(),
@@ -189,14 +192,14 @@ pub fn run(args: &PreviewArgs) -> Result<(), String> {
             }
         }
         let (_, scene, prepared, exposure) = loaded.as_ref().expect("a scene is loaded");
-        let options = RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads: args.threads };
+        let options = RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads };
         let image = prepared.render(scene, &options)?;
         if let Some(path) = &args.output {
-            write_image(&image, path, *exposure).map_err(|e| e.to_string())?;
+            write_image(&image, path, *exposure)?;
         }
         if let Some(dir) = &args.sequence {
             let path = dir.join(format!("frame_{frame:05}.png"));
-            write_image(&image, &path, *exposure).map_err(|e| e.to_string())?;
+            write_image(&image, &path, *exposure)?;
         }
         frame += 1;
         frames_since_report += 1;

@@ -1,4 +1,4 @@
-//! `niebla render` and `niebla info`.
+//! `niebla render`.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -6,12 +6,15 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use niebla::film::{read_checkpoint, render_memory, scene_hash, write_checkpoint, write_image, CheckpointInfo};
+use niebla::film::{read_checkpoint, render_memory, write_checkpoint, write_image, CheckpointInfo};
 use niebla::integrator::{IntegratorSettings, SingleSampling};
-use niebla::limits::{default_memory_limit, format_bytes, parse_memory_size};
-use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo};
-use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
+use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
 use niebla::tracking::TransmittanceMethod;
+
+use crate::error::CliError;
+use crate::flags::{
+    check_output_folder, positive_seconds, ExposureFlag, MaxMemoryFlag, QuietFlag, SeedFlag, ThreadsFlag,
+};
 
 /// Options of `niebla render`.
 #[derive(Args, Debug)]
@@ -43,24 +46,21 @@ pub struct RenderArgs {
     /// (equiangular + distance sampling).
     #[arg(long, value_enum)]
     pub sampling: Option<SamplingName>,
-    /// Worker threads (default: all cores). The image does not depend on it.
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Sampler seed (overrides the scene's `render.seed`).
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// PNG exposure in stops: the PNG shows the radiance times 2^E (overrides
-    /// the scene's `render.exposure`). The EXR is never scaled.
-    #[arg(long, allow_negative_numbers = true)]
-    pub exposure: Option<f32>,
-    /// Do not draw a progress bar.
-    #[arg(long)]
-    pub quiet: bool,
-    /// Most memory the render may take for its image, grids and files, e.g.
-    /// 8G, 512M (binary units); a scene needing more is refused before
-    /// anything large is allocated. Default: half of the machine's memory.
-    #[arg(long, value_parser = parse_memory_size)]
-    pub max_memory: Option<u64>,
+    /// `--threads`: worker threads.
+    #[command(flatten)]
+    pub threads: ThreadsFlag,
+    /// `--seed`: the sampler seed.
+    #[command(flatten)]
+    pub seed: SeedFlag,
+    /// `--exposure`: exposure of the images, in stops.
+    #[command(flatten)]
+    pub exposure: ExposureFlag,
+    /// `--quiet`: no progress bars.
+    #[command(flatten)]
+    pub quiet: QuietFlag,
+    /// `--max-memory`: the memory limit.
+    #[command(flatten)]
+    pub max_memory: MaxMemoryFlag,
     /// Continue the progressive render whose EXR checkpoint (an output of an
     /// earlier `niebla render`, rewritten between passes) is given, up to
     /// --spp samples in all: same scene, integrator and seed required, and
@@ -99,87 +99,6 @@ pub enum SamplingName {
     Equiangular,
     /// Equiangular and distance sampling combined by MIS.
     Mis,
-}
-
-/// Load the scene named on the command line, or the built-in default, within
-/// the default memory limit.
-pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), String> {
-    load_limited(scene, default_memory_limit()).map(|l| (l.built, l.stem))
-}
-
-/// A scene loaded for rendering.
-pub struct LoadedScene {
-    /// The built scene and its render settings.
-    pub built: BuiltScene,
-    /// Output file stem: the scene file's, or `niebla`.
-    pub stem: String,
-    /// [`scene_hash`] of the scene text (recorded in checkpoints).
-    pub hash: String,
-}
-
-/// Load the scene (or the built-in default), refusing before allocating
-/// anything large an image whose render buffers, or grids and files, would
-/// take more than `max_memory` bytes together.
-pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, String> {
-    let (text, source, base, stem) = match scene {
-        Some(path) => {
-            if !path.exists() {
-                return Err(format!("{}: scene file not found", path.display()));
-            }
-            let source = path.display().to_string();
-            let text = std::fs::read_to_string(path).map_err(|e| format!("{source}: cannot read scene file: {e}"))?;
-            let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
-            (text, source, base, stem)
-        }
-        None => (DEFAULT_SCENE.to_string(), "<default scene>".to_string(), PathBuf::from("."), "niebla".to_string()),
-    };
-    let desc = parse_scene_str(&text, &source).map_err(|e| e.to_string())?;
-    let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
-    let image_bytes = render_memory(camera.width, camera.height);
-    if image_bytes > max_memory {
-        return Err(format!(
-            "{source}: camera.width, camera.height: rendering {} x {} pixels would need about {} for the image and \
-             its output buffers, over the memory limit of {} (lower the resolution or raise --max-memory)",
-            camera.width,
-            camera.height,
-            format_bytes(image_bytes),
-            format_bytes(max_memory)
-        ));
-    }
-    let options = BuildOptions { max_memory: max_memory - image_bytes };
-    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|e| {
-        let hint = if e.message.contains("memory limit") { " (raise it with --max-memory)" } else { "" };
-        format!("{e}{hint}")
-    })?;
-    Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
-}
-
-/// Refuse `settings` when its precomputation (photon maps, lattices) would
-/// take more than `left` bytes: the error names the scene (`source`), the
-/// field to lower and the estimated size.
-pub fn check_precompute_memory(
-    source: &str,
-    settings: &IntegratorSettings,
-    scene: &niebla::scene::Scene,
-    left: u64,
-) -> Result<(), String> {
-    match niebla::integrator::precompute_memory(settings, scene) {
-        Some(m) if m.bytes > left => Err(format!(
-            "{source}: render.integrator.{field}: {what} would need about {}, over the {} left of the memory limit \
-             (lower render.integrator.{field} or raise --max-memory)",
-            format_bytes(m.bytes),
-            format_bytes(left),
-            field = m.field,
-            what = m.what,
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// The name of a scene in messages: its path, or `<default scene>`.
-pub fn scene_label(scene: Option<&Path>) -> String {
-    scene.map_or_else(|| "<default scene>".to_string(), |p| p.display().to_string())
 }
 
 /// Apply command-line overrides to the scene's integrator settings.
@@ -241,53 +160,47 @@ pub fn override_integrator(
 }
 
 /// `niebla render`.
-pub fn run(args: &RenderArgs) -> Result<(), String> {
-    let max_memory = args.max_memory.unwrap_or_else(default_memory_limit);
-    let LoadedScene { built, stem, hash } = load_limited(args.scene.as_deref(), max_memory)?;
-    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)?;
+pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+    let max_memory = args.max_memory.limit();
+    let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
+    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)
+        .map_err(CliError::Integrator)?;
     let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
-    check_precompute_memory(&scene_label(args.scene.as_deref()), &integrator, &built.scene, left)?;
+    crate::load::check_precompute_memory(
+        &crate::load::scene_label(args.scene.as_deref()),
+        &integrator,
+        &built.scene,
+        left,
+    )?;
     let spp = args.spp.unwrap_or(built.settings.spp);
     if spp == 0 {
-        return Err("--spp: must be at least 1".into());
+        return Err(CliError::invalid_option("--spp", "must be at least 1"));
     }
     let budget = match args.time {
-        Some(t) if !(t.is_finite() && t > 0.0 && t < 1e7) => {
-            return Err(format!("--time: expected a positive number of seconds, got {t}"));
-        }
-        Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+        Some(t) => Budget::Time(Duration::from_secs_f64(positive_seconds("--time", t)?)),
         None => Budget::Samples(spp),
     };
-    if args.threads == Some(0) {
-        return Err("--threads: must be at least 1".into());
-    }
-    let exposure = args.exposure.unwrap_or(built.settings.exposure);
-    if !exposure.is_finite() {
-        return Err("--exposure: must be a finite number of stops".into());
-    }
+    let threads = args.threads.get()?;
+    let exposure = args.exposure.or(built.settings.exposure)?;
     let outputs: Vec<PathBuf> = match &args.output {
         Some(p) => {
             let ext = p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
             if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-                return Err(format!("{}: output must end in .exr or .png", p.display()));
+                return Err(CliError::OutputFormat(p.clone()));
             }
             vec![p.clone()]
         }
         None => vec![PathBuf::from(format!("{stem}.exr")), PathBuf::from(format!("{stem}.png"))],
     };
     for out in &outputs {
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            if !dir.is_dir() {
-                return Err(format!("{}: output folder {} does not exist", out.display(), dir.display()));
-            }
-        }
+        check_output_folder(out)?;
     }
 
     let scene = &built.scene;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let (start_acc, seed) = match &args.resume {
-        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.unwrap_or(built.settings.seed)),
-        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed)?,
+        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.or(built.settings.seed)),
+        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed.seed)?,
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
@@ -295,7 +208,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             return Ok(());
         }
     }
-    let bar = if args.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
+    let bar = if args.quiet.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
     let template = match budget {
         Budget::Samples(_) => {
             bar.set_length(pixels * spp as u64);
@@ -306,7 +219,7 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
             "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% of the time budget {msg}"
         }
     };
-    bar.set_style(ProgressStyle::with_template(template).map_err(|e| e.to_string())?);
+    bar.set_style(ProgressStyle::with_template(template).expect("the progress bar templates are valid"));
     let start = Instant::now();
     let samples_before_pass = AtomicU64::new(start_acc.spp * pixels);
     let progress = |done: u64, _total: u64| match budget {
@@ -320,16 +233,15 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
     // Checkpoints are at most CHECKPOINT_INTERVAL apart: the first passes take
     // milliseconds, and compressing and writing an image after each of them
     // took up to a third of a short render. The final image is always written.
-    let mut write_error: Option<String> = None;
+    let mut write_error: Option<CliError> = None;
     let mut spp_done = start_acc.spp;
     let mut spp_written = start_acc.spp;
     let mut last_write = Instant::now();
-    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), String> {
+    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), CliError> {
         let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }
-                .map_err(|e| e.to_string())?;
+            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }?;
         }
         Ok(())
     };
@@ -348,8 +260,9 @@ pub fn run(args: &RenderArgs) -> Result<(), String> {
         last_write = Instant::now();
         true
     };
-    let image = resume_progressive(scene, &integrator, seed, args.threads, budget, &progress, None, start_acc, on_pass)
-        .map_err(|e| e.to_string())?;
+    let options =
+        ProgressiveOptions { threads, progress: &progress, ..ProgressiveOptions::new(&integrator, seed, budget) };
+    let image = resume_progressive(scene, &options, start_acc, on_pass)?;
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
     let seconds = start.elapsed().as_secs_f64();
@@ -387,116 +300,28 @@ fn resume_state(
     hash: &str,
     integrator: &IntegratorSettings,
     seed: Option<u64>,
-) -> Result<(Accumulator, u64), String> {
-    let (image, info) = read_checkpoint(path).map_err(|e| format!("--resume: {e}"))?;
-    let at = path.display();
+) -> Result<(Accumulator, u64), CliError> {
+    let (image, info) = read_checkpoint(path).map_err(CliError::CheckpointUnreadable)?;
+    let mismatch = |problem: String| CliError::CheckpointMismatch { path: path.to_path_buf(), problem };
     if info.scene_hash != hash {
-        return Err(format!(
-            "--resume: {at} was rendered from another scene (scene hash {}, this scene's {hash})",
+        return Err(mismatch(format!(
+            "was rendered from another scene (scene hash {}, this scene's {hash})",
             info.scene_hash
-        ));
+        )));
     }
     let settings = format!("{integrator:?}");
     if info.integrator != settings {
-        return Err(format!("--resume: {at} was rendered with {}, not {settings}", info.integrator));
+        return Err(mismatch(format!("was rendered with {}, not {settings}", info.integrator)));
     }
     if let Some(s) = seed.filter(|&s| s != info.seed) {
-        return Err(format!("--resume: {at} was rendered with seed {}, not --seed {s}", info.seed));
+        return Err(mismatch(format!("was rendered with seed {}, not --seed {s}", info.seed)));
     }
     let (w, h) = (scene.camera.width, scene.camera.height);
     if (image.width, image.height) != (w, h) {
-        return Err(format!(
-            "--resume: {at} is {} x {} pixels, the scene's camera {w} x {h}",
-            image.width, image.height
-        ));
+        return Err(mismatch(format!("is {} x {} pixels, the scene's camera {w} x {h}", image.width, image.height)));
     }
     if info.spp == 0 || image.pixels.iter().any(|p| !p.is_finite()) {
-        return Err(format!("--resume: {at} holds no samples or non-finite pixels; start a new render"));
+        return Err(mismatch("holds no samples or non-finite pixels; start a new render".to_string()));
     }
     Ok((Accumulator::from_mean(image, info.spp), info.seed))
-}
-
-/// `niebla info`.
-pub fn info(scene: Option<&Path>) -> Result<(), String> {
-    let (built, _) = load(scene)?;
-    let s = &built.scene;
-    let c = &s.camera;
-    println!("scene: {}", scene.map_or("<default scene>".into(), |p| p.display().to_string()));
-    println!(
-        "camera: perspective at {:?} looking {:?}, {}x{} pixels, fov_y {:.1} deg",
-        c.position.to_array(),
-        c.forward.to_array(),
-        c.width,
-        c.height,
-        2.0 * c.tan_half_fov_y.atan().to_degrees()
-    );
-    println!(
-        "render: {:?}, {} spp, seed {}, exposure {}",
-        built.settings.integrator, built.settings.spp, built.settings.seed, built.settings.exposure
-    );
-    println!("media ({}):", s.media.len());
-    for (name, m) in s.medium_names.iter().zip(&s.media) {
-        match m.as_homogeneous() {
-            Some(h) => println!(
-                "  {name}: homogeneous, sigma_a {:?}, sigma_s {:?} (per unit length), L_ve {:?}, phase {} (mean cosine {:.3})",
-                h.sigma_a.0,
-                h.sigma_s.0,
-                h.l_ve.0,
-                h.phase.name(),
-                h.phase.mean_cosine()
-            ),
-            None => {
-                if let niebla::medium::Medium::Grid(g) = m {
-                    let kind = match &g.density {
-                        niebla::medium::DensityGrid::Dense(d) => format!("dense grid {:?} voxels", d.dims()),
-                        niebla::medium::DensityGrid::Sparse(sp) => format!("sparse grid, {} leaves", sp.leaf_count()),
-                    };
-                    let emission = match &g.emission {
-                        niebla::medium::GridEmission::None => "none".to_string(),
-                        niebla::medium::GridEmission::ProportionalToDensity(l) => format!("L_ve {:?} x density", l.0),
-                        niebla::medium::GridEmission::Field { scale, .. } => format!("grid x {:?}", scale.0),
-                        niebla::medium::GridEmission::Temperature { scale, .. } => {
-                            format!("blackbody of a temperature grid x {scale}")
-                        }
-                    };
-                    println!(
-                        "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \
-                         world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
-                        g.sigma_a.0,
-                        g.sigma_s.0,
-                        g.max_sigma_t(),
-                        g.world_bounds.0.to_array(),
-                        g.world_bounds.1.to_array(),
-                        g.majorant.res(),
-                        g.phase.name()
-                    );
-                }
-            }
-        }
-    }
-    let name_of = |id: Option<niebla::medium::MediumId>| {
-        id.map_or("vacuum".to_string(), |i| s.medium_names[i.0 as usize].clone())
-    };
-    println!("shapes ({}):", s.objects.len());
-    for (i, o) in s.objects.iter().enumerate() {
-        let (lo, hi) = o.shape.bounds();
-        let kind = match o.shape {
-            niebla::geometry::Shape::Sphere(_) => "sphere",
-            niebla::geometry::Shape::Box(_) => "box",
-            niebla::geometry::Shape::Rectangle(_) => "rectangle",
-        };
-        let media = if o.bounds_medium {
-            format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))
-        } else {
-            String::new()
-        };
-        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}", lo.to_array(), hi.to_array(), o.bsdf);
-    }
-    println!("lights ({}):", s.lights.len());
-    for (i, l) in s.lights.iter().enumerate() {
-        println!("  [{i}] {l:?}");
-    }
-    println!("ambient medium: {}", name_of(s.ambient_medium));
-    println!("camera medium: {}", name_of(s.camera_medium));
-    Ok(())
 }

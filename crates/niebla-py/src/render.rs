@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use niebla::film::Image;
 use niebla::integrator::IntegratorSettings;
-use niebla::progressive::{render_progressive, Budget, PassInfo};
+use niebla::progressive::{render_progressive, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::BuiltScene;
 use pyo3::prelude::*;
 
@@ -88,16 +88,15 @@ pub(crate) fn render_blocking(
                 spp_done.store(info.spp, Ordering::Relaxed);
                 true
             };
-            let result = render_progressive(
-                scene,
-                &request.settings,
-                request.seed,
-                request.threads,
-                request.budget,
-                &on_progress,
-                Some(cancel),
-                on_pass,
-            );
+            let options = ProgressiveOptions {
+                settings: &request.settings,
+                seed: request.seed,
+                threads: request.threads,
+                budget: request.budget,
+                progress: &on_progress,
+                cancel: Some(cancel),
+            };
+            let result = render_progressive(scene, &options, on_pass);
             // The receiver only goes away if the caller panicked.
             let _ = sender.send(result.map_err(|e| e.to_string()));
         });

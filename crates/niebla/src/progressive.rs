@@ -130,22 +130,66 @@ pub fn next_pass_size(spp_done: u64) -> u64 {
     spp_done.clamp(1, u32::MAX as u64 / 2)
 }
 
-/// Render progressively until `budget` is spent. `progress(done, total)` sees
-/// pixel samples within the current pass; `on_pass(image, info)` runs after
-/// every pass and may stop the render by returning `false`.
-#[allow(clippy::too_many_arguments)]
+/// How a progressive render runs: the integrator, its seed, the threads,
+/// when to stop, and whom to tell about progress.
+///
+/// ```
+/// use niebla::progressive::{Budget, ProgressiveOptions};
+/// let settings = niebla::integrator::IntegratorSettings::Analytic;
+/// let options = ProgressiveOptions { threads: Some(2), ..ProgressiveOptions::new(&settings, 7, Budget::Samples(4)) };
+/// assert_eq!((options.seed, options.threads, options.cancel.is_none()), (7, Some(2), true));
+/// ```
+#[derive(Clone, Copy)]
+pub struct ProgressiveOptions<'a> {
+    /// The integrator and its parameters.
+    pub settings: &'a IntegratorSettings,
+    /// Sampler seed; sample indices continue across passes, so one seed
+    /// covers the whole render.
+    pub seed: u64,
+    /// Worker threads (`None`: all cores). The image does not depend on it.
+    pub threads: Option<usize>,
+    /// When the render stops.
+    pub budget: Budget,
+    /// `progress(done, total)`: pixel samples done within the current pass.
+    pub progress: &'a (dyn Fn(u64, u64) + Sync),
+    /// Set to stop the render between two pixel blocks (the render then
+    /// returns [`RenderError::Cancelled`]).
+    pub cancel: Option<&'a AtomicBool>,
+}
+
+impl<'a> ProgressiveOptions<'a> {
+    /// `settings`, `seed` and `budget` on all cores, with no progress
+    /// callback and no cancellation.
+    pub fn new(settings: &'a IntegratorSettings, seed: u64, budget: Budget) -> ProgressiveOptions<'a> {
+        ProgressiveOptions { settings, seed, threads: None, budget, progress: &no_progress, cancel: None }
+    }
+}
+
+impl std::fmt::Debug for ProgressiveOptions<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ProgressiveOptions")
+            .field("settings", self.settings)
+            .field("seed", &self.seed)
+            .field("threads", &self.threads)
+            .field("budget", &self.budget)
+            .field("cancel", &self.cancel)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The progress callback of [`ProgressiveOptions::new`]: does nothing.
+fn no_progress(_done: u64, _total: u64) {}
+
+/// Render `scene` progressively until `options.budget` is spent.
+/// `on_pass(image, info)` runs after every pass with the mean image so far
+/// and may stop the render by returning `false`.
 pub fn render_progressive(
     scene: &Scene,
-    settings: &IntegratorSettings,
-    seed: u64,
-    threads: Option<usize>,
-    budget: Budget,
-    progress: &(dyn Fn(u64, u64) + Sync),
-    cancel: Option<&AtomicBool>,
+    options: &ProgressiveOptions,
     on_pass: impl FnMut(&Image, PassInfo) -> bool,
 ) -> Result<Image, RenderError> {
     let start = Accumulator::new(scene.camera.width, scene.camera.height);
-    resume_progressive(scene, settings, seed, threads, budget, progress, cancel, start, on_pass)
+    resume_progressive(scene, options, start, on_pass)
 }
 
 /// [`render_progressive`] continuing from `acc` (for instance
@@ -154,18 +198,13 @@ pub fn render_progressive(
 /// and `Budget::Time` counts from this call. With the same scene, settings
 /// and seed, the result is bit-identical to an uninterrupted render that
 /// passed through the same `acc`.
-#[allow(clippy::too_many_arguments)]
 pub fn resume_progressive(
     scene: &Scene,
-    settings: &IntegratorSettings,
-    seed: u64,
-    threads: Option<usize>,
-    budget: Budget,
-    progress: &(dyn Fn(u64, u64) + Sync),
-    cancel: Option<&AtomicBool>,
+    options: &ProgressiveOptions,
     mut acc: Accumulator,
     mut on_pass: impl FnMut(&Image, PassInfo) -> bool,
 ) -> Result<Image, RenderError> {
+    let ProgressiveOptions { settings, seed, threads, budget, progress, cancel } = *options;
     let start = Instant::now();
     let mut k = 0u32;
     let mut seconds_per_spp = 0.0f64;
@@ -188,9 +227,9 @@ pub fn resume_progressive(
                 }
             }
         }
-        let options = RenderOptions { spp: size as u32, seed, first_sample: acc.spp, threads };
+        let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.spp, threads };
         let pass_start = Instant::now();
-        let image = prepared.render(scene, &options, progress, cancel)?;
+        let image = prepared.render(scene, &pass, progress, cancel)?;
         seconds_per_spp = pass_start.elapsed().as_secs_f64() / size as f64;
         acc.add(&image, size);
         rendered += size;

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use niebla::film::Image;
-use niebla::progressive::{render_progressive, resume_progressive, Accumulator, Budget};
+use niebla::progressive::{render_progressive, resume_progressive, Accumulator, Budget, ProgressiveOptions};
 use niebla::scene::{build_scene, parse_scene_str, DEFAULT_SCENE};
 
 fn bits(image: &Image) -> Vec<[u32; 3]> {
@@ -22,26 +22,25 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
 
     // Uninterrupted, keeping every checkpoint.
     let mut checkpoints = Vec::new();
-    let straight =
-        render_progressive(scene, &settings, 5, Some(2), Budget::Samples(16), &|_, _| {}, None, |im, info| {
-            checkpoints.push((im.clone(), info.spp));
-            true
-        })
-        .unwrap();
+    let options =
+        |threads| ProgressiveOptions { threads, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(16)) };
+    let straight = render_progressive(scene, &options(Some(2)), |im, info| {
+        checkpoints.push((im.clone(), info.spp));
+        true
+    })
+    .unwrap();
     assert_eq!(checkpoints.iter().map(|c| c.1).collect::<Vec<_>>(), [1, 2, 4, 8, 16]);
     assert_eq!(bits(&straight), bits(&checkpoints[4].0));
 
     // Continued from each checkpoint, on another thread count.
     for (image, spp) in &checkpoints[..4] {
         let start = Accumulator::from_mean(image.clone(), *spp);
-        let resumed =
-            resume_progressive(scene, &settings, 5, Some(1), Budget::Samples(16), &|_, _| {}, None, start, |_, _| true)
-                .unwrap();
+        let resumed = resume_progressive(scene, &options(Some(1)), start, |_, _| true).unwrap();
         assert!(bits(&resumed) == bits(&straight), "resumed from {spp} spp differs");
     }
     // Nothing left to do: the checkpoint itself.
     let start = Accumulator::from_mean(straight.clone(), 16);
-    let same = resume_progressive(scene, &settings, 5, None, Budget::Samples(8), &|_, _| {}, None, start, |_, _| true)
-        .unwrap();
+    let same_options = ProgressiveOptions::new(&settings, 5, Budget::Samples(8));
+    let same = resume_progressive(scene, &same_options, start, |_, _| true).unwrap();
     assert_eq!(bits(&same), bits(&straight));
 }

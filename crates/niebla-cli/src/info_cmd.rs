@@ -1,0 +1,91 @@
+//! `niebla info`: what a scene holds (camera, media, shapes, lights, render
+//! settings), printed one item a line.
+
+use std::path::Path;
+
+use crate::error::CliError;
+
+/// `niebla info`.
+pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
+    let (built, _) = crate::load::load(scene)?;
+    let s = &built.scene;
+    let c = &s.camera;
+    println!("scene: {}", scene.map_or("<default scene>".into(), |p| p.display().to_string()));
+    println!(
+        "camera: perspective at {:?} looking {:?}, {}x{} pixels, fov_y {:.1} deg",
+        c.position.to_array(),
+        c.forward.to_array(),
+        c.width,
+        c.height,
+        2.0 * c.tan_half_fov_y.atan().to_degrees()
+    );
+    println!(
+        "render: {:?}, {} spp, seed {}, exposure {}",
+        built.settings.integrator, built.settings.spp, built.settings.seed, built.settings.exposure
+    );
+    println!("media ({}):", s.media.len());
+    for (name, m) in s.medium_names.iter().zip(&s.media) {
+        match m.as_homogeneous() {
+            Some(h) => println!(
+                "  {name}: homogeneous, sigma_a {:?}, sigma_s {:?} (per unit length), L_ve {:?}, phase {} (mean cosine {:.3})",
+                h.sigma_a.0,
+                h.sigma_s.0,
+                h.l_ve.0,
+                h.phase.name(),
+                h.phase.mean_cosine()
+            ),
+            None => {
+                if let niebla::medium::Medium::Grid(g) = m {
+                    let kind = match &g.density {
+                        niebla::medium::DensityGrid::Dense(d) => format!("dense grid {:?} voxels", d.dims()),
+                        niebla::medium::DensityGrid::Sparse(sp) => format!("sparse grid, {} leaves", sp.leaf_count()),
+                    };
+                    let emission = match &g.emission {
+                        niebla::medium::GridEmission::None => "none".to_string(),
+                        niebla::medium::GridEmission::ProportionalToDensity(l) => format!("L_ve {:?} x density", l.0),
+                        niebla::medium::GridEmission::Field { scale, .. } => format!("grid x {:?}", scale.0),
+                        niebla::medium::GridEmission::Temperature { scale, .. } => {
+                            format!("blackbody of a temperature grid x {scale}")
+                        }
+                    };
+                    println!(
+                        "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \
+                         world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
+                        g.sigma_a.0,
+                        g.sigma_s.0,
+                        g.max_sigma_t(),
+                        g.world_bounds.0.to_array(),
+                        g.world_bounds.1.to_array(),
+                        g.majorant.res(),
+                        g.phase.name()
+                    );
+                }
+            }
+        }
+    }
+    let name_of = |id: Option<niebla::medium::MediumId>| {
+        id.map_or("vacuum".to_string(), |i| s.medium_names[i.0 as usize].clone())
+    };
+    println!("shapes ({}):", s.objects.len());
+    for (i, o) in s.objects.iter().enumerate() {
+        let (lo, hi) = o.shape.bounds();
+        let kind = match o.shape {
+            niebla::geometry::Shape::Sphere(_) => "sphere",
+            niebla::geometry::Shape::Box(_) => "box",
+            niebla::geometry::Shape::Rectangle(_) => "rectangle",
+        };
+        let media = if o.bounds_medium {
+            format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))
+        } else {
+            String::new()
+        };
+        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}", lo.to_array(), hi.to_array(), o.bsdf);
+    }
+    println!("lights ({}):", s.lights.len());
+    for (i, l) in s.lights.iter().enumerate() {
+        println!("  [{i}] {l:?}");
+    }
+    println!("ambient medium: {}", name_of(s.ambient_medium));
+    println!("camera medium: {}", name_of(s.camera_medium));
+    Ok(())
+}
