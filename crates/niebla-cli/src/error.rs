@@ -47,10 +47,6 @@ pub enum CliError {
         /// Whether the error is the memory limit refusing a grid or file.
         over_memory_limit: bool,
     },
-    /// The scene's text is not JSON (after it parsed as a scene: never
-    /// expected, but not a reason to panic).
-    #[error("scene: invalid JSON: {0}")]
-    SceneJson(serde_json::Error),
     /// The scene suits no measurement of this command.
     #[error("{}: {problem}", scene.display())]
     SceneUnsuitable {

@@ -20,8 +20,11 @@ pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
         2.0 * c.tan_half_fov_y.atan().to_degrees()
     );
     println!(
-        "render: {:?}, {} spp, seed {}, exposure {}",
-        built.settings.integrator, built.settings.spp, built.settings.seed, built.settings.exposure
+        "render: {}, {} spp, seed {}, exposure {}",
+        built.settings.integrator.key(),
+        built.settings.spp,
+        built.settings.seed,
+        built.settings.exposure
     );
     println!("media ({}):", s.media.len());
     for (name, m) in s.medium_names.iter().zip(&s.media) {

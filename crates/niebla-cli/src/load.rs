@@ -27,7 +27,8 @@ pub struct LoadedScene {
     pub hash: String,
 }
 
-/// Load the scene (or the built-in default), refusing before allocating
+/// Load the scene (or the built-in default), printing its warnings to
+/// stderr, refusing before allocating
 /// anything large an image whose render buffers, or grids and files, would
 /// take more than `max_memory` bytes together.
 pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, CliError> {
@@ -64,6 +65,9 @@ pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene
         let over_memory_limit = error.message.contains("memory limit");
         CliError::Scene { error, over_memory_limit }
     })?;
+    for warning in &built.warnings {
+        eprintln!("warning: {warning}");
+    }
     Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
 }
 

@@ -7,30 +7,25 @@
 use std::path::{Path, PathBuf};
 use std::time::{Instant, SystemTime};
 
-use clap::{Args, ValueEnum};
-use niebla::film::{write_image, Image};
-use niebla::integrator::{
-    AnalyticIntegrator, HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, SingleIntegrator,
-    SingleSampling, ZhouIntegrator, ZhouSettings,
-};
-use niebla::render::{render_with, RenderOptions};
+use clap::Args;
+use niebla::film::write_image;
+use niebla::integrator::{IntegratorSettings, PreparedIntegrator, SingleIntegrator, SingleSampling};
+use niebla::render::RenderOptions;
 use niebla::scene::{load_scene, Scene};
 use niebla::tracking::{MarchStep, TransmittanceMethod};
 
 use crate::error::CliError;
 use crate::flags::{ExposureFlag, MaxMemoryFlag, ThreadsFlag};
 
-/// Integrators fast enough to preview.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum PreviewIntegrator {
-    /// Hegeman et al. 2005 (reconstructed): single + approximate multiple scattering.
-    Hegeman,
-    /// Zhou et al. 2008 (reconstructed): compensated ray marching.
-    Zhou,
-    /// Single scattering by ray marching (ray-marched shadow rays).
-    Single,
-    /// Closed-form single scattering (Sun et al. 2005), homogeneous media.
-    Analytic,
+/// The `--integrator` values of `preview`: the integrators the registry
+/// marks interactive, with their summaries.
+fn interactive_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        niebla::integrator::registry::INTEGRATORS
+            .iter()
+            .filter(|e| e.interactive)
+            .map(|e| clap::builder::PossibleValue::new(e.name).help(e.summary)),
+    )
 }
 
 /// Options of `niebla preview`.
@@ -38,9 +33,10 @@ pub enum PreviewIntegrator {
 pub struct PreviewArgs {
     /// Scene file (JSON, version 1).
     pub scene: PathBuf,
-    /// The integrator (hegeman or zhou use the scene file's settings of that integrator, else their defaults).
-    #[arg(long, value_enum, default_value = "hegeman")]
-    pub integrator: PreviewIntegrator,
+    /// The integrator (the scene file's settings when it names the same
+    /// integrator, else its defaults; single marches shadow rays too).
+    #[arg(long, value_parser = interactive_names(), default_value = "hegeman")]
+    pub integrator: String,
     /// Frame width in pixels (default: the scene's).
     #[arg(long)]
     pub width: Option<u32>,
@@ -70,53 +66,18 @@ pub struct PreviewArgs {
     pub exposure: ExposureFlag,
 }
 
-/// A prepared integrator (precomputation done), one per scene version.
-enum Prepared {
-    Hegeman(Box<HegemanIntegrator>),
-    Zhou(Box<ZhouIntegrator>),
-    Single(SingleIntegrator),
-    Analytic(AnalyticIntegrator),
-}
-
-impl Prepared {
-    /// The settings `kind` runs with: the scene file's when it names the
-    /// same integrator, else the defaults.
-    fn settings(kind: PreviewIntegrator, from_file: IntegratorSettings) -> IntegratorSettings {
-        match (kind, from_file) {
-            (PreviewIntegrator::Hegeman, s @ IntegratorSettings::Hegeman(_)) => s,
-            (PreviewIntegrator::Hegeman, _) => IntegratorSettings::Hegeman(HegemanSettings::default()),
-            (PreviewIntegrator::Zhou, s @ IntegratorSettings::Zhou(_)) => s,
-            (PreviewIntegrator::Zhou, _) => IntegratorSettings::Zhou(ZhouSettings::default()),
-            (PreviewIntegrator::Single, _) => {
-                let SingleIntegrator { step, sampling, transmittance } = interactive_single();
-                IntegratorSettings::Single { step, sampling, transmittance }
-            }
-            (PreviewIntegrator::Analytic, _) => IntegratorSettings::Analytic,
-        }
+/// The settings `name` previews with: the scene file's when it names the
+/// same integrator, else the defaults; `single` always runs as the
+/// interactive ray marcher ([`interactive_single`]).
+fn preview_settings(name: &str, from_file: IntegratorSettings) -> IntegratorSettings {
+    if name == "single" {
+        let SingleIntegrator { step, sampling, transmittance } = interactive_single();
+        return IntegratorSettings::Single { step, sampling, transmittance };
     }
-
-    fn new(kind: PreviewIntegrator, scene: &Scene, from_file: IntegratorSettings) -> Prepared {
-        match Self::settings(kind, from_file) {
-            IntegratorSettings::Hegeman(settings) => {
-                Prepared::Hegeman(Box::new(HegemanIntegrator::new(scene, settings)))
-            }
-            IntegratorSettings::Zhou(settings) => Prepared::Zhou(Box::new(ZhouIntegrator::new(scene, settings))),
-            IntegratorSettings::Analytic => Prepared::Analytic(AnalyticIntegrator::new()),
-            _ => Prepared::Single(interactive_single()),
-        }
+    if from_file.name() == name {
+        return from_file;
     }
-
-    fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, CliError> {
-        fn go<I: Integrator>(scene: &Scene, i: &I, options: &RenderOptions) -> Result<Image, CliError> {
-            Ok(render_with(scene, i, options, &|_, _| {}, None)?)
-        }
-        match self {
-            Prepared::Hegeman(i) => go(scene, i.as_ref(), options),
-            Prepared::Zhou(i) => go(scene, i.as_ref(), options),
-            Prepared::Single(i) => go(scene, i, options),
-            Prepared::Analytic(i) => go(scene, i, options),
-        }
-    }
+    niebla::integrator::registry::defaults(name).expect("clap admits only registered names")
 }
 
 /// `single` as an interactive ray marcher: stratified march along the view
@@ -145,7 +106,7 @@ pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
     if let Some(dir) = &args.sequence {
         std::fs::create_dir_all(dir).map_err(|error| CliError::Io { path: dir.clone(), error })?;
     }
-    let mut loaded: Option<(SystemTime, Scene, Prepared, f32)> = None;
+    let mut loaded: Option<(SystemTime, Scene, PreparedIntegrator, f32)> = None;
     let mut frame = 0u64;
     let mut last_report = Instant::now();
     let mut frames_since_report = 0u32;
@@ -157,13 +118,17 @@ pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
             let loaded_scene =
                 load_scene(&args.scene).map_err(|error| CliError::Scene { error, over_memory_limit: false });
             let checked = loaded_scene.and_then(|built| {
-                let settings = Prepared::settings(args.integrator, built.settings.integrator);
+                let settings = preview_settings(&args.integrator, built.settings.integrator);
                 let limit = args.max_memory.limit();
                 crate::load::check_precompute_memory(&label, &settings, &built.scene, limit)?;
                 Ok(built)
             });
             match checked {
                 Ok(built) => {
+                    for warning in &built.warnings {
+                        eprintln!("warning: {warning}");
+                    }
+                    let settings = preview_settings(&args.integrator, built.settings.integrator);
                     let mut scene = built.scene;
                     let aspect = scene.camera.height as f64 / scene.camera.width as f64;
                     let width = args.width.unwrap_or(scene.camera.width);
@@ -171,10 +136,10 @@ pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
                     scene.camera.width = width;
                     scene.camera.height = height;
                     let start = Instant::now();
-                    let prepared = Prepared::new(args.integrator, &scene, built.settings.integrator);
+                    let prepared = PreparedIntegrator::new(&scene, &settings);
                     let exposure = args.exposure.or(built.settings.exposure)?;
                     eprintln!(
-                        "preview: {} at {width}x{height}, {:?}, precomputed in {:.3} s",
+                        "preview: {} at {width}x{height}, {}, precomputed in {:.3} s",
                         args.scene.display(),
                         args.integrator,
                         start.elapsed().as_secs_f64()
@@ -193,7 +158,7 @@ pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
         }
         let (_, scene, prepared, exposure) = loaded.as_ref().expect("a scene is loaded");
         let options = RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads };
-        let image = prepared.render(scene, &options)?;
+        let image = prepared.render(scene, &options, &|_, _| {}, None)?;
         if let Some(path) = &args.output {
             write_image(&image, path, *exposure)?;
         }

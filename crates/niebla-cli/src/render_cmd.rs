@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use niebla::film::{read_checkpoint, render_memory, write_checkpoint, write_image, CheckpointInfo};
-use niebla::integrator::{IntegratorSettings, SingleSampling};
+use niebla::integrator::IntegratorSettings;
 use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
-use niebla::tracking::TransmittanceMethod;
+use niebla::scene::IntegratorSpec;
 
 use crate::error::CliError;
 use crate::flags::{
@@ -39,8 +39,8 @@ pub struct RenderArgs {
     pub max_depth: Option<u32>,
     /// Integrator (overrides the scene's `render.integrator.type`; its other
     /// parameters take defaults unless the scene names the same integrator).
-    #[arg(long, value_enum)]
-    pub integrator: Option<IntegratorName>,
+    #[arg(long, value_parser = integrator_names())]
+    pub integrator: Option<String>,
     /// Scattering-point sampling of the `single` integrator: march (ray
     /// marching), equiangular (toward point and spot lights) or mis
     /// (equiangular + distance sampling).
@@ -69,27 +69,6 @@ pub struct RenderArgs {
     pub resume: Option<PathBuf>,
 }
 
-/// Integrators selectable on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum IntegratorName {
-    /// Emission and absorption only.
-    Emission,
-    /// Single scattering with shadow rays.
-    Single,
-    /// Volumetric path tracing (multiple scattering, unbiased).
-    Volpath,
-    /// Closed-form single scattering (Sun et al. 2005) in homogeneous media.
-    Analytic,
-    /// Single + approximate multiple scattering (Hegeman et al. 2005), interactive.
-    Hegeman,
-    /// Compensated ray marching (Zhou et al. 2008): RBF fit, SH lighting, diffusion; interactive.
-    Zhou,
-    /// Volumetric photon mapping (one photon map per render).
-    Photon,
-    /// Progressive photon mapping (converges to volpath).
-    Ppm,
-}
-
 /// Scattering-point sampling of `single`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SamplingName {
@@ -101,70 +80,63 @@ pub enum SamplingName {
     Mis,
 }
 
-/// Apply command-line overrides to the scene's integrator settings.
+/// The `--integrator` values: every name of the integrator registry, with
+/// its summary in `--help`.
+pub fn integrator_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        niebla::integrator::registry::INTEGRATORS
+            .iter()
+            .map(|e| clap::builder::PossibleValue::new(e.name).help(e.summary)),
+    )
+}
+
+impl SamplingName {
+    /// The value of the `sampling` field in a scene file.
+    fn field(self) -> &'static str {
+        match self {
+            SamplingName::March => "march",
+            SamplingName::Equiangular => "equiangular",
+            SamplingName::Mis => "mis",
+        }
+    }
+}
+
+/// The scene's integrator (`spec`) with the command-line overrides applied,
+/// read by the integrator registry: `--integrator` naming another
+/// integrator takes that one's defaults; `--sampling` (single) and
+/// `--max-depth` (volpath) set that field.
 pub fn override_integrator(
-    settings: IntegratorSettings,
-    name: Option<IntegratorName>,
+    spec: &IntegratorSpec,
+    name: Option<&str>,
     sampling: Option<SamplingName>,
     max_depth: Option<u32>,
-) -> Result<IntegratorSettings, String> {
-    let mut s = match (name, settings) {
-        (None, s) => s,
-        (Some(IntegratorName::Single), s @ IntegratorSettings::Single { .. }) => s,
-        (Some(IntegratorName::Emission), s @ IntegratorSettings::Emission { .. }) => s,
-        (Some(IntegratorName::Volpath), s @ IntegratorSettings::VolPath { .. }) => s,
-        (Some(IntegratorName::Volpath), _) => {
-            IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH }
-        }
-        (Some(IntegratorName::Single), _) => IntegratorSettings::Single {
-            step: None,
-            sampling: SingleSampling::March,
-            transmittance: TransmittanceMethod::Analytic,
-        },
-        (Some(IntegratorName::Analytic), _) => IntegratorSettings::Analytic,
-        (Some(IntegratorName::Hegeman), s @ IntegratorSettings::Hegeman(_)) => s,
-        (Some(IntegratorName::Hegeman), _) => {
-            IntegratorSettings::Hegeman(niebla::integrator::HegemanSettings::default())
-        }
-        (Some(IntegratorName::Zhou), s @ IntegratorSettings::Zhou(_)) => s,
-        (Some(IntegratorName::Zhou), _) => IntegratorSettings::Zhou(niebla::integrator::ZhouSettings::default()),
-        (Some(IntegratorName::Photon), s @ IntegratorSettings::Photon(_)) => s,
-        (Some(IntegratorName::Photon), _) => {
-            IntegratorSettings::Photon(niebla::integrator::photon::PhotonSettings::photon())
-        }
-        (Some(IntegratorName::Ppm), s @ IntegratorSettings::Ppm(_)) => s,
-        (Some(IntegratorName::Ppm), _) => IntegratorSettings::Ppm(Default::default()),
-        (Some(IntegratorName::Emission), _) => {
-            IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic }
-        }
-    };
+) -> Result<IntegratorSettings, CliError> {
+    let kind = name.unwrap_or(spec.name());
+    let mut fields = Vec::new();
     if let Some(choice) = sampling {
-        match &mut s {
-            IntegratorSettings::Single { sampling, .. } => {
-                *sampling = match choice {
-                    SamplingName::March => SingleSampling::March,
-                    SamplingName::Equiangular => SingleSampling::Equiangular,
-                    SamplingName::Mis => SingleSampling::Mis,
-                }
-            }
-            other => return Err(format!("--sampling applies to the single integrator, not to {}", other.name())),
+        if kind != "single" {
+            return Err(CliError::Integrator(format!("--sampling applies to the single integrator, not to {kind}")));
         }
+        fields.push(("sampling", serde_json::Value::from(choice.field())));
     }
     if let Some(depth) = max_depth {
-        match &mut s {
-            IntegratorSettings::VolPath { max_depth } => *max_depth = depth,
-            other => return Err(format!("--max-depth applies to the volpath integrator, not to {}", other.name())),
+        if kind != "volpath" {
+            return Err(CliError::Integrator(format!("--max-depth applies to the volpath integrator, not to {kind}")));
         }
+        fields.push(("max_depth", serde_json::Value::from(depth)));
     }
-    Ok(s)
+    niebla::integrator::registry::parse_with_overrides(&spec.object, name, &fields).map_err(|e| {
+        let option = if e.path == "max_depth" { "--max-depth" } else { "--integrator" };
+        CliError::Integrator(format!("{option}: render.integrator.{}: {}", e.path, e.message))
+    })
 }
 
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let max_memory = args.max_memory.limit();
     let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
-    let integrator = override_integrator(built.settings.integrator, args.integrator, args.sampling, args.max_depth)
-        .map_err(CliError::Integrator)?;
+    let integrator =
+        override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
     let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
     crate::load::check_precompute_memory(
         &crate::load::scene_label(args.scene.as_deref()),
@@ -238,7 +210,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let mut spp_written = start_acc.spp;
     let mut last_write = Instant::now();
     let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), CliError> {
-        let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: format!("{integrator:?}") };
+        let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: integrator.key() };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
             if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }?;
@@ -309,8 +281,10 @@ fn resume_state(
             info.scene_hash
         )));
     }
-    let settings = format!("{integrator:?}");
-    if info.integrator != settings {
+    // Checkpoints name the settings by their stable key; those written
+    // before it by the settings' Rust debug form, which is still accepted.
+    let settings = integrator.key();
+    if info.integrator != settings && info.integrator != format!("{integrator:?}") {
         return Err(mismatch(format!("was rendered with {}, not {settings}", info.integrator)));
     }
     if let Some(s) = seed.filter(|&s| s != info.seed) {

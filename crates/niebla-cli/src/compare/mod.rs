@@ -26,8 +26,7 @@ use niebla::film::{read_exr, render_memory, write_atomically, write_exr, ExrRead
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
 use niebla::progressive::{render_progressive, Budget, PassInfo, ProgressiveOptions};
-use niebla::scene::{integrator_settings, parse_scene_str, DEFAULT_SCENE};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use crate::error::CliError;
 use crate::flags::{check_output_folder, positive_seconds, ExposureFlag, QuietFlag, SeedFlag, ThreadsFlag};
@@ -131,11 +130,6 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
     }
     check_output_folder(&args.output)?;
     let (built, _) = crate::load::load(args.scene.as_deref())?;
-    let scene_text = match &args.scene {
-        Some(path) => std::fs::read_to_string(path).map_err(|error| CliError::Io { path: path.clone(), error })?,
-        None => DEFAULT_SCENE.to_string(),
-    };
-    let scene_value: Value = serde_json::from_str(&scene_text).map_err(CliError::SceneJson)?;
     let scene_settings = built.settings.integrator;
     let seed = args.seed.or(built.settings.seed);
     let exposure = args.exposure.or(built.settings.exposure)?;
@@ -144,7 +138,7 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
         .iter()
         .map(|s| s.trim())
         .filter(|s| !s.is_empty())
-        .map(|spec| Ok((spec.to_string(), parse_integrator(spec, &scene_value, &scene_settings)?)))
+        .map(|spec| Ok((spec.to_string(), parse_integrator(spec, &scene_settings)?)))
         .collect::<Result<Vec<_>, String>>()
         .map_err(CliError::Integrator)?;
     let scene = &built.scene;
@@ -241,15 +235,11 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// `NAME` or `NAME:SAMPLING` as integrator settings, read by the scene
-/// parser (so every integrator it knows works, with its defaults and its
+/// `NAME` or `NAME:SAMPLING` as integrator settings, read by the
+/// integrator registry (so every integrator works, with its defaults and its
 /// messages). A bare name the scene uses keeps the scene's settings, as
 /// `niebla render --integrator` does.
-fn parse_integrator(
-    spec: &str,
-    scene: &Value,
-    scene_settings: &IntegratorSettings,
-) -> Result<IntegratorSettings, String> {
+fn parse_integrator(spec: &str, scene_settings: &IntegratorSettings) -> Result<IntegratorSettings, String> {
     let (name, sampling) = match spec.split_once(':') {
         Some((name, sampling)) => (name.trim(), Some(sampling.trim())),
         None => (spec, None),
@@ -257,14 +247,13 @@ fn parse_integrator(
     if sampling.is_none() && name == scene_settings.name() {
         return Ok(*scene_settings);
     }
-    let mut integrator = json!({ "type": name });
+    let mut object = serde_json::Map::new();
+    object.insert("type".into(), Value::from(name));
     if let Some(sampling) = sampling {
-        integrator["sampling"] = json!(sampling);
+        object.insert("sampling".into(), Value::from(sampling));
     }
-    // A scene with the real camera and nothing else: only the integrator can be wrong.
-    let probe = json!({"version": 1, "camera": scene["camera"], "render": {"integrator": integrator}});
-    let desc = parse_scene_str(&probe.to_string(), &format!("--integrators {spec}")).map_err(|e| e.to_string())?;
-    Ok(integrator_settings(&desc.render.integrator))
+    niebla::integrator::registry::parse(&object)
+        .map_err(|e| format!("--integrators {spec}: render.integrator.{}: {}", e.path, e.message))
 }
 
 /// The reference image at `path`: an EXR's RGB channels.

@@ -198,6 +198,42 @@ pub fn parse(object: &Object) -> Result<IntegratorSettings, Located> {
     }
 }
 
+/// Settings from `object` (a `render.integrator` object) changed by the
+/// command line: `name`, when it differs from the object's `type`, replaces
+/// the whole object (its fields take their defaults, since they belong to
+/// another integrator); then each `(field, value)` of `fields` is set.
+/// Errors carry the path relative to the object, as [`parse`]'s.
+///
+/// ```
+/// use niebla::integrator::{registry, IntegratorSettings};
+/// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
+/// let object = object.as_object().unwrap();
+/// let same = registry::parse_with_overrides(object, Some("volpath"), &[]).unwrap();
+/// assert_eq!(same, IntegratorSettings::VolPath { max_depth: 64 });
+/// let deeper = registry::parse_with_overrides(object, None, &[("max_depth", 8.into())]).unwrap();
+/// assert_eq!(deeper, IntegratorSettings::VolPath { max_depth: 8 });
+/// let other = registry::parse_with_overrides(object, Some("single"), &[]).unwrap();
+/// assert_eq!(Some(other), registry::defaults("single"));
+/// ```
+pub fn parse_with_overrides(
+    object: &Object,
+    name: Option<&str>,
+    fields: &[(&str, Value)],
+) -> Result<IntegratorSettings, Located> {
+    let mut object = match name {
+        Some(name) if object.get("type").and_then(Value::as_str) != Some(name) => {
+            let mut fresh = Object::new();
+            fresh.insert("type".into(), Value::String(name.to_string()));
+            fresh
+        }
+        _ => object.clone(),
+    };
+    for (field, value) in fields {
+        object.insert(field.to_string(), value.clone());
+    }
+    parse(&object)
+}
+
 /// The settings of integrator `name` with every field at its default
 /// (`None` for an unknown name).
 ///

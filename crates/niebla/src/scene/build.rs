@@ -27,6 +27,9 @@ pub struct BuiltScene {
     pub scene: Scene,
     /// Integrator, spp, seed and exposure from the file.
     pub settings: RenderSettings,
+    /// The file's `render.integrator` object as written (for overrides that
+    /// change one field of it).
+    pub integrator_spec: crate::scene::IntegratorSpec,
     /// Things in the file that are valid but almost surely not what was
     /// meant (a medium nothing refers to), each a whole message naming the
     /// file and the JSON path. Shown by `niebla render` and `niebla info`,
@@ -258,7 +261,12 @@ pub fn build_scene_with_options(
         seed: desc.render.seed,
         exposure: desc.render.exposure,
     };
-    Ok(BuiltScene { scene, settings, warnings: unused_media_warnings(desc, source) })
+    Ok(BuiltScene {
+        scene,
+        settings,
+        integrator_spec: desc.render.integrator.clone(),
+        warnings: unused_media_warnings(desc, source),
+    })
 }
 
 /// A warning for each medium that no shape names as `interior` or
@@ -277,10 +285,7 @@ pub fn build_scene_with_options(
 pub fn unused_media_warnings(desc: &SceneDesc, source: &str) -> Vec<String> {
     let used = |name: &str| {
         desc.ambient_medium.as_deref() == Some(name)
-            || desc
-                .shapes
-                .iter()
-                .any(|s| s.interior.as_deref() == Some(name) || s.exterior.as_deref() == Some(name))
+            || desc.shapes.iter().any(|s| s.interior.as_deref() == Some(name) || s.exterior.as_deref() == Some(name))
     };
     desc.media
         .keys()
