@@ -124,7 +124,7 @@ fn hermite(t: f64, p0: f64, m0: f64, p1: f64, m1: f64) -> f64 {
 }
 
 impl AirlightTable {
-    /// Integrate the table (about 0.1 s once; see [`airlight_table`]).
+    /// Integrate the table (done once per process; see [`airlight_table`]).
     pub fn new() -> AirlightTable {
         let stride = N_V + 1;
         let mut f = vec![0.0; (N_U + 1) * stride];
