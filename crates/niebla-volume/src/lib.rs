@@ -109,8 +109,8 @@
 //!   permutations shuffled by SplitMix64 from the seed) rather than taken
 //!   from a crate, so grids stay bit-identical across dependency updates;
 //!   bakes are single-threaded (no rayon in this crate) and skip voxels no
-//!   noise value can fill: 128^3 takes about 0.07 s (cloud) and 0.2 s
-//!   (plume), see `benches/lookup.rs`.
+//!   noise value can fill (bake times: `benches/lookup.rs`, figures in
+//!   ARCHITECTURE.md).
 //! - Readers load the whole file into memory; [`VdbFile`] decodes grids on
 //!   demand, so reading `density` and `temperature` reads the file once.
 

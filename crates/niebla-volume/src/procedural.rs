@@ -144,9 +144,8 @@ impl ProceduralParams {
 
 /// Bakes the density described by `params` over the unit box `[0, 1]^3`
 /// (y up) at `params.resolution` voxel centers: values in `[0, 1]`, zero
-/// on the voxels next to each face. Single-threaded: at the default
-/// parameters a 128^3 bake takes about 0.07 s (cloud) or 0.2 s (plume) in
-/// release builds (see `benches/lookup.rs`).
+/// on the voxels next to each face. Single-threaded (bake times are printed
+/// by `benches/lookup.rs`; figures in ARCHITECTURE.md).
 ///
 /// ```
 /// use niebla_volume::{procedural_density, MajorantGrid, ProceduralParams};

@@ -1,6 +1,6 @@
 //! The same scene, seed and spp give a bit-identical image with 1, 2 and 8
-//! threads, for every integrator (design.md section 1: randomness depends
-//! only on (seed, x, y, s)); integrators documented as depending on the
+//! threads, for every integrator (the random numbers of sample `s` of pixel
+//! `(x, y)` depend only on (seed, x, y, s)); integrators documented as depending on the
 //! thread count (photon maps built in parallel) are bit-identical at a fixed
 //! thread count instead.
 

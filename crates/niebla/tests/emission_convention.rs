@@ -1,5 +1,5 @@
 //! Emission follows the lecture's convention: `L_ve` is radiance emitted per
-//! unit length (design.md section 1). A deep purely absorbing emitting medium
+//! unit length (pbrt-v2's convention, not pbrt-v4's `sigma_a L_e`). A deep purely absorbing emitting medium
 //! looks like `L_ve / sigma_a`; a slab of thickness d like
 //! `L_ve (1 - exp(-sigma_a d)) / sigma_a`.
 

@@ -1,6 +1,7 @@
 //! The `hegeman` integrator (Hegeman et al. 2005, reconstructed stand-in):
 //! - thin limit: with little scattering along light paths the model reduces
-//!   to single scattering, so it must match `single` (interactive.md 2.6 H1);
+//!   to single scattering (the forward-scattered share `E_ms / E_0 -> tau_s`),
+//!   so it must match `single`;
 //! - against high-spp `volpath` references on the smoke, fog and cloud
 //!   scenes: relative MSE asserted not to regress beyond the value measured
 //!   when the test was written (+25% for noise), with and without the

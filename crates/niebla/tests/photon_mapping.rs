@@ -5,7 +5,8 @@
 //! - `ppm` converges to `volpath` on a homogeneous and a heterogeneous
 //!   scene (relative MSE falls with passes and ends below 1e-3);
 //! - storing direct photons adds exactly the single-scattering image (the
-//!   double-counting detector of methods.md 4.4 item 4);
+//!   double-counting detector: with the exclusion of direct photons switched
+//!   off, the image is brighter by exactly the single-scattering image);
 //! - beam queries and ray-marched point queries agree on the mean;
 //! - both photon integrators are bit-identical for 1, 2 and 3 threads.
 //!

@@ -790,7 +790,8 @@ fn grid_fields_in_a_homogeneous_medium_say_to_add_the_type() {
     assert_error(&text, "media.smoke.emission.temperature", "needs a heterogeneous medium");
 }
 
-/// design.md's sketch leaves out `type` on a medium with a `density`.
+/// The short form of a scene file leaves out `type` on a medium with a
+/// `density`: such a medium is a grid medium.
 #[test]
 fn untyped_medium_with_density_is_a_grid_medium() {
     let text = edit(

@@ -1,6 +1,6 @@
 //! Grid media from scene files: each density source parses, builds and puts
-//! its voxels where design.md section 1 says (values at cell centers of the
-//! box, zero outside, `to_world` placing the source's space in the world,
+//! its voxels where the grid convention says (Mitsuba 3's: values at cell
+//! centers of the box, clamped within half a cell of a face, zero outside, `to_world` placing the source's space in the world,
 //! VDB index-to-world composed before `to_world`); bad data in files is an
 //! error naming the JSON path, the file and the voxel.
 

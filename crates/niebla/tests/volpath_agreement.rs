@@ -99,7 +99,7 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
 /// becomes bimodal when the other heroes sample the path) and 2.8x for blue.
 /// `volpath` now traces one path per group of channels with coefficients
 /// within a factor 3 (here red alone, green with blue): about 1.0x, 1.3x and
-/// 1.5x, at about 1.5x the time per sample of the single hero path.
+/// 1.5x (its cost in time per sample: ARCHITECTURE.md, volpath decisions).
 #[test]
 fn chromatic_medium_converges_as_well_as_a_grey_one() {
     let env = Light::Constant(ConstantLight { radiance: Rgb::ONE });

@@ -1,5 +1,5 @@
 //! The `zhou` integrator (Zhou et al. 2008, compensated ray marching,
-//! reconstructed after interactive.md 1):
+//! reconstructed from the paper's abstract and a paraphrase of its body):
 //! - the RBF fit: its relative L2 error falls as RBFs are added, and a
 //!   density that *is* a sum of a few Gaussians is recovered closely;
 //! - single scattering from the RBF model against the `single` integrator

@@ -5,8 +5,9 @@ use crate::math::{Ray, Vec2, Vec3};
 /// A pinhole perspective camera looking from `position` toward a target.
 ///
 /// Pixel `(x, y)` with row 0 at the top of the image; the camera's right is
-/// increasing column (design.md section 1). `fov_y` is the full vertical field
-/// of view.
+/// increasing column. A camera sample passes through a uniformly random point
+/// of its pixel and counts in that pixel alone (box filter). `fov_y` is the
+/// full vertical field of view.
 #[derive(Clone, Copy, Debug)]
 pub struct PerspectiveCamera {
     /// Eye position (world).

@@ -1,7 +1,7 @@
 //! Blackbody color: Planck's law integrated against the CIE 1931 2-degree
 //! color matching functions, converted to linear Rec.709 RGB and normalized
-//! to unit luminance (design.md: `temperature` in Kelvin maps to a normalized
-//! blackbody color times `emission_scale`).
+//! to unit luminance (a medium's `temperature` in Kelvin maps to this
+//! normalized color times its `emission_scale`).
 //!
 //! The color matching functions are the CIE 1931 2-degree standard observer
 //! tabulated at 5 nm from 380 to 780 nm (CIE 15, `data/cie1931_2deg_5nm.csv`),

@@ -179,3 +179,7 @@ pub(crate) fn trace_camera_ray(
     }
     walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method })
 }
+
+#[cfg(test)]
+#[path = "camera_ray_tests.rs"]
+mod tests;

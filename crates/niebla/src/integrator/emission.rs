@@ -152,3 +152,7 @@ fn step_transmittance(
         _ => segment_transmittance(m, ray, t0, t1, method, sampler),
     }
 }
+
+#[cfg(test)]
+#[path = "emission_tests.rs"]
+mod tests;

@@ -206,3 +206,7 @@ impl SingleIntegrator {
         seg
     }
 }
+
+#[cfg(test)]
+#[path = "single_tests.rs"]
+mod tests;

@@ -1,8 +1,8 @@
 //! Participating media: optical coefficients (per unit length) x density,
 //! a phase function and emission.
 //!
-//! Emission follows the lecture's convention (design.md section 1): `L_ve` is
-//! radiance emitted per unit length, so the source term is
+//! Emission follows the lecture's (and pbrt-v2's) convention: `L_ve` is
+//! radiance emitted per unit length, not multiplied by `sigma_a`, so the source term is
 //! `S = L_ve + sigma_s * integral p L_i`, and a deep purely absorbing emitting
 //! medium looks like `L_ve / sigma_a`.
 
@@ -39,7 +39,8 @@ impl MediumPoint {
     }
 }
 
-/// A closed set of media (style.md rule 3). A scene holds a handful of media
+/// A closed set of media, dispatched by `match` (no virtual call per sample).
+/// A scene holds a handful of media
 /// in a table, so the size difference between variants costs nothing.
 #[derive(Clone, Debug)]
 #[allow(clippy::large_enum_variant)]

@@ -1,6 +1,8 @@
 //! Cornette and Shanks (1992), "Physically reasonable analytic expression for
-//! the single-scattering phase function", Applied Optics 31(16); methods.md
-//! sections 2.1 and 2.2 (sampling option (c): rejection against HG).
+//! the single-scattering phase function", Applied Optics 31(16): HG times a Rayleigh-like `(1 + mu^2)`
+//! factor, renormalized; its mean cosine is `3 g (4 + g^2) / (5 (2 + g^2))`,
+//! not `g`. Sampled by rejection against HG (the ratio `p_CS / p_HG` is
+//! bounded by `3 / (2 + g^2)`).
 
 use super::error::{check_open_unit, PhaseError};
 use super::hg::{hg_eval, HenyeyGreenstein};

@@ -1,5 +1,5 @@
-//! Double (two-term) Henyey-Greenstein; methods.md section 2.1 (common for
-//! clouds, smoke and fog; fitted to Mie in reference/mie_fog_fit.json).
+//! Double (two-term) Henyey-Greenstein, `w HG(g1) + (1 - w) HG(g2)` with mean
+//! cosine `w g1 + (1 - w) g2` (common for clouds, smoke and fog; fitted to Mie in reference/mie_fog_fit.json).
 
 use super::error::PhaseError;
 use super::hg::HenyeyGreenstein;

@@ -1,4 +1,5 @@
-//! Errors of phase-function construction (style.md rule 14: say where and what).
+//! Errors of phase-function construction: each says which parameter is wrong
+//! and what range it must lie in.
 
 use std::path::PathBuf;
 

@@ -66,7 +66,7 @@ impl HenyeyGreenstein {
     /// Inversion of the CDF with `1 - mu` and `1 + mu` in cancellation-free form.
     ///
     /// With `d = 1 - g + 2 g u` and `s = (1 - g^2) / d` (so that
-    /// `mu = (1 + g^2 - s^2) / (2 g)`, methods.md section 2.2):
+    /// `mu = (1 + g^2 - s^2) / (2 g)`, the inverse CDF of HG in `mu`):
     /// `1 - mu = (1 - g)(1 - u)(s + 1 - g) / d`, `1 + mu = (1 + g) u (1 + g + s) / d`.
     /// No division by `g`, so `g = 0` needs no special case.
     #[inline]

@@ -1,6 +1,6 @@
 //! Phase functions: the angular distribution of light scattered in a medium.
 //!
-//! # Convention (the one place it is written; design.md section 1)
+//! # Convention (the one place it is written; also in ARCHITECTURE.md)
 //!
 //! `p(wo, wi)` takes two unit directions that both point AWAY from the
 //! scattering point, as in pbrt-v4 and Mitsuba 3:
@@ -18,7 +18,7 @@
 //! its direction of travel toward the eye. `g > 0` means forward scattering,
 //! and Henyey-Greenstein reads `(1 - g^2) / (4 pi (1 + g^2 + 2 g dot(wo, wi))^1.5)`.
 //! (pbrt-v2 used `w' = -wi` and the sign `- 2 g cos`; mixing the two turns
-//! forward into backward scattering, methods.md section 0.2.)
+//! forward into backward scattering.)
 //!
 //! Every phase function is normalized, `integral over the sphere of p(wo, wi) dwi = 1`
 //! (units 1/sr), reciprocal (`p(wo, wi) = p(wi, wo)`) and depends on `mu` only.
@@ -154,7 +154,8 @@ impl ScatteringCosine {
     }
 }
 
-/// A phase function, dispatched by `match` (a closed set, style.md rule 3).
+/// A phase function, dispatched by `match`: a closed set, so the per-sample
+/// path has no virtual call.
 /// See the module documentation for the direction convention.
 ///
 /// ```

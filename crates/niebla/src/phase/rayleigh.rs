@@ -1,6 +1,7 @@
 //! Rayleigh scattering (unpolarized); pbrt-v2 `PhaseRayleigh`; sampling by
 //! Cardano's formula, cf. Frisvad 2011, "Importance sampling the Rayleigh
-//! phase function", JOSA A; methods.md section 2.2.
+//! phase function", JOSA A: `z = 2 (2 u - 1)`, `A = cbrt(z + sqrt(z^2 + 1))`,
+//! `mu = A - 1/A`.
 
 use super::ScatteringCosine;
 use crate::math::PI;

@@ -1,5 +1,6 @@
 //! Schlick's phase function (Blasi, Le Saec, Schlick 1993); pbrt-v2
-//! `PhaseSchlick`; methods.md sections 2.1 and 2.2.
+//! `PhaseSchlick`: `(1 - k^2) / (4 pi (1 - k mu)^2)`, sampled in closed form
+//! by `mu = (2 u + k - 1) / (2 k u - k + 1)`. Its `k` is not the mean cosine.
 
 use super::error::{check_open_unit, PhaseError};
 use super::ScatteringCosine;
@@ -80,7 +81,7 @@ impl Schlick {
 /// pbrt-v2's mapping from an asymmetry `g` to Schlick's `k`,
 /// `k = 1.5 g - 0.5 g^3` (attributed there to Thies Heidecke). Approximate:
 /// the resulting mean cosine for g = 0.3 / 0.76 / 0.9 is 0.303 / 0.799 / 0.942
-/// (methods.md section 2.1); use [`k_for_mean_cosine`] for an exact match.
+/// (computed by quadrature); use [`k_for_mean_cosine`] for an exact match.
 pub fn k_from_g(g: f32) -> f32 {
     1.5 * g - 0.5 * g * g * g
 }
@@ -138,7 +139,7 @@ mod tests {
 
     #[test]
     fn schlick_pbrt_v2_mapping_gives_methods_mean_cosines() {
-        // methods.md 2.1: g = 0.3 / 0.76 / 0.9 -> <mu> 0.303 / 0.799 / 0.942 (3 digits).
+        // g = 0.3 / 0.76 / 0.9 -> <mu> 0.303 / 0.799 / 0.942 (3 digits, by quadrature).
         for (g, expected) in [(0.3f32, 0.303), (0.76, 0.799), (0.9, 0.942)] {
             let m = schlick_mean_cosine(k_from_g(g) as f64);
             assert!((m - expected).abs() < 5e-4, "g {g}: <mu> = {m}");

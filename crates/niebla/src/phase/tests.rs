@@ -1,4 +1,4 @@
-//! Tests shared by every phase function (methods.md section 2.4): quadrature
+//! Tests shared by every phase function: quadrature
 //! normalization and mean cosine, a chi-square goodness-of-fit test of every
 //! sampler (Mitsuba 3 style: (theta, phi) histogram, low-expectation cells
 //! pooled), exactness of `pdf`, reciprocity, limits, the direction convention

@@ -2,7 +2,7 @@
 //!
 //! Randomness is counter based: sample `s` of pixel `(x, y)` draws its numbers
 //! from a hash of `(seed, x, y, s, dimension)`, so an image does not depend on
-//! thread count or tile order (design.md section 1).
+//! thread count, tile order or machine.
 
 mod distribution;
 mod rng;

@@ -1,5 +1,5 @@
 //! Warps from uniform numbers to distributions, each with its pdf
-//! (style.md rule 2: a sampler ships with its pdf and its test).
+//! and a test of the two together.
 
 use crate::math::{safe_sqrt, Vec2, Vec3, INV_4PI, PI};
 

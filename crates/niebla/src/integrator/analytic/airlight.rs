@@ -5,7 +5,8 @@
 //!
 //! `F(u, v) = integral_0^v exp(-u tan xi) dxi`,
 //!
-//! which is tabulated once ([`AirlightTable`]). Derivation (methods.md 3.3):
+//! which is tabulated once ([`AirlightTable`]). Derivation (the paper's, with
+//! separate `sigma_s` and `sigma_t` where it uses one coefficient for both):
 //! with the foot of the perpendicular from the light at ray parameter `t_c`
 //! and distance `h`, substitute `t - t_c = h tan(theta)` and
 //! `xi = pi/4 + theta/2`; then `dt / d^2 = 2 dxi / h` and
@@ -123,7 +124,7 @@ fn hermite(t: f64, p0: f64, m0: f64, p1: f64, m1: f64) -> f64 {
 }
 
 impl AirlightTable {
-    /// Integrate the table (about 0.1 s once; see [`airlight_table`]).
+    /// Integrate the table (done once per process; see [`airlight_table`]).
     pub fn new() -> AirlightTable {
         let stride = N_V + 1;
         let mut f = vec![0.0; (N_U + 1) * stride];
@@ -198,7 +199,7 @@ pub fn airlight_table() -> &'static AirlightTable {
 /// Asymptotic `F` for large `u`: with `t = tan xi`,
 /// `F = int_0^T exp(-u t) / (1 + t^2) dt ~ int_0^T exp(-u t) (1 - t^2 + t^4) dt`,
 /// `T = tan v`, each term an incomplete gamma function
-/// `(2n)!/u^(2n+1) P(2n+1, u T)`. methods.md 3.3 gives the first term
+/// `(2n)!/u^(2n+1) P(2n+1, u T)`. The usual asymptote is the first term alone,
 /// `(1 - exp(-u v))/u` (relative error ~`2/u^2`); with three terms the
 /// relative error is ~`720/u^6` (7e-7 at `u = 32`).
 pub fn f_asymptotic(u: f64, v: f64) -> f64 {

@@ -252,8 +252,9 @@ impl AnalyticIntegrator {
 }
 
 /// `(t_c, h)` of `position` relative to `ray`'s line in f64, with `h` kept
-/// away from 0 (a light on the line: the limit `gamma -> 0` of methods.md
-/// 3.3, clamped to a relative 1e-6).
+/// away from 0 (a light on the line, angle `gamma` between the ray and the
+/// light -> 0, makes the closed form's prefactor `1/h` times a vanishing
+/// `F` difference: `h` is clamped to a relative 1e-6).
 fn closest_approach(ray: &Ray, position: Vec3) -> (f64, f64) {
     match equiangular_geometry(ray, position) {
         Some((t_c, _)) => {
@@ -332,7 +333,9 @@ fn distance_sampled_other_lights(
 mod tests {
     use super::*;
 
-    /// Methods.md 3.3's reference values (sigma_s, sigma_t, D_sv, gamma, D_vp, L_a), I = 1.
+    /// Reference values (sigma_s, sigma_t, D_sv, gamma, D_vp, L_a), I = 1: the
+    /// closed form of Sun et al. 2005 with separate coefficients, checked
+    /// against brute-force quadrature of the single-scattering integral to 1e-9.
     #[test]
     fn airlight_matches_methods_reference_values() {
         let cases = [

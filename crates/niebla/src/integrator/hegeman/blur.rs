@@ -5,8 +5,8 @@
 //! The blur kernel is the heat kernel on the sphere (Legendre coefficients
 //! `exp(-l (l + 1) w^2 / 2)`): exactly normalized, positive, and for small
 //! `w` a Gaussian of per-axis variance `w^2`, as the small-angle
-//! (Fermi-Eyges) theory of interactive.md 2.3 asks; interactive.md suggests
-//! a von Mises-Fisher lobe, which has the same small-angle limit. In Legendre
+//! (Fermi-Eyges) theory of the stand-in model asks (see [`super`]); a von
+//! Mises-Fisher lobe of `kappa = 1/w^2` would have the same small-angle limit. In Legendre
 //! space the convolution is a product (Funk-Hecke), so
 //! `P_w(mu) = sum_l (2l + 1)/(4 pi) g^l exp(-l (l + 1) w^2 / 2) P_l(mu)`.
 

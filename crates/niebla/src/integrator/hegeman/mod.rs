@@ -3,14 +3,19 @@
 //! Ashikhmin and Premoze 2005 ("A lighting model for general participating
 //! media", I3D 2005).
 //!
-//! **Reconstruction, not the paper's equations.** The paper's body could not
-//! be read (interactive.md 2.2); this is the physically grounded stand-in of
-//! interactive.md 2.3-2.5 with the paper's structure: light arriving at a
+//! **Reconstruction, not the paper's equations.** Only the paper's abstract
+//! was available when this was written; this is a physically grounded
+//! stand-in with the structure the abstract and its lineage describe
+//! (Premoze, Ashikhmin, Ramamoorthi and Nayar 2004, "Practical rendering of
+//! multiple scattering effects in participating media": a point spread
+//! function along the most probable path, here the straight line from the
+//! light, in small-angle transport theory): light arriving at a
 //! point `u` of a view ray from each light is split into
 //! - an unscattered beam, `E_0 = E exp(-tau_t)` from the light direction, and
 //! - a forward-scattered part, `E_ms = E exp(-tau_a) (1 - exp(-tau_s))`
-//!   (`k_loss = 1`: the Monte Carlo calibration of interactive.md 2.4 is not
-//!   done), blurred in angle around the light direction by a Gaussian of
+//!   (`k_loss = 1`: the pure small-angle value; a Monte Carlo calibration of
+//!   the light lost from the forward cone, which matters for `tau_s >= 5` or
+//!   `g <= 0.7`, is not done), blurred in angle around the light direction by a Gaussian of
 //!   per-axis variance `w^2` from small-angle (Fermi-Eyges) theory,
 //!   `w^2 = int z^2 sigma_s (1 - g) dz / s^2` along the straight line
 //!   light -> u (z from the light; for a directional light `w^2 = int sigma_s

@@ -1,5 +1,6 @@
 //! Multiple scattering by diffusion (Zhou et al. 2008, Section 5.4, after
-//! Stam 1995; equations of interactive.md 1.2):
+//! Stam 1995, "Multiple scattering as a diffusion process"; the P1
+//! diffusion approximation of the radiative transfer equation):
 //! `div(kappa grad L0) - alpha L0 + S = 0`, `kappa = 1 / (3 sigma (1 - albedo g))`,
 //! `alpha = sigma (1 - albedo)`, `S = sigma J0 - div(J1) / (3 (1 - albedo g))`,
 //! then `L1 = 3 kappa (sigma J1 - grad L0)` (propagation convention), turned
@@ -11,8 +12,7 @@
 //! the centres alone carries no boundary condition (the uniform
 //! `L0 = J0 / (1 - albedo)` satisfies every row however small the cloud), so
 //! this solves the same equation by finite volumes on the lattice over the
-//! RBF approximation `D~` (the Stam grid variant interactive.md 1.7 names as
-//! the reference), with a zero-incoming-flux (Marshak) condition
+//! RBF approximation `D~` (Stam's grid variant of the same equation), with a zero-incoming-flux (Marshak) condition
 //! `-kappa dL0/dn = L0 / 2` on the faces where the medium ends (lattice nodes
 //! with `D~` below 1e-3 of its maximum, and the lattice boundary). Light
 //! thereby leaves the cloud through its surface. Solved by Jacobi-

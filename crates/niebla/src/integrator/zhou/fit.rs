@@ -1,13 +1,13 @@
 //! Fitting the RBF approximation `D~ = sum_l w_l exp(-|x - c_l|^2 / r_l^2)`
-//! to a density sampled on a lattice (Zhou et al. 2008, Section 5.1;
-//! interactive.md 1.4): least squares over centres, radii and weights with
+//! to a density sampled on a lattice (Zhou et al. 2008, Section 5.1): least
+//! squares over centres, radii and weights with
 //! analytic gradients, minimized by a projected L-BFGS (bounds enforced by
-//! clamping after each step: the "ours" substitute for L-BFGS-B named in
-//! interactive.md 1.10), with teleportation of the least important RBF to the
+//! clamping after each step: the "ours" substitute for the paper's
+//! L-BFGS-B), with teleportation of the least important RBF to the
 //! location of largest error every `teleport_every` iterations (kept only when
 //! it lowers the objective).
 //!
-//! Bounds (the paper's, interactive.md 1.8): radii in 0.015-0.09 of the
+//! Bounds (the paper's): radii in 0.015-0.09 of the
 //! longest side (and at least half a lattice cell), weights in 0.01-1 of the
 //! largest density, centres inside the lattice. Not done: the paper's final
 //! alternation of teleports at convergence and its per-frame insertion scheme

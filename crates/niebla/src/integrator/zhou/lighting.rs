@@ -7,7 +7,7 @@
 //! Optical depth in SH: each RBF `h` seen from centre `c_l` is a zonal
 //! function of the direction with zonal coefficients depending only on
 //! `delta = |c_h - c_l| / r_h` ([`ZonalDepthTable`], 256 samples of the
-//! half-angle `beta` in [0, pi], interactive.md 1.6), rotated to the axis
+//! half-angle `beta` in [0, pi], the paper's table size), rotated to the axis
 //! `c_l -> c_h` and scaled by `w_h r_h`. Exponentiation: the band-limited
 //! optical depth is evaluated at the nodes of a sphere quadrature,
 //! exponentiated there and multiplied by the environment before projecting

@@ -2,9 +2,10 @@
 //! Bao, Guo and Shum 2008 ("Real-time smoke rendering using compensated ray
 //! marching", SIGGRAPH 2008), on the CPU.
 //!
-//! The paper's body could not be read (interactive.md 0.1); this follows the
-//! reconstruction of interactive.md 1.2-1.10, with the deviations marked
-//! "ours" in each module:
+//! Only the paper's abstract and a prose paraphrase of its sections 3-5
+//! (equations missing) were available when this was written; this is a
+//! reconstruction of its method, with the deviations marked "ours" in each
+//! module:
 //! 1. **Density decomposition** ([`fit`]): the density, sampled on a lattice
 //!    over each grid medium, is approximated by Gaussian RBFs
 //!    `D~ = sum w_l exp(-|x - c_l|^2 / r_l^2)` (projected L-BFGS with
@@ -26,7 +27,7 @@
 //!    J(c_l) / sum w_l B_l(x)` (Eq. 7) is stored per lattice node as SH; a
 //!    per-view pass turns it into RGB toward the camera (the paper's volume
 //!    pass), and each view ray marches the *full* density `D = D~ + R` with
-//!    that source (variant A of interactive.md 1.9: the residual is
+//!    that source (variant A: the residual is
 //!    compensated back into both the source and the attenuation along view
 //!    rays), or `D~` for attenuation only (variant B), or `D~` everywhere
 //!    (compensation off).

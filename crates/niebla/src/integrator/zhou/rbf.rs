@@ -1,5 +1,5 @@
 //! Gaussian radial basis functions `w exp(-|x - c|^2 / r^2)` (truncated at
-//! `3 r`, interactive.md 1.3) approximating a density field, their
+//! `3 r`, as in the paper) approximating a density field, their
 //! evaluation on a lattice through buckets, the RBF-weighted interpolation
 //! of per-centre values (Zhou et al. Eq. 7) and closed-form optical depths.
 

@@ -2,7 +2,8 @@
 //! quadrature grid on the sphere for projections and products, rotation of
 //! zonal harmonics, and the Legendre (zonal) coefficients of a phase function.
 //!
-//! Convention (interactive.md 0.3, pinned by a test): orthonormal real SH,
+//! Convention (pinned by a test; some PRT code bases carry extra minus signs
+//! on `l = 1`): orthonormal real SH,
 //! index `l*l + l + m`, no Condon-Shortley phase, so
 //! `y_{1,-1} = sqrt(3/4pi) y`, `y_{1,0} = sqrt(3/4pi) z`, `y_{1,1} = sqrt(3/4pi) x`.
 //! A function `f(w)` of a unit direction is `sum_lm f_lm y_lm(w)`. All math is
