@@ -112,3 +112,33 @@ fn info_describes_the_default_scene() {
     assert!(text.contains("camera medium: haze"), "{text}");
     assert!(text.contains("lights (3)"), "{text}");
 }
+
+#[test]
+fn a_medium_nothing_refers_to_is_warned_about_by_info_and_render() {
+    let dir = temp_dir("cli_unused_medium");
+    // A grid medium from a file-less procedural density, neither bounded by
+    // a shape nor the ambient medium: it would render only the background.
+    let scene = r#"{"version": 1,
+        "camera": {"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 8, "height": 8},
+        "media": {"plume": {"type": "grid", "sigma_t": 2, "albedo": 0.9,
+                            "density": {"type": "procedural", "shape": "cloud", "resolution": 8}}},
+        "lights": [{"type": "constant", "radiance": 1}]}"#;
+    std::fs::write(dir.join("plume.json"), scene).unwrap();
+    for args in [vec!["info", "plume.json"], vec!["render", "plume.json", "-o", "x.png", "--spp", "1", "--quiet"]] {
+        let out = niebla().current_dir(&dir).args(&args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.matches("warning: ").count(), 1, "{args:?}: {err}");
+        assert!(err.contains(r#"warning: plume.json: media.plume: medium "plume" is not used"#), "{err}");
+        assert!(err.contains(r#""interior": "plume""#) && err.contains(r#""ambient_medium": "plume""#), "{err}");
+    }
+    // Bounded by a shape, it is used: no warning.
+    let bounded = scene.replace(
+        r#""lights""#,
+        r#""shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "interior": "plume"}], "lights""#,
+    );
+    std::fs::write(dir.join("bounded.json"), bounded).unwrap();
+    let out = niebla().current_dir(&dir).args(["info", "bounded.json"]).output().unwrap();
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"), "{}", String::from_utf8_lossy(&out.stderr));
+}

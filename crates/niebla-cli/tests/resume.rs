@@ -103,7 +103,7 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
         &dir,
         &["render", "fog.json", "-o", "x.exr", "--spp", "64", "--resume", "killed.exr", "--integrator", "single"],
     );
-    assert!(err.contains("was rendered with VolPath"), "{err}");
+    assert!(err.contains("was rendered with volpath(max_depth=1024), not single("), "{err}");
     // Nothing but the outputs is left behind (no temporary files).
     let mut names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();

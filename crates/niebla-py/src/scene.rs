@@ -1,7 +1,7 @@
 //! `niebla._niebla.Scene`: a scene description kept as JSON, parsed and
 //! built by the renderer's own scene code.
 //!
-//! Describe, then build (style.md rule 8). The description is held as a
+//! Describe, then build (as the scene files are read). The description is held as a
 //! `serde_json::Value` so that edits from Python (a density from a numpy
 //! array or a VDB file) are edits of the same JSON a scene file holds, and
 //! every edit is checked by re-parsing that JSON with
@@ -64,9 +64,15 @@ pub struct PyScene {
 }
 
 impl PyScene {
-    /// Builds `desc` with the GIL released.
+    /// Builds `desc` with the GIL released; its warnings (such as a medium
+    /// nothing refers to) are raised as Python `UserWarning`s.
     fn build(py: Python<'_>, desc: &SceneDesc, source: &str, base_dir: &Path) -> PyResult<Arc<BuiltScene>> {
-        py.allow_threads(|| build_scene(desc, source, base_dir)).map(Arc::new).map_err(|e| scene_error(py, &e))
+        let built = py.allow_threads(|| build_scene(desc, source, base_dir)).map_err(|e| scene_error(py, &e))?;
+        for warning in &built.warnings {
+            let text = std::ffi::CString::new(warning.replace('\0', " ")).expect("NUL bytes were replaced");
+            PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &text, 1)?;
+        }
+        Ok(Arc::new(built))
     }
 
     /// Parses `value` (JSON), puts the array densities in, validates.

@@ -146,3 +146,12 @@ def test_relative_mse_is_the_documented_formula():
     assert niebla.relative_mse(reference, reference) == 0.0
     with pytest.raises(ValueError):
         niebla.relative_mse(image, reference[:3])
+
+
+def test_a_medium_nothing_refers_to_is_warned_about(tiny_scene):
+    tiny_scene["media"]["smoke"] = {"sigma_a": 0.1, "sigma_s": 1.0}
+    with pytest.warns(UserWarning, match=r'media\.smoke: medium "smoke" is not used') as record:
+        niebla.Scene.from_dict(tiny_scene)
+    assert len(record) == 1
+    assert '"interior": "smoke"' in str(record[0].message)
+    assert '"ambient_medium": "smoke"' in str(record[0].message)

@@ -302,8 +302,8 @@ pub fn unused_media_warnings(desc: &SceneDesc, source: &str) -> Vec<String> {
 
 /// Give each medium-bounding shape without an explicit `exterior` the medium
 /// of the innermost other closed shape that contains its whole bounding box,
-/// else the ambient medium (design.md section 1: the same rule that places
-/// the camera).
+/// else the ambient medium (the same rule that places the camera; see
+/// ARCHITECTURE.md, "Which medium").
 fn assign_enclosing_exteriors(scene: &mut Scene, explicit: &[bool]) {
     for (i, &is_explicit) in explicit.iter().enumerate() {
         if is_explicit || !scene.objects[i].bounds_medium {

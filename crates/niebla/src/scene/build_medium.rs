@@ -3,7 +3,7 @@
 //! (inline, `.npy`, `.vol`, OpenVDB, procedural), checked, placed in the
 //! world and given its majorant grid.
 //!
-//! Spaces (design.md section 1): a dense source's values fill a box in its
+//! Spaces: a dense source's values fill a box in its
 //! own *local* space, which the medium's `to_world` places in the world, so
 //! `world_to_grid = inverse(to_world)`. A VDB grid keeps its own
 //! index-to-world map, after which `to_world` applies, so `world_to_grid =

@@ -1,7 +1,9 @@
 //! Scenes: the JSON description (serde), its validation, and the build into
 //! the render-ready [`Scene`].
 //!
-//! Describe, then build (style.md rule 8):
+//! Describe, then build: a file is parsed into plain description types
+//! (`SceneDesc`, every value checked, errors with JSON paths), then built
+//! into the render-ready scene, which holds no strings on the per-sample path:
 //! ```
 //! use niebla::scene::{build_scene, parse_scene_str, DEFAULT_SCENE};
 //! let desc = parse_scene_str(DEFAULT_SCENE, "<default>").unwrap();

@@ -207,8 +207,8 @@ struct RawGrid {
 const GRID_ONLY_FIELDS: &[&str] = &["density", "to_world", "majorant_resolution", "storage"];
 
 fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
-    // Without a `type`, a medium with a `density` is a grid medium (as in
-    // design.md's sketch), any other homogeneous.
+    // Without a `type`, a medium with a `density` is a grid medium, any
+    // other homogeneous.
     let default = if object.contains_key("density") { "grid" } else { "homogeneous" };
     let tag = take_tag(&mut object, "medium", MediumDesc::TYPES, Some(default))?;
     match tag.as_str() {
