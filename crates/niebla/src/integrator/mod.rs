@@ -9,7 +9,6 @@ mod direct;
 mod emission;
 mod equiangular;
 pub mod hegeman;
-mod light_volume;
 pub mod photon;
 mod precompute_memory;
 mod single;

@@ -9,6 +9,7 @@
 //! assert!(built.scene.camera_medium.is_some());
 //! ```
 
+mod boundary_walk;
 mod build;
 mod build_medium;
 pub mod desc;
@@ -17,6 +18,7 @@ mod parse;
 mod render_scene;
 mod validate;
 
+pub use boundary_walk::{walk_shadow_ray, PathRay, ShadowSegment, MAX_PATH_BOUNDARY_CROSSINGS};
 pub use build::{
     build_scene, build_scene_with_options, build_transform, integrator_settings, BuildOptions, BuiltScene,
 };

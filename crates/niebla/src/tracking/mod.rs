@@ -6,6 +6,7 @@
 //! per-channel transmittance estimate.
 
 mod along_ray;
+mod collision;
 mod distance;
 mod free_flight;
 mod grid_dispatch;
@@ -13,6 +14,7 @@ mod ray_march;
 mod trackers;
 
 pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, UnitDensity};
+pub use collision::{pass_through_weight, CollisionEvent, NullWeights};
 pub use distance::MajorantProfile;
 pub use free_flight::{sample_t_maj, MajorantCollision};
 pub use grid_dispatch::{with_grid_along_ray, GridRayVisitor};
