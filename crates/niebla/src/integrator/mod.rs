@@ -6,7 +6,7 @@
 mod analytic;
 mod camera_ray;
 mod direct;
-mod emission;
+mod emission_absorption;
 mod equiangular;
 pub mod hegeman;
 pub mod photon;
@@ -20,7 +20,7 @@ pub use analytic::AnalyticIntegrator;
 pub use camera_ray::SegmentRadiance;
 pub(crate) use camera_ray::{trace_camera_ray, walk_camera_ray, CameraRayVisitor};
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
-pub use emission::EmissionIntegrator;
+pub use emission_absorption::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use single::{SingleIntegrator, SingleSampling};

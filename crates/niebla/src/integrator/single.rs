@@ -10,7 +10,7 @@ use crate::sampling::{balance_heuristic, PixelSampler};
 use crate::scene::Scene;
 use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
 
-use super::emission::{emission_segment, march_segment, marched_range};
+use super::emission_absorption::{emission_segment, march_segment, marched_range};
 use super::equiangular::{equiangular_target, PointLightTarget};
 use super::{default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance};
 

@@ -139,3 +139,100 @@ where
     }
     false
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::PixelSampler;
+    use crate::scene::{build_scene, parse_scene_str};
+    use crate::tracking::TransmittanceMethod;
+
+    /// Two nested index-matched boxes along +x from the origin (`inner` to
+    /// x = 1, `outer` to x = 2, vacuum beyond), a grey diffuse wall at x = 3.
+    fn nested_boxes() -> Scene {
+        let json = r#"{
+          "version": 1,
+          "camera": {"type": "perspective", "position": [0, 0, 10], "target": [0, 0, 0], "fov_y": 40,
+                     "width": 4, "height": 4},
+          "media": {
+            "inner": {"type": "homogeneous", "sigma_a": 0.5, "sigma_s": 0.0},
+            "outer": {"type": "homogeneous", "sigma_a": 0.25, "sigma_s": 0.0}
+          },
+          "shapes": [
+            {"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "interior": "inner", "bsdf": {"type": "null"}},
+            {"type": "box", "min": [-2, -2, -2], "max": [2, 2, 2], "interior": "outer", "bsdf": {"type": "null"}},
+            {"type": "rectangle", "to_world": {"rotate_y": -90, "translate": [3, 0, 0]},
+             "bsdf": {"type": "diffuse", "reflectance": 0.5}}
+          ]
+        }"#;
+        let desc = parse_scene_str(json, "<test>").unwrap();
+        build_scene(&desc, "<test>", std::path::Path::new(".")).unwrap().scene
+    }
+
+    #[test]
+    fn shadow_walk_visits_each_medium_piece_and_stops_at_blockers() {
+        let scene = nested_boxes();
+        let start = scene.medium_at(Vec3::ZERO);
+        assert!(start.is_some());
+        let mut pieces = Vec::new();
+        let reached = walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 2.5, None, |s| {
+            pieces.push((s.medium, s.ray.o.x, s.t_end, s.blocked));
+            ControlFlow::Continue(())
+        });
+        // Two boundaries crossed, three pieces: [0, 1] inner, [1, 2] outer, [2, 2.5] vacuum.
+        assert!(reached);
+        assert_eq!(pieces.len(), 3);
+        let (inner, outer) = (pieces[0].0, pieces[1].0);
+        assert!(inner.is_some() && outer.is_some() && inner != outer);
+        assert_eq!(pieces[2].0, None);
+        for (k, &(o, t_end)) in [(0.0, 1.0), (1.0, 1.0), (2.0, 0.5)].iter().enumerate() {
+            // Origins are hit points: box faces are exact in f32; a tolerance for the ray-box slab test.
+            assert!((pieces[k].1 - o).abs() < 1e-5 && (pieces[k].2 - t_end).abs() < 1e-5, "{pieces:?}");
+        }
+        assert!(pieces.iter().all(|p| !p.3));
+
+        // Past the wall at x = 3: blocked, the last piece flagged, unless the
+        // wall is the ignored object (the light's own surface).
+        let mut last = None;
+        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, None, |s| {
+            last = Some(s.blocked);
+            ControlFlow::Continue(())
+        }));
+        assert_eq!(last, Some(true));
+        assert!(walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, Some(2), |_| ControlFlow::Continue(())));
+
+        // Scene::transmittance over the walk: exp(-(0.5 * 1 + 0.25 * 1)).
+        let mut s = PixelSampler::from_key(1);
+        let tr = scene.transmittance(Vec3::ZERO, start, Vec3::X, 2.5, TransmittanceMethod::Analytic, &mut s);
+        assert!((tr[0] - (-0.75f32).exp()).abs() < 1e-5, "{tr:?}");
+    }
+
+    #[test]
+    fn path_ray_counts_crossings_and_tracks_the_medium() {
+        let scene = nested_boxes();
+        let start = scene.medium_at(Vec3::ZERO);
+        let mut path = PathRay::new(Ray::new(Vec3::ZERO, Vec3::X), start, 0.0);
+        let mut media = vec![path.medium];
+        let wall = loop {
+            let hit = path.intersect(&scene).unwrap();
+            if !scene.object(&hit).bsdf.is_null() {
+                break hit;
+            }
+            assert!(path.cross(&scene, &hit));
+            media.push(path.medium);
+        };
+        assert_eq!(path.crossings, 2);
+        assert_eq!(media.len(), 3);
+        assert_eq!(media[2], None);
+        assert!((wall.surface.p.x - 3.0).abs() < 1e-5);
+        // Leaving the wall by reflection keeps the medium and starts past epsilon.
+        path.leave_surface(&scene, &wall, -Vec3::X, false);
+        assert_eq!(path.medium, None);
+        assert_eq!(path.t_min, surface_epsilon(wall.surface.p));
+        // The limit: a path that has used up its crossings is refused one more.
+        let hit = path.intersect(&scene).unwrap();
+        path.crossings = MAX_PATH_BOUNDARY_CROSSINGS;
+        assert!(!path.cross(&scene, &hit));
+        assert_eq!(path.medium, None);
+    }
+}

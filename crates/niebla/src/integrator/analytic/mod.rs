@@ -40,7 +40,7 @@ use crate::sampling::PixelSampler;
 use crate::scene::Scene;
 use crate::tracking::TransmittanceMethod;
 
-use super::emission::emission_segment;
+use super::emission_absorption::emission_segment;
 use super::equiangular::{cone_hull, equiangular_geometry};
 use super::{
     light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance, SingleIntegrator, SingleSampling,

@@ -14,7 +14,7 @@ use crate::sampling::PixelSampler;
 use crate::scene::{Hit, Scene};
 use crate::tracking::{segment_transmittance, MarchStep, TransmittanceMethod};
 
-use super::super::emission::{march_segment, marched_range};
+use super::super::emission_absorption::{march_segment, marched_range};
 use super::super::{
     default_march_step, direct_surface_radiance, walk_camera_ray, CameraRayVisitor, Integrator, SegmentRadiance,
     SingleIntegrator,
