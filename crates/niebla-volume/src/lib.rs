@@ -22,8 +22,9 @@
 //!   and reports [`Segment`]s in order through a `ControlFlow` callback. A
 //!   ray mapped into that space by an affine map keeps its `t` parameter as
 //!   long as the direction is mapped as a vector and not renormalized.
-//! - **Minorant grids** ([`MajorantGrid::minorant_from_dense`],
-//!   [`MajorantGrid::minorant_from_sparse`]) are `MajorantGrid`s holding the
+//! - **Minorant grids** ([`DensityBoundGrid::minorant_from_dense`],
+//!   [`DensityBoundGrid::minorant_from_sparse`]) are [`DensityBoundGrid`]s (the
+//!   type of majorant grids too, [`MajorantGrid`] being its alias) holding the
 //!   per-cell *minimum* that interpolation can reach (the control density
 //!   of residual ratio tracking), over the same voxels as the majorant.
 //!   Built with the same arguments as a majorant grid they have exactly its
@@ -58,7 +59,7 @@
 //! # Example
 //! ```
 //! use std::ops::ControlFlow;
-//! use niebla_volume::{DenseGrid, MajorantGrid};
+//! use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid};
 //!
 //! // A 4^3 density grid filling [-1, 1]^3, one bright cell.
 //! let mut data = vec![0.0; 64];
@@ -76,7 +77,7 @@
 //! assert_eq!(pieces, [(1.0, 2.0, 0.0), (2.0, 3.0, 5.0)]);
 //!
 //! // Minorants on the same cells: the bright cell's support reaches zeros.
-//! let minorants = MajorantGrid::minorant_from_dense(&density, [2, 2, 2]);
+//! let minorants = DensityBoundGrid::minorant_from_dense(&density, [2, 2, 2]);
 //! assert!(minorants.same_layout(&majorants));
 //! assert_eq!(minorants.max_value(), 0.0);
 //!
@@ -99,7 +100,7 @@
 //! - The DDA reports zero-majorant cells instead of skipping them, so the
 //!   caller always sees contiguous `t`; [`MajorantGrid::walk_merged`] merges
 //!   runs of equal majorant, which makes empty space one callback.
-//! - Minorant grids reuse [`MajorantGrid`] (same cells, same DDA) instead
+//! - Minorant grids share the type [`DensityBoundGrid`] (same cells, same DDA) instead
 //!   of a type of their own, so a tracker walks one grid and reads both
 //!   bounds by cell index. A sparse cell's minorant includes the background
 //!   unless leaves and tiles store every voxel of its support, found by
@@ -133,7 +134,7 @@ pub use error::VolumeError;
 pub use io::npy::{parse_npy, read_npy};
 pub use io::vdb::{VdbFile, VdbGridInfo};
 pub use io::vol::{parse_vol, read_vol};
-pub use majorant::MajorantGrid;
+pub use majorant::{DensityBoundGrid, MajorantGrid};
 pub use procedural::{procedural_density, ProceduralParams, ProceduralShape};
 pub use rgb::{DenseRgbGrid, DenseVolume};
 pub use sparse::{Leaf, SparseGrid, Tile, LEAF_DIM};

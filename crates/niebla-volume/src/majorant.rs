@@ -22,16 +22,25 @@ use crate::{DenseGrid, SparseGrid, VolumeError, LEAF_DIM};
 /// Margin, in voxels, by which each cell's interpolation support is grown.
 const SUPPORT_EPSILON: f64 = 1e-3;
 
-/// A coarse grid of per-cell maxima over a box, indexed `[z][y][x]`.
+/// A coarse grid of per-cell bounds of a density over a box, indexed
+/// `[z][y][x]`: maxima when built by [`DensityBoundGrid::from_dense`] or
+/// [`DensityBoundGrid::from_sparse`] (a majorant grid), minima when built by
+/// [`DensityBoundGrid::minorant_from_dense`] or
+/// [`DensityBoundGrid::minorant_from_sparse`] (a minorant grid, see
+/// `minorant.rs`). Both kinds share the cells and the DDA walk.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MajorantGrid {
+pub struct DensityBoundGrid {
     pub(crate) res: [usize; 3],
     pub(crate) bounds_min: [f32; 3],
     pub(crate) bounds_max: [f32; 3],
     pub(crate) values: Vec<f32>,
 }
 
-impl MajorantGrid {
+/// A [`DensityBoundGrid`] of per-cell maxima: the name used where the grid
+/// is a majorant (the local bound `sigma_maj` of the trackers).
+pub type MajorantGrid = DensityBoundGrid;
+
+impl DensityBoundGrid {
     /// Default resolution for dense grids.
     pub const DEFAULT_RESOLUTION: [usize; 3] = [16, 16, 16];
     /// Default cell budget for sparse grids (2^21 cells, 8 MiB).

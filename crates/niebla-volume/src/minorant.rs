@@ -4,13 +4,13 @@
 //! minorant is the control density `sigma_c` and only the residual
 //! `sigma_t - sigma_c` is tracked.
 //!
-//! A minorant grid is a [`MajorantGrid`] holding minima instead of maxima,
+//! A minorant grid is a [`DensityBoundGrid`] holding minima instead of maxima,
 //! with exactly the cells of the majorant grid built from the same grid and
 //! parameters (same resolution and box, so the same DDA segments): cell
 //! `(x, y, z)` of one pairs with cell `(x, y, z)` of the other, and a
-//! tracker walks the majorant grid with [`MajorantGrid::walk_cells`] and
-//! reads the minorant of each cell with [`MajorantGrid::value`]
-//! ([`MajorantGrid::same_layout`] checks the pairing).
+//! tracker walks the majorant grid with [`DensityBoundGrid::walk_cells`] and
+//! reads the minorant of each cell with [`DensityBoundGrid::value`]
+//! ([`DensityBoundGrid::same_layout`] checks the pairing).
 //!
 //! A cell's value is the smallest voxel value whose interpolation support
 //! touches the cell, over the same voxels (support grown by 1/1000 voxel)
@@ -27,27 +27,27 @@
 //! end on the box's faces) can read below the minorant of the face cell.
 
 use crate::majorant::{reduce_dense, SparseLayout};
-use crate::{DenseGrid, MajorantGrid, SparseGrid, LEAF_DIM};
+use crate::{DenseGrid, DensityBoundGrid, SparseGrid, LEAF_DIM};
 
-impl MajorantGrid {
+impl DensityBoundGrid {
     /// The minorants of a dense grid over its local-space box, with `res`
     /// cells per axis (each at least 1): the same cells as
     /// [`MajorantGrid::from_dense`]`(grid, res)`.
     ///
     /// ```
-    /// use niebla_volume::{DenseGrid, MajorantGrid};
+    /// use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid};
     /// let g = DenseGrid::new([4, 1, 1], vec![2.0, 2.0, 0.5, 3.0], [0.0; 3], [4.0, 1.0, 1.0]).unwrap();
-    /// let minorant = MajorantGrid::minorant_from_dense(&g, [2, 1, 1]);
+    /// let minorant = DensityBoundGrid::minorant_from_dense(&g, [2, 1, 1]);
     /// let majorant = MajorantGrid::from_dense(&g, [2, 1, 1]);
     /// // Cell 0 spans x in [0, 2]: interpolation there reaches voxel 2 (center 2.5).
     /// assert_eq!(minorant.values(), &[0.5, 0.5]);
     /// assert_eq!(majorant.values(), &[2.0, 3.0]);
     /// assert!(minorant.same_layout(&majorant));
     /// ```
-    pub fn minorant_from_dense(grid: &DenseGrid, res: [usize; 3]) -> MajorantGrid {
+    pub fn minorant_from_dense(grid: &DenseGrid, res: [usize; 3]) -> DensityBoundGrid {
         let res = res.map(|r| r.max(1));
         let (bounds_min, bounds_max) = grid.bounds();
-        MajorantGrid { res, bounds_min, bounds_max, values: reduce_dense(grid, res, f32::INFINITY, f32::min) }
+        DensityBoundGrid { res, bounds_min, bounds_max, values: reduce_dense(grid, res, f32::INFINITY, f32::min) }
     }
 
     /// The minorants of a sparse grid in its index space: the same cells as
@@ -56,13 +56,13 @@ impl MajorantGrid {
     /// background.
     ///
     /// ```
-    /// use niebla_volume::{Affine, MajorantGrid, SparseGridBuilder};
+    /// use niebla_volume::{Affine, DensityBoundGrid, MajorantGrid, SparseGridBuilder};
     /// let mut b = SparseGridBuilder::new(0.0, Affine::IDENTITY);
     /// b.fill_tile(1, [0, 0, 0], 2.0, true); // voxels 0..128 along each axis
     /// b.set_voxel([60, 60, 60], 0.5, true);
     /// let g = b.build();
     /// let majorant = MajorantGrid::from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
-    /// let minorant = MajorantGrid::minorant_from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
+    /// let minorant = DensityBoundGrid::minorant_from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
     /// assert!(minorant.same_layout(&majorant));
     /// // Cells are 8 voxels from -8: cell (3, 3, 3) covers voxels 16..24,
     /// // inside the tile and away from (60, 60, 60).
@@ -73,7 +73,7 @@ impl MajorantGrid {
     /// assert_eq!(minorant.value(8, 8, 8), 0.5);
     /// assert_eq!(minorant.value(0, 3, 3), 0.0);
     /// ```
-    pub fn minorant_from_sparse(grid: &SparseGrid, max_cells: usize) -> MajorantGrid {
+    pub fn minorant_from_sparse(grid: &SparseGrid, max_cells: usize) -> DensityBoundGrid {
         let background = grid.background();
         let Some(layout) = SparseLayout::new(grid, max_cells) else {
             return SparseLayout::empty_grid(background);
@@ -132,7 +132,7 @@ mod tests {
         let mut b = SparseGridBuilder::new(0.0, Affine::IDENTITY);
         b.fill_tile(1, [0, 0, 0], 1.0, true);
         let g = b.build();
-        let m = MajorantGrid::minorant_from_sparse(&g, MajorantGrid::DEFAULT_MAX_CELLS);
+        let m = DensityBoundGrid::minorant_from_sparse(&g, DensityBoundGrid::DEFAULT_MAX_CELLS);
         let [rx, ry, rz] = m.res();
         assert_eq!(m.res(), [18, 18, 18]); // voxels -8..136: tile plus margins
         for z in 0..rz {
@@ -150,8 +150,8 @@ mod tests {
     #[test]
     fn empty_sparse_grid_minorant_is_the_background() {
         let g = SparseGridBuilder::new(-0.5, Affine::IDENTITY).build();
-        let min = MajorantGrid::minorant_from_sparse(&g, 100);
-        let max = MajorantGrid::from_sparse(&g, 100);
+        let min = DensityBoundGrid::minorant_from_sparse(&g, 100);
+        let max = DensityBoundGrid::from_sparse(&g, 100);
         assert!(min.same_layout(&max));
         assert_eq!(min.values(), &[-0.5]);
     }

@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use crate::film::Image;
 use crate::integrator::IntegratorSettings;
 use crate::render::{RenderError, RenderOptions};
-use crate::scene::Scene;
+use crate::world::Scene;
 
 /// When a progressive render stops.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,8 +8,8 @@ use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::{Medium, MediumId};
 use crate::sampling::PixelSampler;
-use crate::scene::{surface_epsilon, Hit, Scene, MAX_BOUNDARY_CROSSINGS};
 use crate::tracking::TransmittanceMethod;
+use crate::world::{Hit, PathRay, Scene, MAX_BOUNDARY_CROSSINGS};
 
 use super::direct_surface_radiance;
 
@@ -61,22 +61,22 @@ pub(crate) trait CameraRayVisitor {
 /// environment.
 pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
     scene: &Scene,
-    mut ray: Ray,
-    mut medium: Option<MediumId>,
+    ray: Ray,
+    medium: Option<MediumId>,
     sampler: &mut PixelSampler,
     visitor: &mut V,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
     let mut beta = Rgb::ONE;
-    let mut t_min = 0.0;
+    let mut path = PathRay::new(ray, medium, 0.0);
     let mut specular_bounces = 0u32;
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
-        let hit = scene.intersect(&ray, t_min, f32::INFINITY);
+        let hit = path.intersect(scene);
         let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
 
         // Medium segment up to the next surface (or to infinity).
-        if let Some(id) = medium {
-            let s = visitor.segment(scene, scene.medium(id), id, &ray, t_end, sampler);
+        if let Some(id) = path.medium {
+            let s = visitor.segment(scene, scene.medium(id), id, &path.ray, t_end, sampler);
             l += beta * s.radiance;
             beta *= s.transmittance;
         }
@@ -86,22 +86,20 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
 
         // Escaped: the environment.
         let Some(hit) = hit else {
-            l += beta * scene.escaped_radiance(ray.d);
+            l += beta * scene.escaped_radiance(path.ray.d);
             break;
         };
 
         // Index-matched boundary: change medium and go on.
         let object = scene.object(&hit);
         if object.bsdf.is_null() {
-            // Continue from the hit point itself so no path length is lost.
-            medium = scene.medium_after_crossing(&hit, ray.d, medium);
-            ray = Ray::new(hit.surface.p, ray.d);
-            t_min = surface_epsilon(hit.surface.p);
+            // The loop's own bound limits crossings (and bounces) first.
+            path.cross(scene, &hit);
             continue;
         }
 
         // An area light: its emitted radiance (its surface reflects nothing).
-        if let Some((le, _)) = scene.emitted_radiance(&hit, -ray.d) {
+        if let Some((le, _)) = scene.emitted_radiance(&hit, -path.ray.d) {
             l += beta * le;
             break;
         }
@@ -114,20 +112,16 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
                 break;
             }
             let u_lobe = sampler.next_1d();
-            let Some(bs) = object.bsdf.sample(hit.surface.n, -ray.d, u_lobe, sampler.next_2d()) else {
+            let Some(bs) = object.bsdf.sample(hit.surface.n, -path.ray.d, u_lobe, sampler.next_2d()) else {
                 break;
             };
             beta *= bs.weight(hit.surface.n);
-            if bs.is_transmission {
-                medium = scene.medium_after_crossing(&hit, bs.wi, medium);
-            }
-            ray = Ray::new(hit.surface.p, bs.wi);
-            t_min = surface_epsilon(hit.surface.p);
+            path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
             continue;
         }
 
         // Opaque surface: shaded by the integrator, then stop.
-        l += beta * visitor.opaque_surface(scene, &hit, -ray.d, medium, sampler);
+        l += beta * visitor.opaque_surface(scene, &hit, -path.ray.d, path.medium, sampler);
         break;
     }
     l

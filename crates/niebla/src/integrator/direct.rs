@@ -7,8 +7,8 @@ use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::scene::{offset_origin, Scene};
 use crate::tracking::TransmittanceMethod;
+use crate::world::{offset_origin, Scene};
 
 /// Radiance scattered toward `wo` at surface point `p` (normal `n`, facing the
 /// side of `wo`), from one sample of every light, with shadow rays that start

@@ -18,9 +18,8 @@ use serde_json::Value;
 
 use super::precompute_memory::{hegeman_memory, photon_map_memory, zhou_memory};
 use super::{
-    analytic, emission_settings, hegeman, photon, single_settings, volpath_settings, zhou, AnalyticIntegrator,
-    EmissionIntegrator, HegemanIntegrator, PrecomputeMemory, SingleIntegrator, SingleSampling, VolPathIntegrator,
-    ZhouIntegrator,
+    analytic, emission_absorption, hegeman, photon, single, volpath, zhou, AnalyticIntegrator, EmissionIntegrator,
+    HegemanIntegrator, PrecomputeMemory, SingleIntegrator, SingleSampling, VolPathIntegrator, ZhouIntegrator,
 };
 use crate::film::Image;
 use crate::params::{describe, Located, Object};
@@ -95,7 +94,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         summary: "Single scattering with shadow rays (march, equiangular or MIS sampling)",
         interactive: true,
         parse: |o| {
-            single_settings::parse(o).map(|(step, sampling, transmittance)| IntegratorSettings::Single {
+            single::settings::parse(o).map(|(step, sampling, transmittance)| IntegratorSettings::Single {
                 step,
                 sampling,
                 transmittance,
@@ -107,7 +106,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         summary: "Emission and absorption only",
         interactive: false,
         parse: |o| {
-            emission_settings::parse(o)
+            emission_absorption::settings::parse(o)
                 .map(|(step, transmittance)| IntegratorSettings::Emission { step, transmittance })
         },
     },
@@ -115,7 +114,7 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         name: "volpath",
         summary: "Volumetric path tracing (multiple scattering, unbiased)",
         interactive: false,
-        parse: |o| volpath_settings::parse(o).map(|max_depth| IntegratorSettings::VolPath { max_depth }),
+        parse: |o| volpath::settings::parse(o).map(|max_depth| IntegratorSettings::VolPath { max_depth }),
     },
     IntegratorEntry {
         name: "analytic",
@@ -247,7 +246,7 @@ pub fn defaults(name: &str) -> Option<IntegratorSettings> {
 
 impl IntegratorSettings {
     /// Default path depth of `volpath`: deep enough for dense albedo-0.99 media.
-    pub const DEFAULT_MAX_DEPTH: u32 = volpath_settings::DEFAULT_MAX_DEPTH;
+    pub const DEFAULT_MAX_DEPTH: u32 = volpath::settings::DEFAULT_MAX_DEPTH;
 
     /// Names of all integrators that can be selected ([`NAMES`]).
     pub const NAMES: &'static [&'static str] = &NAMES;
@@ -279,11 +278,13 @@ impl IntegratorSettings {
     /// ```
     pub fn key(&self) -> String {
         match self {
-            IntegratorSettings::Emission { step, transmittance } => emission_settings::key(*step, *transmittance),
-            IntegratorSettings::Single { step, sampling, transmittance } => {
-                single_settings::key(*step, *sampling, *transmittance)
+            IntegratorSettings::Emission { step, transmittance } => {
+                emission_absorption::settings::key(*step, *transmittance)
             }
-            IntegratorSettings::VolPath { max_depth } => volpath_settings::key(*max_depth),
+            IntegratorSettings::Single { step, sampling, transmittance } => {
+                single::settings::key(*step, *sampling, *transmittance)
+            }
+            IntegratorSettings::VolPath { max_depth } => volpath::settings::key(*max_depth),
             IntegratorSettings::Analytic => "analytic".to_string(),
             IntegratorSettings::Hegeman(h) => hegeman::settings::key(h),
             IntegratorSettings::Zhou(z) => zhou::settings::key(z),

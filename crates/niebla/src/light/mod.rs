@@ -5,11 +5,11 @@
 //! (W/(sr m^2)).
 
 mod area;
-mod emission;
+mod emitted_rays;
 mod envmap;
 
 pub use area::{AreaLight, AreaLightSample, AreaShape};
-pub use emission::{spot_falloff_solid_angle, LightEmission, SceneSphere};
+pub use emitted_rays::{spot_falloff_solid_angle, EmittedRay, SceneSphere};
 pub use envmap::{latlong_direction, latlong_uv, EnvironmentMap, EnvironmentSample, LightError};
 
 use crate::color::Rgb;

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use glam::Affine3A;
-use niebla_volume::{DenseGrid, MajorantGrid, SparseGrid};
+use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid};
 
 use crate::color::{BlackbodyTable, Rgb};
 use crate::math::{Ray, Vec3};
@@ -101,7 +101,7 @@ pub struct GridMedium {
     pub majorant: MajorantGrid,
     /// Per coarse cell (same layout), the smallest density interpolation reaches;
     /// the control of residual ratio tracking. `None`: zero.
-    pub minorant: Option<MajorantGrid>,
+    pub minorant: Option<DensityBoundGrid>,
     /// Emission.
     pub emission: GridEmission,
     /// Phase function.
@@ -119,7 +119,7 @@ impl GridMedium {
         density: DensityGrid,
         world_to_grid: Affine3A,
         majorant: MajorantGrid,
-        minorant: Option<MajorantGrid>,
+        minorant: Option<DensityBoundGrid>,
         emission: GridEmission,
         phase: PhaseFunction,
     ) -> GridMedium {

@@ -18,7 +18,10 @@ mod error;
 mod parse;
 mod validate;
 
-pub use crate::world::{offset_origin, surface_epsilon, Hit, Scene, SceneObject, MAX_BOUNDARY_CROSSINGS};
+pub use crate::world::{
+    offset_origin, surface_epsilon, walk_shadow_ray, Hit, PathRay, Scene, SceneObject, ShadowSegment,
+    MAX_BOUNDARY_CROSSINGS, MAX_PATH_BOUNDARY_CROSSINGS,
+};
 pub use build::{
     build_scene, build_scene_with_options, build_transform, integrator_settings, unused_media_warnings, BuildOptions,
     BuiltScene,

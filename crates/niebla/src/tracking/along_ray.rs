@@ -1,11 +1,11 @@
 //! Density along one ray inside one medium, with its majorant segments: the
 //! concrete view the trackers loop over. The medium is matched once per ray
-//! (style.md rule 4) and the trackers are generic over [`DensityAlongRay`],
+//! (in `grid_dispatch`, not per lookup) and the trackers are generic over [`DensityAlongRay`],
 //! so their inner loops have no type branches.
 
 use std::ops::ControlFlow;
 
-use niebla_volume::{DenseGrid, MajorantGrid, SparseGrid};
+use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid};
 
 use crate::math::Vec3;
 
@@ -79,7 +79,7 @@ pub struct GridAlongRay<'a, G: GridLookup> {
     /// Per-cell maxima.
     pub majorant: &'a MajorantGrid,
     /// Per-cell minima (same layout), if known.
-    pub minorant: Option<&'a MajorantGrid>,
+    pub minorant: Option<&'a DensityBoundGrid>,
     /// Ray origin in grid space.
     pub o: Vec3,
     /// Ray direction in grid space.

@@ -10,10 +10,11 @@
 
 use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
-use crate::medium::{DensityGrid, Medium, MediumPoint};
+use crate::medium::{Medium, MediumPoint};
 use crate::sampling::PixelSampler;
 
-use super::along_ray::{DensityAlongRay, GridAlongRay, UnitDensity};
+use super::along_ray::{DensityAlongRay, GridAlongRay, GridLookup, UnitDensity};
+use super::grid_dispatch::{with_grid_along_ray, GridRayVisitor};
 
 /// A tentative collision handed to the callback of [`sample_t_maj`].
 #[derive(Clone, Copy, Debug)]
@@ -56,25 +57,36 @@ where
             let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
                 return Rgb::ONE;
             };
-            let (o, d) = g.ray_to_grid(ray);
             let at = |p: Vec3, density: f32| MediumPoint {
                 sigma_a: g.sigma_a * density,
                 sigma_s: g.sigma_s * density,
                 l_ve: g.l_ve(p, density),
             };
-            match &g.density {
-                DensityGrid::Dense(grid) => {
-                    let r =
-                        GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b };
-                    walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
-                }
-                DensityGrid::Sparse(grid) => {
-                    let r =
-                        GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b };
-                    walk(&r, g.sigma_t(), ray, hero, sampler, at, callback)
-                }
-            }
+            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
+            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), false, flight)
         }
+    }
+}
+
+/// [`walk`] as a [`GridRayVisitor`]: its arguments but the density view.
+struct Flight<'a, P, F> {
+    sigma_t: Rgb,
+    ray: &'a Ray,
+    hero: usize,
+    sampler: &'a mut PixelSampler,
+    point_at: P,
+    callback: F,
+}
+
+impl<P, F> GridRayVisitor for Flight<'_, P, F>
+where
+    P: Fn(Vec3, f32) -> MediumPoint,
+    F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
+{
+    type Output = Rgb;
+    #[inline]
+    fn visit<G: GridLookup>(self, r: &GridAlongRay<'_, G>) -> Rgb {
+        walk(r, self.sigma_t, self.ray, self.hero, self.sampler, self.point_at, self.callback)
     }
 }
 

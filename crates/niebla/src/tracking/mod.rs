@@ -6,20 +6,24 @@
 //! per-channel transmittance estimate.
 
 mod along_ray;
+mod collision;
 mod distance;
 mod free_flight;
+mod grid_dispatch;
 mod ray_march;
 mod trackers;
 
 pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, UnitDensity};
+pub use collision::{pass_through_weight, CollisionEvent, NullWeights};
 pub use distance::MajorantProfile;
 pub use free_flight::{sample_t_maj, MajorantCollision};
+pub use grid_dispatch::{with_grid_along_ray, GridRayVisitor};
 pub use ray_march::{ray_march_optical_depth, MarchStep};
 pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking, residual_ratio_tracking_with};
 
 use crate::color::Rgb;
 use crate::math::Ray;
-use crate::medium::{DensityGrid, GridMedium, Medium};
+use crate::medium::{GridMedium, Medium};
 use crate::sampling::PixelSampler;
 
 /// How transmittance along a segment is estimated.
@@ -90,33 +94,19 @@ fn grid_transmittance(
     let Some((a, b)) = g.clip(ray, t0, t1) else {
         return Rgb::ONE;
     };
-    let (o, d) = g.ray_to_grid(ray);
-    match &g.density {
-        DensityGrid::Dense(grid) => {
-            let r = GridAlongRay {
-                grid: grid.as_ref(),
-                majorant: &g.majorant,
-                minorant: g.minorant.as_ref(),
-                o,
-                d,
-                t0: a,
-                t1: b,
-            };
-            run_tracker(&r, g.sigma_t(), a, b, method, sampler)
-        }
-        DensityGrid::Sparse(grid) => {
-            let r = GridAlongRay {
-                grid: grid.as_ref(),
-                majorant: &g.majorant,
-                minorant: g.minorant.as_ref(),
-                o,
-                d,
-                t0: a,
-                t1: b,
-            };
-            run_tracker(&r, g.sigma_t(), a, b, method, sampler)
+    struct Track<'a> {
+        sigma_t: Rgb,
+        method: TransmittanceMethod,
+        sampler: &'a mut PixelSampler,
+    }
+    impl GridRayVisitor for Track<'_> {
+        type Output = Rgb;
+        #[inline]
+        fn visit<G: GridLookup>(self, r: &GridAlongRay<'_, G>) -> Rgb {
+            run_tracker(r, self.sigma_t, r.t0, r.t1, self.method, self.sampler)
         }
     }
+    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), true, Track { sigma_t: g.sigma_t(), method, sampler })
 }
 
 #[inline]
@@ -149,17 +139,15 @@ pub fn majorant_profile(medium: &Medium, ray: &Ray, t0: f32, t1: f32, rate_per_d
             let Some((a, b)) = g.clip(ray, t0, t1) else {
                 return MajorantProfile::default();
             };
-            let (o, d) = g.ray_to_grid(ray);
-            match &g.density {
-                DensityGrid::Dense(grid) => MajorantProfile::new(
-                    &GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b },
-                    rate_per_density,
-                ),
-                DensityGrid::Sparse(grid) => MajorantProfile::new(
-                    &GridAlongRay { grid: grid.as_ref(), majorant: &g.majorant, minorant: None, o, d, t0: a, t1: b },
-                    rate_per_density,
-                ),
+            struct Profile(f32);
+            impl GridRayVisitor for Profile {
+                type Output = MajorantProfile;
+                #[inline]
+                fn visit<G: GridLookup>(self, r: &GridAlongRay<'_, G>) -> MajorantProfile {
+                    MajorantProfile::new(r, self.0)
+                }
             }
+            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), false, Profile(rate_per_density))
         }
     }
 }

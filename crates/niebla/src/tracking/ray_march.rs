@@ -24,8 +24,9 @@ impl MarchStep {
 
 /// Ray-marched optical depth `integral sigma_t dt` over `[t0, t1]` (finite), with
 /// sample points at `t0 + (i + u) dt`: a randomly shifted lattice, so the
-/// optical depth estimate is unbiased for any `u` uniform in [0, 1) (methods.md
-/// section 1.2). `sigma_t` maps a ray parameter to per-channel extinction.
+/// optical depth estimate is unbiased for any `u` uniform in [0, 1) (its
+/// expectation over `u` is the exact integral; `exp(-tau)` of it is still
+/// biased upward, by Jensen's inequality). `sigma_t` maps a ray parameter to per-channel extinction.
 pub fn ray_march_optical_depth(sigma_t: impl Fn(f32) -> Rgb, t0: f32, t1: f32, step: MarchStep, u: f32) -> Rgb {
     let n = step.count_for(t1 - t0);
     let dt = (t1 - t0) / n as f32;
@@ -41,7 +42,7 @@ mod tests {
     use super::*;
     use crate::sampling::PixelSampler;
 
-    /// methods.md 1.8 test 4: on sigma_t = 2t over [0, 1] (tau = 1), the mean of
+    /// On sigma_t = 2t over [0, 1] (tau = 1), the mean of
     /// the jittered ray-marched transmittance is biased upward and the bias
     /// shrinks about quadratically with the step: +0.065, +0.016, +0.004 for 1,
     /// 2, 4 steps.

@@ -1,5 +1,6 @@
-//! Unbiased transmittance estimators over majorant segments (methods.md
-//! sections 1.3 to 1.6): delta tracking (binary, weighted for chromatic
+//! Unbiased transmittance estimators over majorant segments (Novák et al.
+//! 2014, "Residual ratio tracking for estimating attenuation in
+//! participating media"; Woodcock et al. 1965 for delta tracking): delta tracking (binary, weighted for chromatic
 //! media), ratio tracking and residual ratio tracking. Each takes the density
 //! along a ray, the medium's extinction per unit density `sigma_t` (RGB) and
 //! random numbers, and returns a per-channel estimate whose expectation is

@@ -38,10 +38,10 @@ use crate::math::{Ray, Vec3};
 use crate::medium::{HomogeneousMedium, Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::scene::Scene;
 use crate::tracking::TransmittanceMethod;
+use crate::world::Scene;
 
-use super::emission::emission_segment;
+use super::emission_absorption::emission_segment;
 use super::equiangular::{cone_hull, equiangular_geometry};
 use super::{
     light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance, SingleIntegrator, SingleSampling,

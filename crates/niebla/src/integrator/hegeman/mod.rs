@@ -25,7 +25,7 @@
 //! `P_w` the phase function convolved with the blur ([`blur`], tabulated once
 //! per `g`: the "simple precomputation"), and it is composited along the view
 //! ray by ray marching. The line integrals toward each light are precomputed
-//! on a lattice over each grid medium ([`light_volume`]) and turned into the
+//! on a lattice over each grid medium ([`line_integrals`]) and turned into the
 //! per-node factors `exp(-tau_t)`, `exp(-tau_a)(1 - exp(-tau_s))` and `w`
 //! whenever coefficients change (cheap); a view ray only fetches them.
 //!
@@ -42,7 +42,7 @@
 //! with ray-marched shadow rays.
 
 pub mod blur;
-pub mod light_volume;
+pub mod line_integrals;
 pub(crate) mod settings;
 
 use std::time::Instant;
@@ -53,12 +53,12 @@ use crate::math::{Ray, Vec3};
 use crate::medium::{GridMedium, Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::scene::Scene;
 use crate::tracking::{MarchStep, TransmittanceMethod};
+use crate::world::Scene;
 
 use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use blur::BlurredPhaseTable;
-use light_volume::{LightSource, LightVolume};
+use line_integrals::{LightSource, LineIntegralLattice};
 
 /// Directional lights standing in for a constant environment.
 pub const ENVIRONMENT_DIRECTIONS: usize = 8;
@@ -104,7 +104,7 @@ const FACTORS: usize = 7;
 /// A grid medium's precomputation.
 #[derive(Clone, Debug)]
 struct GridModel {
-    volumes: Vec<LightVolume>,
+    volumes: Vec<LineIntegralLattice>,
     lo: Vec3,
     hi: Vec3,
     n: [usize; 3],
@@ -139,8 +139,8 @@ impl HegemanIntegrator {
             .iter()
             .map(|m| match m {
                 Medium::Grid(g) => {
-                    let volumes: Vec<LightVolume> =
-                        lights.iter().map(|l| LightVolume::new(g, l.source, resolution)).collect();
+                    let volumes: Vec<LineIntegralLattice> =
+                        lights.iter().map(|l| LineIntegralLattice::new(g, l.source, resolution)).collect();
                     let (lo, hi) = g.world_bounds;
                     let longest = (hi - lo).max_element();
                     let step = settings.step_cells.max(0.05) * longest / resolution as f32;
@@ -176,7 +176,7 @@ impl HegemanIntegrator {
             .iter()
             .flatten()
             .map(|m| {
-                m.volumes.iter().map(LightVolume::memory_bytes).sum::<usize>()
+                m.volumes.iter().map(LineIntegralLattice::memory_bytes).sum::<usize>()
                     + m.factors.len() * 4
                     + m.blur.memory_bytes()
             })

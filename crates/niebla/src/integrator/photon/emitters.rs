@@ -18,7 +18,7 @@ use crate::light::SceneSphere;
 use crate::math::{Vec2, Vec3, PI};
 use crate::medium::{Medium, MediumId};
 use crate::sampling::{sample_uniform_sphere, Distribution1D};
-use crate::scene::Scene;
+use crate::world::Scene;
 
 /// Lattice cells along the longest side of an emitting medium's box.
 const LATTICE_CELLS: usize = 32;

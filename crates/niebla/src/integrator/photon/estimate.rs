@@ -11,10 +11,10 @@ use crate::math::{Ray, Vec3, PI};
 use crate::medium::{Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::scene::{Hit, Scene};
 use crate::tracking::{segment_transmittance, MarchStep, TransmittanceMethod};
+use crate::world::{Hit, Scene};
 
-use super::super::emission::{march_segment, marched_range};
+use super::super::emission_absorption::{march_segment, marched_range};
 use super::super::{
     default_march_step, direct_surface_radiance, walk_camera_ray, CameraRayVisitor, Integrator, SegmentRadiance,
     SingleIntegrator,

@@ -7,7 +7,7 @@ use super::emitters::Emitters;
 use super::kdtree::PhotonTree;
 use super::trace::{trace_photons_with, TraceSettings, TraceStats};
 use super::{PhotonGather, PhotonSettings, VolumeQuery};
-use crate::scene::Scene;
+use crate::world::Scene;
 
 /// Neighbours behind the automatic radius.
 const AUTO_K: usize = 50;

@@ -12,8 +12,8 @@ use crate::color::Rgb;
 use crate::film::Image;
 use crate::integrator::SingleIntegrator;
 use crate::render::{render_with, ProgressFn, RenderError, RenderOptions};
-use crate::scene::Scene;
 use crate::tracking::TransmittanceMethod;
+use crate::world::Scene;
 
 /// Pass index of the `photon` integrator's single map.
 const PHOTON_PASS: u64 = u64::MAX;

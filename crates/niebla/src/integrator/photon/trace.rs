@@ -11,14 +11,16 @@
 //! - Volume photons are stored at *real scattering* events (after the event
 //!   choice picked scattering, before the phase function is sampled): their
 //!   power density is `sigma_s * integral L dw`, so the in-scattering
-//!   estimate `sum p Phi / V` needs no albedo factor (methods.md 4.2 item 4).
+//!   estimate `sum p Phi / V` needs no albedo factor (the stored flux
+//!   already went through the choice of scattering over absorption).
 //! - Surface photons are stored on arrival at diffuse surfaces, before the
 //!   BSDF is sampled (density: incident flux per area).
 //! - *Direct* photons are not stored: those whose path from the light has
 //!   crossed only media (without a real scattering) and index-matched
 //!   boundaries. That light is what shadow rays from the camera side compute
 //!   (single scattering in media, direct lighting at surfaces), so storing it
-//!   would count it twice (methods.md 4.2 item 5). Photons that passed a
+//!   would count it twice (Jensen and Christensen 1998 leave direct light to
+//!   ray tracing the same way). Photons that passed a
 //!   specular surface (a volume caustic behind glass) are stored, and so
 //!   are all events of photons emitted by media.
 //!   [`TraceSettings::store_direct`] stores them too (for tests).
@@ -35,8 +37,8 @@ use crate::color::Rgb;
 use crate::light::Light;
 use crate::math::{Ray, Vec3};
 use crate::sampling::{hash_u64, PixelSampler};
-use crate::scene::{surface_epsilon, Scene, MAX_BOUNDARY_CROSSINGS};
-use crate::tracking::sample_t_maj;
+use crate::tracking::{pass_through_weight, sample_t_maj, CollisionEvent};
+use crate::world::{surface_epsilon, PathRay, Scene};
 
 use super::emitters::{Emitters, Source};
 use super::stored::Photon;
@@ -174,7 +176,7 @@ impl Tracer<'_> {
         // Emission: a light or an emissive medium by power, then a ray from it.
         let u_choice = sampler.next_1d();
         let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-        let (mut ray, mut beta, mut t_min, mut medium, from_medium) = match self.emitters.choose(u_choice) {
+        let (ray, mut beta, t_min, medium, from_medium) = match self.emitters.choose(u_choice) {
             None => return,
             Some(Source::Light { index, pmf }) => {
                 let light = &scene.lights[index];
@@ -217,87 +219,84 @@ impl Tracer<'_> {
         let mut depth = 0u32;
         // Photons from emissive media have no part that shadow rays compute.
         let mut direct = !from_medium;
-        let mut crossings = 0u32;
+        let mut path = PathRay::new(ray, medium, t_min);
         let store_direct = self.settings.store_direct;
         let max_depth = self.settings.max_depth;
 
         loop {
-            let hit = scene.intersect(&ray, t_min, f32::INFINITY);
+            let hit = path.intersect(scene);
             let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
 
             // Free flight through the medium up to the surface.
-            if let Some(id) = medium {
+            if let Some(id) = path.medium {
+                let ray = path.ray;
                 let m = scene.medium(id);
-                let mut scattered: Option<Ray> = None;
+                let mut scattered: Option<(Vec3, Vec3)> = None;
                 let mut ended = false;
                 let mut cut = false;
                 let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
-                    let (sigma_a, sigma_s) = (c.point.sigma_a, c.point.sigma_s);
-                    let p_absorb = sigma_a[hero] / c.sigma_maj[hero];
-                    let p_scatter = sigma_s[hero] / c.sigma_maj[hero];
-                    let u = sampler.next_1d();
-                    if u < p_absorb {
-                        // Absorption: the photon ends.
-                        ended = true;
-                        return false;
-                    }
-                    if u < p_absorb + p_scatter {
-                        // Real scattering: store, then sample the phase function.
-                        let pdf = c.t_maj[hero] * sigma_s[hero];
-                        beta *= c.t_maj * sigma_s / pdf;
-                        r_u *= c.t_maj * sigma_s / pdf;
-                        let power = beta / r_u.average();
-                        if !power.is_finite() || power.is_black() {
+                    match c.event(hero, sampler.next_1d()) {
+                        CollisionEvent::Absorb => {
+                            // Absorption: the photon ends.
                             ended = true;
-                            return false;
+                            false
                         }
-                        out.stats.volume_events += 1;
-                        add(&mut out.stats.volume_event_power, power);
-                        if !direct || store_direct {
-                            out.volume.push(Photon::in_medium(c.p, -ray.d, power, id.0));
+                        CollisionEvent::Scatter => {
+                            // Real scattering: store, then sample the phase function.
+                            let w = c.scatter_weight(hero);
+                            beta *= w;
+                            r_u *= w;
+                            let power = beta / r_u.average();
+                            if !power.is_finite() || power.is_black() {
+                                ended = true;
+                                return false;
+                            }
+                            out.stats.volume_events += 1;
+                            add(&mut out.stats.volume_event_power, power);
+                            if !direct || store_direct {
+                                out.volume.push(Photon::in_medium(c.p, -ray.d, power, id.0));
+                            }
+                            if depth >= max_depth {
+                                add(&mut out.stats.lost_power, power);
+                                cut = true;
+                                return false;
+                            }
+                            depth += 1;
+                            let Some(ps) = m.phase().sample(-ray.d, sampler.next_2d()) else {
+                                ended = true;
+                                return false;
+                            };
+                            beta *= ps.value / ps.pdf;
+                            direct = false;
+                            scattered = Some((c.p, ps.wi));
+                            false
                         }
-                        if depth >= max_depth {
-                            add(&mut out.stats.lost_power, power);
-                            cut = true;
-                            return false;
+                        CollisionEvent::Null => {
+                            // Null collision: continue with the null-scattering weights.
+                            let Some(w) = c.null_weights(hero) else {
+                                ended = true;
+                                return false;
+                            };
+                            beta *= w.throughput;
+                            r_u *= w.throughput;
+                            !(beta.is_black() || r_u.is_black())
                         }
-                        depth += 1;
-                        let Some(ps) = m.phase().sample(-ray.d, sampler.next_2d()) else {
-                            ended = true;
-                            return false;
-                        };
-                        beta *= ps.value / ps.pdf;
-                        direct = false;
-                        scattered = Some(Ray::new(c.p, ps.wi));
-                        return false;
                     }
-                    // Null collision: continue with the null-scattering weights.
-                    let sigma_n = (c.sigma_maj - sigma_a - sigma_s).map(|x| x.max(0.0));
-                    let pdf = c.t_maj[hero] * sigma_n[hero];
-                    if !(pdf > 0.0) {
-                        ended = true;
-                        return false;
-                    }
-                    beta *= c.t_maj * sigma_n / pdf;
-                    r_u *= c.t_maj * sigma_n / pdf;
-                    !(beta.is_black() || r_u.is_black())
                 });
                 if ended || cut || beta.is_black() || r_u.is_black() || !beta.is_finite() {
                     return;
                 }
-                if let Some(next) = scattered {
-                    ray = next;
-                    t_min = 0.0;
+                if let Some((p, wi)) = scattered {
+                    path.scatter_in_medium(p, wi);
                     continue;
                 }
                 // Passed through: the hero's majorant transmittance was the
                 // probability of reaching the surface.
-                let h = t_maj[hero];
-                if !(h > 0.0) {
+                let Some(w) = pass_through_weight(t_maj, hero) else {
                     return;
-                }
-                beta *= t_maj / h;
-                r_u *= t_maj / h;
+                };
+                beta *= w;
+                r_u *= w;
             }
 
             let power = beta / r_u.average();
@@ -310,14 +309,10 @@ impl Tracer<'_> {
             // Index-matched boundary: cross it without counting a bounce.
             let object = scene.object(&hit);
             if object.bsdf.is_null() {
-                crossings += 1;
-                if crossings > MAX_BOUNDARY_CROSSINGS * 16 {
+                if !path.cross(scene, &hit) {
                     add(&mut out.stats.lost_power, power);
                     return;
                 }
-                medium = scene.medium_after_crossing(&hit, ray.d, medium);
-                ray = Ray::new(hit.surface.p, ray.d);
-                t_min = surface_epsilon(hit.surface.p);
                 continue;
             }
 
@@ -328,7 +323,7 @@ impl Tracer<'_> {
             }
 
             // Diffuse surface: store on arrival.
-            let wo = -ray.d;
+            let wo = -path.ray.d;
             if !object.bsdf.is_specular() {
                 add(&mut out.stats.surface_event_power, power);
                 if !direct || store_direct {
@@ -355,11 +350,7 @@ impl Tracer<'_> {
             }
             beta *= bs.weight(hit.surface.n);
             direct = false;
-            if bs.is_transmission {
-                medium = scene.medium_after_crossing(&hit, bs.wi, medium);
-            }
-            ray = Ray::new(hit.surface.p, bs.wi);
-            t_min = surface_epsilon(hit.surface.p);
+            path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
 
             // Russian roulette keeps the photon's power: survive with the
             // ratio of new to old power (the albedo for grey surfaces).
@@ -373,5 +364,43 @@ impl Tracer<'_> {
                 beta /= q;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn photon_streams_differ_per_seed_and_pass_and_are_stable() {
+        let streams: Vec<u64> = (0..4).flat_map(|seed| (0..4).map(move |pass| photon_stream(seed, pass))).collect();
+        for (i, a) in streams.iter().enumerate() {
+            for b in &streams[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+        // A pure function of (seed, pass): maps are reproducible across runs.
+        assert_eq!(photon_stream(3, 7), photon_stream(3, 7));
+    }
+
+    #[test]
+    fn stats_merge_sums_every_field_in_f64() {
+        let mut a = TraceStats::default();
+        add(&mut a.emitted_power, Rgb::new(1.0, 2.0, 3.0));
+        a.emitted = 2;
+        a.volume_events = 5;
+        let mut b = a;
+        add(&mut b.escaped_power, Rgb::new(0.5, 0.25, 0.125));
+        add(&mut b.lost_power, Rgb::splat(1e-8));
+        a.merge(&b);
+        assert_eq!(a.emitted, 4);
+        assert_eq!(a.volume_events, 10);
+        assert_eq!(a.emitted_power, [2.0, 4.0, 6.0]);
+        assert_eq!(a.escaped_power, [0.5, 0.25, 0.125]);
+        // f64 sums keep a 1e-8 increment that an f32 sum of order 1 would round away.
+        let mut sum = [1.0f64; 3];
+        add(&mut sum, Rgb::splat(1e-8));
+        assert!(sum[0] > 1.0);
+        assert_eq!(a.lost_power[0], 1e-8f32 as f64);
     }
 }

@@ -60,8 +60,8 @@ use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::{GridMedium, Medium, MediumId};
 use crate::sampling::PixelSampler;
-use crate::scene::Scene;
 use crate::tracking::{MarchStep, TransmittanceMethod};
+use crate::world::Scene;
 
 use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use fit::{FitReport, FitSettings};

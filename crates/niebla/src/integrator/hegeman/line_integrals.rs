@@ -1,5 +1,7 @@
 //! Per-light line integrals of the density toward a light, precomputed on a
-//! lattice over a grid medium's box (interactive.md 2.5 step 2): at each
+//! lattice over a grid medium's box (the per-light precomputation of
+//! Hegeman, Ashikhmin, Premoze 2005, "A lighting model for general
+//! participating media"): at each
 //! node `x`, with `r` the distance from `x` along the straight line to the
 //! light (the assumed most probable path) and `d` the density,
 //! `D0 = int d dr`, `D1 = int r d dr`, `D2 = int r^2 d dr`.
@@ -25,8 +27,8 @@ pub enum LightSource {
 
 /// Line integrals `(D0, D1, D2)` toward one light on a lattice of nodes.
 #[derive(Clone, Debug)]
-pub struct LightVolume {
-    /// The light this volume belongs to.
+pub struct LineIntegralLattice {
+    /// The light this lattice belongs to.
     pub source: LightSource,
     lo: Vec3,
     hi: Vec3,
@@ -65,11 +67,11 @@ pub fn line_integrals(medium: &GridMedium, x: Vec3, source: LightSource, step: f
     sums
 }
 
-impl LightVolume {
+impl LineIntegralLattice {
     /// Integrate the lattice: `resolution` nodes along the longest side of the
     /// medium's world box (proportionally fewer along the others), marching
     /// with a step of one lattice cell.
-    pub fn new(medium: &GridMedium, source: LightSource, resolution: usize) -> LightVolume {
+    pub fn new(medium: &GridMedium, source: LightSource, resolution: usize) -> LineIntegralLattice {
         let (lo, hi) = medium.world_bounds;
         let extent = hi - lo;
         let longest = extent.max_element().max(1e-6);
@@ -85,7 +87,7 @@ impl LightVolume {
                 line_integrals(medium, lo + extent * f, source, step)
             })
             .collect();
-        LightVolume { source, lo, hi, n, values }
+        LineIntegralLattice { source, lo, hi, n, values }
     }
 
     /// Trilinear `(D0, D1, D2)` at world point `p` (clamped to the box).

@@ -5,7 +5,7 @@
 //! light's emission distribution and returns the emitted quantity with the
 //! densities of the origin (per m^2, 1 for point-like lights) and of the
 //! direction (per sr, 1 for directional lights). The flux one ray carries is
-//! [`LightEmission::flux`] `= le |cos| / (pdf_pos pdf_dir)`; its mean over
+//! [`EmittedRay::flux`] `= le |cos| / (pdf_pos pdf_dir)`; its mean over
 //! samples is [`Light::power`], which photon tracing uses to choose lights.
 //!
 //! Distant lights (directional, constant and map environments) emit through a
@@ -66,7 +66,7 @@ impl SceneSphere {
 
 /// A ray leaving a light, from [`Light::sample_le`].
 #[derive(Clone, Copy, Debug)]
-pub struct LightEmission {
+pub struct EmittedRay {
     /// Origin on the light (or on the emitting disk of a distant light) and
     /// unit direction of travel.
     pub ray: Ray,
@@ -83,7 +83,7 @@ pub struct LightEmission {
     pub cos: f32,
 }
 
-impl LightEmission {
+impl EmittedRay {
     /// Flux carried by this sample, W per channel: `le cos / (pdf_pos pdf_dir)`.
     /// Its mean over samples is the light's [`Light::power`].
     #[inline]
@@ -133,9 +133,9 @@ impl Light {
     /// assert_eq!(e.ray.o, Vec3::Y);
     /// assert!((e.flux().g() - light.power(&sphere).g()).abs() < 1e-4);
     /// ```
-    pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, sphere: &SceneSphere) -> Option<LightEmission> {
+    pub fn sample_le(&self, u_pos: Vec2, u_dir: Vec2, sphere: &SceneSphere) -> Option<EmittedRay> {
         match self {
-            Light::Point(l) => Some(LightEmission {
+            Light::Point(l) => Some(EmittedRay {
                 ray: Ray::new(l.position, sample_uniform_sphere(u_dir)),
                 le: l.intensity,
                 pdf_pos: 1.0,
@@ -146,7 +146,7 @@ impl Light {
                 let cos_max = l.cutoff_angle.cos();
                 let w = l.frame.to_world(sample_uniform_cone(u_dir, cos_max)).normalize();
                 let falloff = l.falloff(w);
-                (falloff > 0.0).then(|| LightEmission {
+                (falloff > 0.0).then(|| EmittedRay {
                     ray: Ray::new(l.position, w),
                     le: l.intensity * falloff,
                     pdf_pos: 1.0,
@@ -154,7 +154,7 @@ impl Light {
                     cos: 1.0,
                 })
             }
-            Light::Directional(l) => Some(LightEmission {
+            Light::Directional(l) => Some(EmittedRay {
                 ray: Ray::new(sphere.disk_origin(l.direction, u_pos), l.direction),
                 le: l.irradiance,
                 pdf_pos: 1.0 / sphere.disk_area(),
@@ -163,7 +163,7 @@ impl Light {
             }),
             Light::Constant(l) => {
                 let w = sample_uniform_sphere(u_dir);
-                Some(LightEmission {
+                Some(EmittedRay {
                     ray: Ray::new(sphere.disk_origin(w, u_pos), w),
                     le: l.radiance,
                     pdf_pos: 1.0 / sphere.disk_area(),
@@ -174,7 +174,7 @@ impl Light {
             Light::Environment(e) => {
                 // Sampled toward the environment; the light travels the other way.
                 let s = e.sample_li(u_dir)?;
-                Some(LightEmission {
+                Some(EmittedRay {
                     ray: Ray::new(sphere.disk_origin(-s.wi, u_pos), -s.wi),
                     le: s.li,
                     pdf_pos: 1.0 / sphere.disk_area(),
@@ -208,7 +208,7 @@ impl Light {
                     return None;
                 }
                 let w = Frame::from_z(n).to_world(local).normalize();
-                Some(LightEmission {
+                Some(EmittedRay {
                     // On the surface: tracing skips hits closer than `surface_epsilon`.
                     ray: Ray::new(p, w),
                     le: a.radiance,

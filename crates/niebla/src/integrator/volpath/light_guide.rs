@@ -1,5 +1,6 @@
-//! Directions toward the volume a point or spot light illuminates, for
-//! `volpath`'s direction guiding toward lights inside media ([`LightGuide`]).
+//! `volpath`'s guide toward point and spot lights inside media
+//! ([`LightGuide`]): directions toward the cone of space a light illuminates
+//! ([`LightCone`]).
 //!
 //! A point `y` is sampled with density proportional to `1/r^2` (r the
 //! distance to the light) inside the light's cone (the whole sphere for a
@@ -13,14 +14,14 @@ use crate::light::Light;
 use crate::math::{Frame, Ray, Vec3};
 use crate::sampling::sample_uniform_cone;
 
-use super::equiangular::cone_hull;
+use crate::integrator::equiangular::cone_hull;
 
 /// Points with density `1 / (Omega R r^2)` in the cone of half-angle
 /// `acos(cos_cutoff)` (`cos_cutoff = -1`: the whole sphere) around `axis`
 /// with apex at the light, `r` the distance to the apex, `r < R`, Omega the
 /// cone's solid angle.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightVolume {
+pub(crate) struct LightCone {
     apex: Vec3,
     frame: Frame,
     cos_cutoff: f32,
@@ -30,10 +31,10 @@ pub(crate) struct LightVolume {
     radius: f32,
 }
 
-impl LightVolume {
+impl LightCone {
     /// The volume of `light` (a point or spot light) out to `radius`; `None`
     /// for other lights or a radius that is not positive and finite.
-    pub(crate) fn new(light: &Light, radius: f32) -> Option<LightVolume> {
+    pub(crate) fn new(light: &Light, radius: f32) -> Option<LightCone> {
         if !(radius > 0.0 && radius.is_finite()) {
             return None;
         }
@@ -43,7 +44,7 @@ impl LightVolume {
             _ => return None,
         };
         let solid_angle = 2.0 * std::f32::consts::PI * (1.0 - cos_cutoff);
-        (solid_angle > 0.0).then_some(LightVolume { apex, frame, cos_cutoff, solid_angle, radius })
+        (solid_angle > 0.0).then_some(LightCone { apex, frame, cos_cutoff, solid_angle, radius })
     }
 
     /// A point of the volume from three uniform numbers.
@@ -53,7 +54,7 @@ impl LightVolume {
     }
 
     /// Solid-angle density (1/sr) that the direction from `x` toward a point
-    /// sampled by [`LightVolume::sample`] is `w` (unit): the integral of the
+    /// sampled by [`LightCone::sample`] is `w` (unit): the integral of the
     /// point density times `s^2` along the ray `x + s w`.
     pub(crate) fn direction_pdf(&self, x: Vec3, w: Vec3) -> f32 {
         let ray = Ray::new(x, w);
@@ -112,7 +113,7 @@ mod tests {
         });
         let point = Light::Point(PointLight { position: Vec3::new(0.5, 1.0, -0.5), intensity: crate::color::Rgb::ONE });
         for light in [spot, point] {
-            let volume = LightVolume::new(&light, 5.0).unwrap();
+            let volume = LightCone::new(&light, 5.0).unwrap();
             for x in [Vec3::new(0.3, 1.0, 0.2), Vec3::new(4.0, -1.0, 2.0), Vec3::new(0.0, 2.5, 0.0)] {
                 let mut s = PixelSampler::from_key(5);
                 let n = 400_000;
@@ -142,7 +143,7 @@ mod tests {
             cutoff_angle: 0.6,
             beam_width: 0.5,
         });
-        let volume = LightVolume::new(&light, 4.0).unwrap();
+        let volume = LightCone::new(&light, 4.0).unwrap();
         let x = Vec3::new(2.5, 0.5, 0.3);
         let mut s = PixelSampler::from_key(9);
         let n = 400_000;
@@ -175,24 +176,21 @@ const MAX_GUIDED_LIGHTS: usize = 4;
 /// phase or BSDF sampling picks directions passing within `h` with a
 /// probability proportional to `h^2`: the estimator's variance diverges
 /// (logarithmically), and renders of a lamp inside fog show fireflies that
-/// do not average out. Directions drawn toward the light's [`LightVolume`]
+/// do not average out. Directions drawn toward the light's [`LightCone`]
 /// have a density proportional to `1/h` near the light, which cancels the
 /// singularity; `volpath` mixes them with phase/BSDF sampling (one-sample
 /// MIS). Lights outside every medium need none (no segment in a medium comes
 /// arbitrarily close to them), so the guide is empty there.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LightGuide {
-    volumes: [Option<LightVolume>; MAX_GUIDED_LIGHTS],
+    volumes: [Option<LightCone>; MAX_GUIDED_LIGHTS],
     count: usize,
 }
 
 impl LightGuide {
-    /// A guide toward no light.
-    pub(crate) const NONE: LightGuide = LightGuide { volumes: [None; MAX_GUIDED_LIGHTS], count: 0 };
-
     /// The guide toward the scene's point and spot lights that lie inside a
     /// medium (the first [`MAX_GUIDED_LIGHTS`] of them).
-    pub(crate) fn new(scene: &crate::scene::Scene) -> LightGuide {
+    pub(crate) fn new(scene: &crate::world::Scene) -> LightGuide {
         let mut volumes = [None; MAX_GUIDED_LIGHTS];
         let mut count = 0;
         let (lo, hi) = scene.bounds;
@@ -205,7 +203,7 @@ impl LightGuide {
             }
             // Out to the farthest corner of the scene's bounds.
             let radius = (position - lo).abs().max((position - hi).abs()).length();
-            if let Some(v) = LightVolume::new(light, radius) {
+            if let Some(v) = LightCone::new(light, radius) {
                 volumes[count] = Some(v);
                 count += 1;
             }

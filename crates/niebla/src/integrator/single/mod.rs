@@ -3,14 +3,16 @@
 //! spot lights (Kulla and Fajardo 2012) and its MIS combination with distance
 //! sampling. Surfaces are lit directly; media emission is included.
 
+pub(crate) mod settings;
+
 use crate::color::Rgb;
 use crate::math::Ray;
 use crate::medium::{Medium, MediumId};
 use crate::sampling::{balance_heuristic, PixelSampler};
-use crate::scene::Scene;
 use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
+use crate::world::Scene;
 
-use super::emission::{emission_segment, march_segment, marched_range};
+use super::emission_absorption::{emission_segment, march_segment, marched_range};
 use super::equiangular::{equiangular_target, PointLightTarget};
 use super::{default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance};
 
@@ -208,5 +210,5 @@ impl SingleIntegrator {
 }
 
 #[cfg(test)]
-#[path = "single_tests.rs"]
+#[path = "tests.rs"]
 mod tests;

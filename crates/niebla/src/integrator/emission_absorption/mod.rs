@@ -1,13 +1,15 @@
 //! The emission-absorption integrator (pbrt-v2 `EmissionIntegrator`; Max 1995):
 //! radiance emitted by media, attenuated by extinction, no in-scattering.
 
+pub(crate) mod settings;
+
 use crate::color::Rgb;
 use crate::math::Ray;
 use crate::medium::MediumPoint;
 use crate::medium::{Medium, MediumId};
 use crate::sampling::PixelSampler;
-use crate::scene::Scene;
 use crate::tracking::{medium_range, segment_transmittance, MarchStep, TransmittanceMethod};
+use crate::world::Scene;
 
 use super::{default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance};
 
@@ -154,5 +156,5 @@ fn step_transmittance(
 }
 
 #[cfg(test)]
-#[path = "emission_tests.rs"]
+#[path = "tests.rs"]
 mod tests;

@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use super::common_settings::{march_key, march_step, transmittance_key, TransmittanceField};
+use crate::integrator::common_settings::{march_key, march_step, transmittance_key, TransmittanceField};
 use crate::params::{rest, Located, Object};
 use crate::tracking::{MarchStep, TransmittanceMethod};
 

@@ -1,6 +1,12 @@
 //! The render-ready scene: typed ids, world-space shapes and lights, no strings
 //! on the per-sample path. Immutable and `Sync` while rendering.
 
+mod boundary_walk;
+
+pub use boundary_walk::{walk_shadow_ray, PathRay, ShadowSegment, MAX_PATH_BOUNDARY_CROSSINGS};
+
+use std::ops::ControlFlow;
+
 use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
 use crate::color::Rgb;
@@ -168,7 +174,7 @@ impl Scene {
     pub fn transmittance_ignoring(
         &self,
         p: Vec3,
-        mut medium: Option<MediumId>,
+        medium: Option<MediumId>,
         wi: Vec3,
         distance: f32,
         ignore: Option<u32>,
@@ -176,38 +182,21 @@ impl Scene {
         sampler: &mut PixelSampler,
     ) -> Rgb {
         let mut tr = Rgb::ONE;
-        let mut ray = Ray::new(p, wi);
-        let mut remaining = distance;
-        let mut t_min = 0.0;
-        for _ in 0..MAX_BOUNDARY_CROSSINGS {
-            let hit = self.intersect(&ray, t_min, remaining);
-            let t_end = hit.map_or(remaining, |h| h.surface.t);
-            if let Some(id) = medium {
-                tr *= segment_transmittance(self.medium(id), &ray, 0.0, t_end, method, sampler);
+        let reached = walk_shadow_ray(self, p, medium, wi, distance, ignore, |s| {
+            if let Some(id) = s.medium {
+                tr *= segment_transmittance(self.medium(id), s.ray, 0.0, s.t_end, method, sampler);
                 if tr.is_black() {
-                    return tr;
+                    return ControlFlow::Break(());
                 }
             }
-            let Some(hit) = hit else {
-                return tr;
-            };
-            if !self.object(&hit).bsdf.is_null() {
-                if Some(hit.object) == ignore {
-                    return tr;
-                }
-                return Rgb::ZERO;
-            }
-            // Cross the index-matched boundary: continue from the hit point itself
-            // (no path length is lost), ignoring hits closer than an epsilon.
-            medium = self.medium_after_crossing(&hit, wi, medium);
-            remaining -= hit.surface.t;
-            ray = Ray::new(hit.surface.p, wi);
-            t_min = surface_epsilon(hit.surface.p);
-            if remaining <= t_min {
-                return tr;
-            }
+            ControlFlow::Continue(())
+        });
+        // A black estimate is returned as it is; a blocked ray is black.
+        if reached || tr.is_black() {
+            tr
+        } else {
+            Rgb::ZERO
         }
-        Rgb::ZERO
     }
 
     /// Radiance emitted by the surface of `hit` toward `w_out` (zero unless the

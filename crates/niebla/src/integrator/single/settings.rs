@@ -3,10 +3,10 @@
 
 use serde::Deserialize;
 
-use super::common_settings::{
+use super::SingleSampling;
+use crate::integrator::common_settings::{
     march_key, march_step, sampling_key, transmittance_key, SamplingField, TransmittanceField,
 };
-use super::SingleSampling;
 use crate::params::{rest, Located, Object};
 use crate::tracking::{MarchStep, TransmittanceMethod};
 

@@ -1,0 +1,156 @@
+//! Equiangular next-event estimation on `volpath`'s medium segments (Kulla
+//! and Fajardo 2012, "Importance sampling techniques for path tracing in
+//! participating media"), and its balance-heuristic MIS against the
+//! free-flight vertices' light sampling.
+
+use crate::color::Rgb;
+use crate::light::Light;
+use crate::math::Ray;
+use crate::medium::{Medium, MediumId};
+use crate::sampling::PixelSampler;
+use crate::tracking::{majorant_profile, segment_transmittance, TransmittanceMethod};
+use crate::world::Scene;
+
+use super::channels::{per_channel, Channels};
+use super::nee::LightChoice;
+use crate::integrator::equiangular::{equiangular_target, PointLightTarget};
+
+/// The medium segment on which a free-flight vertex was found.
+#[derive(Clone, Copy)]
+pub(super) struct Segment<'a> {
+    /// The path's ray; the segment is `[0, t_end)` of it.
+    pub(super) ray: &'a Ray,
+    pub(super) t_end: f32,
+    /// Ray parameter of the vertex.
+    pub(super) t: f32,
+    /// The medium of the segment.
+    pub(super) medium: &'a Medium,
+}
+
+/// Density (per unit length) with which free flight on the segment produces a
+/// real scattering at `t`, averaged over the channels: `avg_c sigma_s,c(t)
+/// T_c(0, t)`, with the transmittance exact in homogeneous media and from the
+/// majorants in grids (a deterministic stand-in; MIS weights only need to be
+/// consistent). The average, not the hero channel's density, is what the
+/// spectral MIS of the free-flight strategy amounts to once the hero is
+/// averaged out, so the two strategies' weights sum to one per channel
+/// (a hero-channel density biased chromatic media by about 0.5%).
+pub(super) fn free_flight_scatter_density(m: &Medium, ray: &Ray, t_end: f32, t: f32, group: Channels) -> f32 {
+    let sigma_s = m.at(ray.at(t)).sigma_s;
+    let sigma_t = m.sigma_t_per_density();
+    let depth_per_unit_sigma = match m.as_homogeneous() {
+        Some(_) => t,
+        // exp(-D(t)) with D the integral of the majorant density.
+        None => -majorant_profile(m, ray, 0.0, t_end, 1.0).transmittance(t).ln(),
+    };
+    group.average(per_channel(|c| sigma_s[c] * (-sigma_t[c] * depth_per_unit_sigma).exp()))
+}
+
+/// Number of point and spot lights (the lights equiangular sampling chooses from).
+pub(super) fn point_light_count(scene: &Scene) -> usize {
+    scene.lights.iter().filter(|l| l.point_position().is_some()).count()
+}
+
+/// Balance-heuristic weight of light sampling from a free-flight vertex
+/// (light chosen with probability 1/N) against equiangular sampling of the
+/// same vertex (point light chosen with probability 1/P); `None` when the
+/// light is not point-like or equiangular sampling cannot produce the vertex.
+pub(super) fn light_weight_against_equiangular(
+    seg: Segment,
+    light: &Light,
+    lights: LightChoice,
+    group: Channels,
+) -> Option<f32> {
+    let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
+        return None;
+    };
+    let p_eq = e.pdf(seg.t) * lights.point_pmf();
+    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group) * lights.pmf();
+    (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
+}
+
+/// A medium segment on which [`equiangular_ld`] samples points.
+pub(super) struct EquiangularSegment<'a> {
+    /// The path's ray; the segment is `[0, t_end)` of it.
+    pub(super) ray: &'a Ray,
+    pub(super) t_end: f32,
+    /// The medium the segment lies in, and its id.
+    pub(super) medium: &'a Medium,
+    pub(super) id: MediumId,
+    /// MIS-normalized path throughput at the segment's start.
+    pub(super) throughput: Rgb,
+}
+
+/// Equiangular next-event estimation on a medium segment (Kulla and Fajardo
+/// 2012, combined by MIS with free-flight sampling as Cycles does): every
+/// point or spot light, or one chosen uniformly ([`LightChoice`]), one point
+/// sampled equiangularly toward each (within the spot's cone), camera-side
+/// and light-side transmittance exact (homogeneous) or by ratio tracking.
+pub(super) fn equiangular_ld(
+    scene: &Scene,
+    segment: &EquiangularSegment,
+    group: Channels,
+    lights: LightChoice,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let count = lights.points;
+    if count == 0 {
+        return Rgb::ZERO;
+    }
+    let mut point_lights = scene.lights.iter().filter(|l| l.point_position().is_some());
+    if lights.all() {
+        let mut l = Rgb::ZERO;
+        for light in point_lights {
+            l += equiangular_ld_light(scene, segment, group, lights, light, sampler);
+        }
+        return l;
+    }
+    let u_light = sampler.next_1d();
+    let k = ((u_light * count as f32) as usize).min(count - 1);
+    let Some(light) = point_lights.nth(k) else {
+        return Rgb::ZERO;
+    };
+    equiangular_ld_light(scene, segment, group, lights, light, sampler)
+}
+
+/// [`equiangular_ld`] toward `light`, chosen with probability `lights.point_pmf()`.
+fn equiangular_ld_light(
+    scene: &Scene,
+    segment: &EquiangularSegment,
+    group: Channels,
+    lights: LightChoice,
+    light: &Light,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let EquiangularSegment { ray, t_end, medium: m, id, throughput } = *segment;
+    let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
+    let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
+        return Rgb::ZERO;
+    };
+    let t = e.sample(u_t);
+    let pdf_eq = e.pdf(t);
+    if !(pdf_eq > 0.0 && pdf_eq.is_finite()) {
+        return Rgb::ZERO;
+    }
+    let p = ray.at(t);
+    let sigma_s = m.at(p).sigma_s;
+    if sigma_s.is_black() {
+        return Rgb::ZERO;
+    }
+    let Some(ls) = light.sample_li(p, None, u_dir) else {
+        return Rgb::ZERO;
+    };
+    let f = m.phase().eval(-ray.d, ls.wi);
+    if f == 0.0 || ls.li.is_black() {
+        return Rgb::ZERO;
+    }
+    let tr_camera = segment_transmittance(m, ray, 0.0, t, TransmittanceMethod::Analytic, sampler);
+    if tr_camera.is_black() {
+        return Rgb::ZERO;
+    }
+    let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
+    let p_eq = pdf_eq * lights.point_pmf();
+    let p_d = free_flight_scatter_density(m, ray, t_end, t, group) * lights.pmf();
+    let weight = p_eq / (p_eq + p_d);
+    throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
+}

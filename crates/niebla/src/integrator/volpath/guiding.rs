@@ -1,0 +1,77 @@
+//! Direction sampling at a `volpath` vertex mixed with the guide toward
+//! lights inside media ([`LightGuide`]): one-sample MIS of phase or BSDF
+//! sampling and guided directions.
+
+use crate::bsdf::Bsdf;
+use crate::math::Vec3;
+use crate::phase::PhaseFunction;
+use crate::sampling::PixelSampler;
+
+use super::light_guide::LightGuide;
+
+/// Direction guiding at a vertex: the guide and the probability of using it.
+#[derive(Clone, Copy)]
+pub(super) struct Guiding<'a> {
+    pub(super) guide: &'a LightGuide,
+    pub(super) fraction: f32,
+}
+
+impl Guiding<'_> {
+    /// The one-sample MIS density of direction `w` at `x`, given the density
+    /// `pdf` of phase or BSDF sampling there.
+    #[inline]
+    pub(super) fn mix(&self, x: Vec3, w: Vec3, pdf: f32) -> f32 {
+        (1.0 - self.fraction) * pdf + self.fraction * self.guide.pdf(x, w)
+    }
+}
+
+/// Phase sampling at `x`, mixed with guiding toward lights when `guiding` is
+/// given (one-sample MIS: the returned `pdf` is the mixture's density and
+/// `value` the phase function, so `value / pdf` is the path weight). Without
+/// guiding it draws the same random numbers as plain phase sampling.
+pub(super) fn sample_phase(
+    phase: &PhaseFunction,
+    x: Vec3,
+    wo: Vec3,
+    guiding: Option<Guiding>,
+    sampler: &mut PixelSampler,
+) -> Option<crate::phase::PhaseSample> {
+    let Some(g) = guiding else {
+        return phase.sample(wo, sampler.next_2d());
+    };
+    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let wi = if u_choice < g.fraction { g.guide.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
+    let pdf = g.mix(x, wi, phase.pdf(wo, wi));
+    (pdf > 0.0).then(|| crate::phase::PhaseSample { wi, value: phase.eval(wo, wi), pdf })
+}
+
+/// BSDF sampling at surface point `p` with outward geometric normal `n`,
+/// mixed with guiding toward lights when `guiding` is given (only for
+/// non-specular BSDFs; the sample's `f` and `pdf` are then the BSDF value
+/// and the mixture's density). Without guiding it draws the same random
+/// numbers as plain BSDF sampling.
+pub(super) fn sample_bsdf(
+    bsdf: &Bsdf,
+    n: Vec3,
+    p: Vec3,
+    wo: Vec3,
+    guiding: Option<Guiding>,
+    sampler: &mut PixelSampler,
+) -> Option<crate::bsdf::BsdfSample> {
+    let u_lobe = sampler.next_1d();
+    let Some(g) = guiding else {
+        return bsdf.sample(n, wo, u_lobe, sampler.next_2d());
+    };
+    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let wi = if u_choice < g.fraction {
+        g.guide.sample(p, u_light, u_dir, u_r)?
+    } else {
+        bsdf.sample(n, wo, u_lobe, u_dir)?.wi
+    };
+    let f = bsdf.eval(n, wo, wi);
+    if f.is_black() {
+        return None;
+    }
+    let pdf = g.mix(p, wi, bsdf.pdf(n, wo, wi));
+    Some(crate::bsdf::BsdfSample { wi, f, pdf, is_specular: false, is_transmission: false, eta: 1.0 })
+}

@@ -1,0 +1,145 @@
+//! Volumetric path tracing with the null-scattering path integral (Miller,
+//! Georgiev, Jarosz 2019), after pbrt-v4's `VolPathIntegrator`: free flight by
+//! delta tracking over majorant segments with real, null and absorption
+//! events; medium emission at every tentative collision; next-event
+//! estimation at every scattering vertex with shadow transmittance by ratio
+//! tracking; MIS between phase or BSDF sampling and light sampling; spectral
+//! MIS over the RGB channels with a hero channel chosen per path (stratified
+//! over the pixel's samples); Russian
+//! roulette on throughput.
+//!
+//! Channels whose medium coefficients differ much are traced by separate
+//! paths, one per group of similar channels (`channels`).
+//!
+//! Path state (pbrt-v4's notation): `beta` is the throughput divided by the
+//! hero channel's path pdf; `r_u` and `r_l` are the unidirectional and
+//! light-sampling path pdfs of every channel divided by that same hero pdf.
+//! A contribution found by phase/BSDF sampling is divided by the channel mean
+//! of `r_u + r_l` (or of `r_u` alone where light sampling could not have made
+//! it), one found by light sampling by the mean of `r_l + r_u`.
+//!
+//! Files: `path` (the path loop), `nee` (next-event estimation and shadow
+//! rays), `equiangular_nee` (equiangular sampling on medium segments and its
+//! MIS), `guiding` and `light_guide` (directions toward lamps inside media),
+//! `channels` (channel grouping).
+
+mod channels;
+mod equiangular_nee;
+mod guiding;
+mod light_guide;
+mod nee;
+mod path;
+pub(crate) mod settings;
+
+use crate::color::Rgb;
+use crate::math::Ray;
+use crate::medium::MediumId;
+use crate::sampling::PixelSampler;
+use crate::world::Scene;
+
+use super::Integrator;
+use channels::{channel_groups, Channels};
+use guiding::Guiding;
+use light_guide::LightGuide;
+use nee::LightChoice;
+
+/// The volumetric path tracer.
+#[derive(Clone, Copy, Debug)]
+pub struct VolPathIntegrator {
+    /// Largest number of scattering events (medium or surface) on a path.
+    pub max_depth: u32,
+    /// Probability, at a vertex whose next segment runs through a medium,
+    /// of drawing the direction toward a point or spot light inside a
+    /// medium instead of from the phase function or diffuse BSDF (one-sample
+    /// MIS of the two; see `LightGuide`). 0 turns guiding off; it only acts
+    /// in scenes with such a light. Values above [`MAX_GUIDE_FRACTION`] act
+    /// as it: phase/BSDF sampling must keep a share, or directions the guide
+    /// never draws would be lost.
+    pub guide_fraction: f32,
+    /// What depends only on the scene, when computed once for the scene
+    /// being rendered ([`VolPathIntegrator::for_scene`]); else found for
+    /// every camera sample.
+    scene_constants: Option<SceneConstants>,
+}
+
+/// What a render's paths share: it depends on the scene alone.
+#[derive(Clone, Copy, Debug)]
+struct SceneConstants {
+    /// The channel groups traced by separate paths, `groups.0[..groups.1]`.
+    groups: ([Channels; 3], usize),
+    /// How next-event estimation picks lights.
+    lights: LightChoice,
+    /// The guide toward the lights inside media.
+    guide: LightGuide,
+}
+
+impl SceneConstants {
+    fn new(scene: &Scene) -> SceneConstants {
+        SceneConstants { groups: channel_groups(scene), lights: LightChoice::new(scene), guide: LightGuide::new(scene) }
+    }
+}
+
+/// [`VolPathIntegrator::guide_fraction`] of [`VolPathIntegrator::new`].
+pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
+
+/// Largest guiding probability used.
+pub const MAX_GUIDE_FRACTION: f32 = 0.9;
+
+impl VolPathIntegrator {
+    /// The path tracer with at most `max_depth` scattering events per path
+    /// and the default light guiding, for any scene.
+    pub fn new(max_depth: u32) -> VolPathIntegrator {
+        VolPathIntegrator { max_depth, guide_fraction: DEFAULT_GUIDE_FRACTION, scene_constants: None }
+    }
+
+    /// [`VolPathIntegrator::new`] with what depends on the scene alone
+    /// (channel groups, light choice, guide) computed once, for `scene`:
+    /// render only that scene (unchanged) with it.
+    pub fn for_scene(scene: &Scene, max_depth: u32) -> VolPathIntegrator {
+        VolPathIntegrator { scene_constants: Some(SceneConstants::new(scene)), ..VolPathIntegrator::new(max_depth) }
+    }
+
+    /// The same integrator with guiding probability `fraction` (0: off).
+    pub fn with_guide_fraction(self, fraction: f32) -> VolPathIntegrator {
+        VolPathIntegrator { guide_fraction: fraction, ..self }
+    }
+}
+
+/// How a path samples lights: next-event estimation's choice and direction
+/// guiding toward lights inside media.
+#[derive(Clone, Copy)]
+struct LightSampling<'a> {
+    lights: LightChoice,
+    guiding: Option<Guiding<'a>>,
+}
+
+impl Integrator for VolPathIntegrator {
+    fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        match &self.scene_constants {
+            Some(constants) => self.radiance_with(constants, scene, ray, medium, sampler),
+            None => self.radiance_with(&SceneConstants::new(scene), scene, ray, medium, sampler),
+        }
+    }
+}
+
+impl VolPathIntegrator {
+    /// [`Integrator::radiance`] with the scene's constants: one path per channel group.
+    #[inline]
+    fn radiance_with(
+        &self,
+        constants: &SceneConstants,
+        scene: &Scene,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let SceneConstants { groups: (groups, count), lights, ref guide } = *constants;
+        let guiding = (self.guide_fraction > 0.0 && lights.points > 0 && guide.is_active())
+            .then_some(Guiding { guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
+        let mut l = Rgb::ZERO;
+        for &group in &groups[..count] {
+            l += self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler);
+        }
+        l
+    }
+}

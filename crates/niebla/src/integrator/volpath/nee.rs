@@ -1,0 +1,300 @@
+//! Next-event estimation at `volpath`'s scattering vertices (pbrt-v4's
+//! `SampleLd`): which lights are sampled ([`LightChoice`]), one direction
+//! toward each, and the shadow ray's transmittance by ratio tracking with the
+//! null-scattering MIS weights, across index-matched boundaries.
+
+use std::ops::ControlFlow;
+
+use crate::bsdf::Bsdf;
+use crate::color::Rgb;
+use crate::light::Light;
+use crate::math::Vec3;
+use crate::medium::MediumId;
+use crate::phase::PhaseFunction;
+use crate::sampling::PixelSampler;
+use crate::tracking::{pass_through_weight, sample_t_maj};
+use crate::world::{surface_epsilon, walk_shadow_ray, Scene};
+
+use super::channels::Channels;
+use super::equiangular_nee::{light_weight_against_equiangular, point_light_count, Segment};
+use super::guiding::Guiding;
+
+/// The scattering function at a vertex, for next-event estimation.
+#[derive(Clone, Copy)]
+pub(super) enum Scatter<'a> {
+    Phase(&'a PhaseFunction),
+    /// Opaque surface with its normal facing `wo`.
+    Surface(&'a Bsdf, Vec3),
+}
+
+impl Scatter<'_> {
+    /// `f * |cos|` (surfaces) or `p` (media), and the sampling pdf of `wi`.
+    #[inline]
+    pub(super) fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        match *self {
+            Scatter::Phase(phase) => {
+                let p = phase.eval(wo, wi);
+                (Rgb::splat(p), phase.pdf(wo, wi))
+            }
+            Scatter::Surface(bsdf, n) => {
+                let cos = wi.dot(n);
+                if cos <= 0.0 {
+                    return (Rgb::ZERO, 0.0);
+                }
+                (bsdf.eval(n, wo, wi) * cos, bsdf.pdf(n, wo, wi))
+            }
+        }
+    }
+}
+
+/// How next-event estimation picks lights: every light, each with one
+/// sample, when there are few (no variance from the choice, which dominated
+/// scenes with a bright spot light and a dim sky); else one chosen uniformly.
+/// Only lights [`sampled_by_nee`] take part.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LightChoice {
+    /// Number of lights next-event estimation samples.
+    pub(super) n: usize,
+    /// Number of point and spot lights (equiangular sampling's lights).
+    pub(super) points: usize,
+}
+
+/// Up to this many lights, next-event estimation samples each of them.
+const SAMPLE_ALL_LIGHTS_UP_TO: usize = 4;
+
+impl LightChoice {
+    pub(super) fn new(scene: &Scene) -> LightChoice {
+        LightChoice { n: scene.lights.iter().filter(|l| sampled_by_nee(l)).count(), points: point_light_count(scene) }
+    }
+
+    /// Whether every light is sampled at each vertex.
+    #[inline]
+    pub(super) fn all(self) -> bool {
+        self.n <= SAMPLE_ALL_LIGHTS_UP_TO
+    }
+
+    /// Probability that next-event estimation samples a given light.
+    #[inline]
+    pub(super) fn pmf(self) -> f32 {
+        if self.all() {
+            1.0
+        } else {
+            1.0 / self.n as f32
+        }
+    }
+
+    /// Probability that next-event estimation samples `light` (0 for lights
+    /// it leaves to phase/BSDF sampling).
+    #[inline]
+    pub(super) fn pmf_of(self, light: &Light) -> f32 {
+        if sampled_by_nee(light) {
+            self.pmf()
+        } else {
+            0.0
+        }
+    }
+
+    /// Probability that equiangular sampling on a segment targets a given point light.
+    #[inline]
+    pub(super) fn point_pmf(self) -> f32 {
+        if self.all() {
+            1.0
+        } else {
+            1.0 / self.points as f32
+        }
+    }
+}
+
+/// Whether next-event estimation samples `light`. A uniform environment
+/// (`constant`) is not: its radiance is the same in every direction, so
+/// phase or BSDF sampling already draws directions in proportion to the
+/// integrand wherever the sky is visible, and light sampling (uniform or
+/// cosine-weighted directions, blind to visibility as well) could only match
+/// it worse while paying a shadow ray. pbrt-v4 skips it the same way
+/// (`allowIncompletePDF`); ARCHITECTURE.md gives the measured gain.
+pub(super) fn sampled_by_nee(light: &Light) -> bool {
+    !matches!(light, Light::Constant(_))
+}
+
+/// A scattering vertex at which next-event estimation samples the lights.
+#[derive(Clone, Copy)]
+pub(super) struct NeeVertex<'a> {
+    /// Position (world).
+    pub(super) p: Vec3,
+    /// Unit direction back along the path.
+    pub(super) wo: Vec3,
+    /// Phase function or surface there.
+    pub(super) scatter: Scatter<'a>,
+    /// Medium the vertex lies in (the side of `wo` for surfaces).
+    pub(super) medium: Option<MediumId>,
+    /// Path throughput over the hero channel's pdf, up to the vertex.
+    pub(super) beta: Rgb,
+    /// Unidirectional path pdfs per channel over the hero's, up to the vertex.
+    pub(super) r_p: Rgb,
+    /// The medium segment of a free-flight vertex (for the MIS against
+    /// equiangular sampling); `None` at surfaces.
+    pub(super) segment: Option<Segment<'a>>,
+    /// Guiding, when the vertex's own direction sampling mixes it in.
+    pub(super) guiding: Option<Guiding<'a>>,
+}
+
+/// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
+/// uniformly ([`LightChoice`]), one direction toward each, ratio tracking
+/// along the shadow ray through every medium and index-matched boundary,
+/// weighted against phase/BSDF sampling.
+pub(super) fn sample_ld(
+    scene: &Scene,
+    vertex: &NeeVertex,
+    group: Channels,
+    hero: usize,
+    lights: LightChoice,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let n_lights = lights.n;
+    if n_lights == 0 {
+        return Rgb::ZERO;
+    }
+    let mut sampled = scene.lights.iter().enumerate().filter(|(_, light)| sampled_by_nee(light)).map(|(i, _)| i);
+    if lights.all() {
+        let mut l = Rgb::ZERO;
+        for index in sampled {
+            l += sample_ld_light(scene, vertex, group, hero, lights, index, sampler);
+        }
+        return l;
+    }
+    let u_light = sampler.next_1d();
+    let k = ((u_light * n_lights as f32) as usize).min(n_lights - 1);
+    let Some(index) = sampled.nth(k) else {
+        return Rgb::ZERO;
+    };
+    sample_ld_light(scene, vertex, group, hero, lights, index, sampler)
+}
+
+/// [`sample_ld`] for light `light_index`, chosen with probability `lights.pmf()`.
+fn sample_ld_light(
+    scene: &Scene,
+    vertex: &NeeVertex,
+    group: Channels,
+    hero: usize,
+    lights: LightChoice,
+    light_index: usize,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment, guiding } = *vertex;
+    let u_dir = sampler.next_2d();
+    let light: &Light = &scene.lights[light_index];
+    let pmf = lights.pmf();
+    let normal = match scatter {
+        Scatter::Surface(_, n) => Some(n),
+        Scatter::Phase(_) => None,
+    };
+    let Some(ls) = light.sample_li(p, normal, u_dir) else {
+        return Rgb::ZERO;
+    };
+    if ls.li.is_black() || !(ls.pdf > 0.0) {
+        return Rgb::ZERO;
+    }
+    let (f_hat, scatter_pdf) = scatter.eval(wo, ls.wi);
+    if f_hat.is_black() {
+        return Rgb::ZERO;
+    }
+    let origin = match normal {
+        Some(n) => p + n * surface_epsilon(p),
+        None => p,
+    };
+    let Some((t_ray, mut r_l, mut r_u)) = shadow_transmittance(
+        scene,
+        origin,
+        medium,
+        ls.wi,
+        ls.distance,
+        scene.light_object(light_index),
+        group,
+        hero,
+        sampler,
+    ) else {
+        return Rgb::ZERO;
+    };
+    let light_pdf = pmf * ls.pdf;
+    r_l *= r_p * light_pdf;
+    if ls.is_delta {
+        // A point or spot light seen from a free-flight vertex: the same path can
+        // come from equiangular sampling on the segment (`equiangular_ld`).
+        let weight =
+            segment.map_or(1.0, |seg| light_weight_against_equiangular(seg, light, lights, group).unwrap_or(1.0));
+        beta * f_hat * t_ray * ls.li * weight / group.average(r_l)
+    } else {
+        // The density with which this vertex's own direction sampling draws
+        // `wi` (only a light that is not a delta can be reached that way).
+        let scatter_pdf = guiding.map_or(scatter_pdf, |g| g.mix(p, ls.wi, scatter_pdf));
+        r_u *= r_p * scatter_pdf;
+        beta * f_hat * t_ray * ls.li / group.average(r_l + r_u)
+    }
+}
+
+/// Ratio tracking along a shadow ray with the null-scattering MIS weights of
+/// pbrt-v4: returns `(T_ray, r_l, r_u)` or `None` when the ray is blocked by
+/// an opaque surface or its estimate was terminated.
+#[allow(clippy::too_many_arguments)]
+fn shadow_transmittance(
+    scene: &Scene,
+    p: Vec3,
+    medium: Option<MediumId>,
+    wi: Vec3,
+    distance: f32,
+    ignore: Option<u32>,
+    group: Channels,
+    hero: usize,
+    sampler: &mut PixelSampler,
+) -> Option<(Rgb, Rgb, Rgb)> {
+    let mut t_ray = Rgb::ONE;
+    let mut r_l = Rgb::ONE;
+    let mut r_u = Rgb::ONE;
+    let reached = walk_shadow_ray(scene, p, medium, wi, distance, ignore, |s| {
+        if s.blocked {
+            return ControlFlow::Break(());
+        }
+        if let Some(id) = s.medium {
+            let m = scene.medium(id);
+            if let Some(homogeneous) = m.as_homogeneous() {
+                // Exact transmittance: the light-sampling path pdf is unchanged,
+                // the unidirectional one (free flight passing) gains T per channel.
+                let tr = (homogeneous.sigma_t() * s.t_end).map(|x| if x.is_nan() { 0.0 } else { x }).exp_neg();
+                t_ray *= tr;
+                r_u *= tr;
+            } else {
+                let t_maj = sample_t_maj(m, s.ray, s.t_end, hero, sampler, |c, sampler| {
+                    let w = c.ratio_tracking_weights(hero);
+                    t_ray *= w.throughput;
+                    r_l *= w.majorant;
+                    r_u *= w.throughput;
+                    // Russian roulette on the MIS-normalized transmittance (pbrt-v4).
+                    let tr = t_ray * group.indicator() / group.average(r_l + r_u);
+                    if tr.max_channel() < 0.05 {
+                        if sampler.next_1d() < 0.75 {
+                            t_ray = Rgb::ZERO;
+                        } else {
+                            t_ray /= 0.25;
+                        }
+                    }
+                    !t_ray.is_black()
+                });
+                match pass_through_weight(t_maj, hero) {
+                    Some(w) => {
+                        t_ray *= w;
+                        r_l *= w;
+                        r_u *= w;
+                    }
+                    // The hero channel cannot pass but others can: the hero-based pdfs are 0.
+                    None if !t_maj.is_black() => return ControlFlow::Break(()),
+                    None => {}
+                }
+            }
+        }
+        if t_ray.is_black() || !t_ray.is_finite() {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    reached.then_some((t_ray, r_l, r_u))
+}

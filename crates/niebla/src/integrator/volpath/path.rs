@@ -1,0 +1,257 @@
+//! `volpath`'s path loop: free flight with real, null and absorption
+//! events, medium emission, surfaces, index-matched boundaries, escape to
+//! the environment and Russian roulette.
+
+use crate::color::Rgb;
+use crate::math::Ray;
+use crate::math::Vec3;
+use crate::medium::MediumId;
+use crate::sampling::PixelSampler;
+use crate::tracking::{pass_through_weight, sample_t_maj, CollisionEvent};
+use crate::world::{PathRay, Scene};
+
+use super::channels::Channels;
+use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment};
+use super::guiding::{sample_bsdf, sample_phase};
+use super::nee::{sample_ld, NeeVertex, Scatter};
+use super::{LightSampling, VolPathIntegrator};
+
+/// How the previous vertex scattered: what light sampling there would have done.
+#[derive(Clone, Copy, Debug)]
+struct PreviousVertex {
+    p: Vec3,
+    /// Surface normal (facing the outgoing direction) for surface vertices.
+    normal: Option<Vec3>,
+}
+
+impl VolPathIntegrator {
+    /// One path for the channels of `group` (the other channels of the
+    /// result are 0), with the hero channel and spectral MIS over that group.
+    pub(super) fn trace(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        medium: Option<MediumId>,
+        group: Channels,
+        light_sampling: LightSampling,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let LightSampling { lights, guiding } = light_sampling;
+        // The hero channel cycles over the pixel's samples (stratified), so the
+        // discrete choice adds no variance over each group of samples.
+        let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
+        let mut l = Rgb::ZERO;
+        let mut beta = group.indicator();
+        let mut r_u = Rgb::ONE;
+        let mut r_l = Rgb::ONE;
+        let mut depth = 0u32;
+        let mut specular_bounce = false;
+        // Product of etap^2 over refractions: radiance scaling that Russian
+        // roulette must not mistake for lost energy (pbrt-v4's etaScale).
+        let mut eta_scale = 1.0f32;
+        let mut previous = PreviousVertex { p: ray.o, normal: None };
+        let mut path = PathRay::new(ray, medium, 0.0);
+
+        loop {
+            let (ray, medium) = (path.ray, path.medium);
+            let hit = path.intersect(scene);
+            let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
+
+            // Free flight through the medium up to the surface.
+            if let Some(id) = medium {
+                let m = scene.medium(id);
+                // Equiangular sampling toward point and spot lights along this
+                // segment, MIS-weighted against the free-flight vertices' NEE.
+                if depth < self.max_depth {
+                    let segment =
+                        EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput: beta / group.average(r_u) };
+                    l += equiangular_ld(scene, &segment, group, lights, sampler);
+                }
+                let mut scattered: Option<(Vec3, Vec3)> = None;
+                let mut terminated = false;
+                let wo = -ray.d;
+                let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
+                    // Medium emission, a collision estimator at every tentative collision.
+                    if depth < self.max_depth && !c.point.l_ve.is_black() {
+                        let pdf = c.sigma_maj[hero] * c.t_maj[hero];
+                        let beta_e = beta * c.t_maj / pdf;
+                        let r_e = r_u * c.sigma_maj * c.t_maj / pdf;
+                        if group.average(r_e) > 0.0 {
+                            l += beta_e * c.point.l_ve / group.average(r_e);
+                        }
+                    }
+                    let event = c.event(hero, sampler.next_1d());
+                    if event == CollisionEvent::Absorb {
+                        // Absorption: the path ends.
+                        terminated = true;
+                        return false;
+                    }
+                    if event == CollisionEvent::Scatter {
+                        // Real scattering.
+                        if depth >= self.max_depth {
+                            terminated = true;
+                            return false;
+                        }
+                        depth += 1;
+                        let w = c.scatter_weight(hero);
+                        beta *= w;
+                        r_u *= w;
+                        if beta.is_black() || !(group.average(r_u) > 0.0) {
+                            terminated = true;
+                            return false;
+                        }
+                        let phase = m.phase();
+                        let segment = Segment { ray: &ray, t_end, t: c.t, medium: m };
+                        let vertex = NeeVertex {
+                            p: c.p,
+                            wo,
+                            scatter: Scatter::Phase(phase),
+                            medium: Some(id),
+                            beta,
+                            r_p: r_u,
+                            segment: Some(segment),
+                            guiding,
+                        };
+                        l += sample_ld(scene, &vertex, group, hero, lights, sampler);
+                        let Some(ps) = sample_phase(phase, c.p, wo, guiding, sampler) else {
+                            terminated = true;
+                            return false;
+                        };
+                        beta *= ps.value / ps.pdf;
+                        r_l = r_u / ps.pdf;
+                        previous = PreviousVertex { p: c.p, normal: None };
+                        specular_bounce = false;
+                        scattered = Some((c.p, ps.wi));
+                        return false;
+                    }
+                    // Null collision: continue with the null-scattering weights.
+                    let Some(w) = c.null_weights(hero) else {
+                        beta = Rgb::ZERO;
+                        return false;
+                    };
+                    beta *= w.throughput;
+                    r_u *= w.throughput;
+                    r_l *= w.majorant;
+                    !beta.is_black() && group.average(r_u) > 0.0
+                });
+                if terminated || beta.is_black() || !(group.average(r_u) > 0.0) || !beta.is_finite() {
+                    return l;
+                }
+                if let Some((p, wi)) = scattered {
+                    path.scatter_in_medium(p, wi);
+                    continue;
+                }
+                // Passed through: the hero channel's majorant transmittance was the
+                // free-flight probability of reaching the surface.
+                let Some(w) = pass_through_weight(t_maj, hero) else {
+                    return l;
+                };
+                beta *= w;
+                r_u *= w;
+                let h = t_maj[hero];
+                // Light sampling crosses homogeneous segments with exact
+                // transmittance (no sampling pdf), so there its path pdf gains
+                // no transmittance factor; elsewhere ratio tracking's does.
+                if m.as_homogeneous().is_some() {
+                    r_l /= h;
+                } else {
+                    r_l *= w;
+                }
+            }
+
+            // Escaped: environment lights, MIS against light sampling.
+            let Some(hit) = hit else {
+                for light in scene.lights.iter().filter(|l| l.is_infinite()) {
+                    let le = light.le_escaped(ray.d);
+                    if le.is_black() {
+                        continue;
+                    }
+                    if depth == 0 || specular_bounce {
+                        l += beta * le / group.average(r_u);
+                    } else {
+                        let pmf = lights.pmf_of(light);
+                        let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        l += beta * le / group.average(r_u + r_l_env);
+                    }
+                }
+                return l;
+            };
+
+            // Index-matched boundary: cross it without counting a bounce.
+            let object = scene.object(&hit);
+            if object.bsdf.is_null() {
+                if !path.cross(scene, &hit) {
+                    return l;
+                }
+                continue;
+            }
+
+            // An area light: emitted radiance, MIS-weighted against light
+            // sampling from the previous vertex; its black surface ends the path.
+            if let Some((le, index)) = scene.emitted_radiance(&hit, -ray.d) {
+                if !le.is_black() {
+                    if depth == 0 || specular_bounce {
+                        l += beta * le / group.average(r_u);
+                    } else {
+                        let light = &scene.lights[index as usize];
+                        let pmf = lights.pmf_of(light);
+                        let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        l += beta * le / group.average(r_u + r_l_hit);
+                    }
+                }
+                return l;
+            }
+
+            // Opaque surface: next-event estimation, then BSDF sampling.
+            if depth >= self.max_depth {
+                return l;
+            }
+            depth += 1;
+            let wo = -ray.d;
+            let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
+            let p = hit.surface.p;
+            // Guiding toward lights inside a medium, for non-specular surfaces
+            // whose side of `wo` lies in a medium.
+            let surface_guiding = guiding.filter(|_| medium.is_some() && !object.bsdf.is_specular());
+            if !object.bsdf.is_specular() {
+                let vertex = NeeVertex {
+                    p,
+                    wo,
+                    scatter: Scatter::Surface(&object.bsdf, n),
+                    medium,
+                    beta,
+                    r_p: r_u,
+                    segment: None,
+                    guiding: surface_guiding,
+                };
+                l += sample_ld(scene, &vertex, group, hero, lights, sampler);
+            }
+            let Some(bs) = sample_bsdf(&object.bsdf, hit.surface.n, p, wo, surface_guiding, sampler) else {
+                return l;
+            };
+            if !(bs.pdf > 0.0) {
+                return l;
+            }
+            beta *= bs.weight(hit.surface.n);
+            r_l = r_u / bs.pdf;
+            specular_bounce = bs.is_specular;
+            if bs.is_transmission {
+                eta_scale *= bs.eta * bs.eta;
+            }
+            let side = if hit.surface.n.dot(bs.wi) < 0.0 { -hit.surface.n } else { hit.surface.n };
+            previous = PreviousVertex { p, normal: Some(side) };
+            path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
+
+            // Russian roulette on the MIS-normalized throughput.
+            let rr_beta = beta * eta_scale / group.average(r_u);
+            let u = sampler.next_1d();
+            if rr_beta.max_channel() < 1.0 && depth > 1 {
+                let q = (1.0 - rr_beta.max_channel()).max(0.0);
+                if u < q {
+                    return l;
+                }
+                beta /= 1.0 - q;
+            }
+        }
+    }
+}

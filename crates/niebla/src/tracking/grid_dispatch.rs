@@ -1,0 +1,43 @@
+//! The one place where a grid medium's density storage (dense or sparse) is
+//! matched: [`with_grid_along_ray`] builds the concrete [`GridAlongRay`] view
+//! of a ray and hands it to a [`GridRayVisitor`], whose generic method is
+//! monomorphized per storage type. Trackers, free-flight sampling and
+//! majorant profiles are written once against [`DensityAlongRay`] and reach
+//! the grid through here, so their inner loops carry no type branch.
+
+use crate::math::Vec3;
+use crate::medium::{DensityGrid, GridMedium};
+
+use super::along_ray::{GridAlongRay, GridLookup};
+
+/// Work done on a grid seen along a ray, generic over the voxel storage.
+pub trait GridRayVisitor {
+    /// What the work returns.
+    type Output;
+    /// Run on the concrete view `r` of the grid along the ray.
+    fn visit<G: GridLookup>(self, r: &GridAlongRay<'_, G>) -> Self::Output;
+}
+
+/// Run `visitor` on the grid of `g` along the grid-space ray `o + t d`
+/// (`t` the world ray's parameter, see [`GridMedium::ray_to_grid`]) over the
+/// parameter range `[t0, t1]` (already clipped to the grid box). Per-cell
+/// minima are passed along when `with_minorant` is set and the medium has them.
+#[inline]
+pub fn with_grid_along_ray<V: GridRayVisitor>(
+    g: &GridMedium,
+    (o, d): (Vec3, Vec3),
+    (t0, t1): (f32, f32),
+    with_minorant: bool,
+    visitor: V,
+) -> V::Output {
+    let majorant = &g.majorant;
+    let minorant = if with_minorant { g.minorant.as_ref() } else { None };
+    match &g.density {
+        DensityGrid::Dense(grid) => {
+            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1 })
+        }
+        DensityGrid::Sparse(grid) => {
+            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1 })
+        }
+    }
+}

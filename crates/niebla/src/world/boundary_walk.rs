@@ -1,0 +1,238 @@
+//! Walking a ray across index-matched boundaries (shapes with a `null`
+//! BSDF, which only separate media): the one implementation used by paths
+//! (`volpath`, photon tracing, the camera-ray walk) and by shadow rays
+//! ([`Scene::transmittance`] and `volpath`'s next-event estimation).
+//!
+//! A crossing continues from the hit point itself, so no path length is lost,
+//! and ignores hits closer than [`surface_epsilon`] of it; the medium after it
+//! is [`Scene::medium_after_crossing`].
+
+use std::ops::ControlFlow;
+
+use crate::math::{Ray, Vec3};
+use crate::medium::MediumId;
+
+use super::{surface_epsilon, Hit, Scene, MAX_BOUNDARY_CROSSINGS};
+
+/// Largest number of index-matched boundaries one path (all its segments
+/// together) crosses before it is ended: paths bounce, so they get more
+/// room than a single shadow ray's [`MAX_BOUNDARY_CROSSINGS`].
+pub const MAX_PATH_BOUNDARY_CROSSINGS: u32 = MAX_BOUNDARY_CROSSINGS * 16;
+
+/// Where a path is: its current ray, the medium around the ray's origin,
+/// the smallest accepted hit parameter and the boundaries crossed so far.
+#[derive(Clone, Copy, Debug)]
+pub struct PathRay {
+    /// The ray the path travels along.
+    pub ray: Ray,
+    /// The medium the ray starts in (`None`: vacuum).
+    pub medium: Option<MediumId>,
+    /// Smallest ray parameter of the next hit (`surface_epsilon` after a surface).
+    pub t_min: f32,
+    /// Index-matched boundaries crossed so far.
+    pub crossings: u32,
+}
+
+impl PathRay {
+    /// A path starting along `ray` in `medium`, accepting hits beyond `t_min`.
+    #[inline]
+    pub fn new(ray: Ray, medium: Option<MediumId>, t_min: f32) -> PathRay {
+        PathRay { ray, medium, t_min, crossings: 0 }
+    }
+
+    /// The nearest surface hit ahead.
+    #[inline]
+    pub fn intersect(&self, scene: &Scene) -> Option<Hit> {
+        scene.intersect(&self.ray, self.t_min, f32::INFINITY)
+    }
+
+    /// Cross the index-matched boundary `hit` straight on; `false` (and no
+    /// change) once the path has crossed [`MAX_PATH_BOUNDARY_CROSSINGS`].
+    #[inline]
+    pub fn cross(&mut self, scene: &Scene, hit: &Hit) -> bool {
+        self.crossings += 1;
+        if self.crossings > MAX_PATH_BOUNDARY_CROSSINGS {
+            return false;
+        }
+        self.medium = scene.medium_after_crossing(hit, self.ray.d, self.medium);
+        self.ray = Ray::new(hit.surface.p, self.ray.d);
+        self.t_min = surface_epsilon(hit.surface.p);
+        true
+    }
+
+    /// Leave surface `hit` toward unit `wi` (a sampled reflection or, when
+    /// `transmitted`, a refraction into the medium on `wi`'s side).
+    #[inline]
+    pub fn leave_surface(&mut self, scene: &Scene, hit: &Hit, wi: Vec3, transmitted: bool) {
+        if transmitted {
+            self.medium = scene.medium_after_crossing(hit, wi, self.medium);
+        }
+        self.ray = Ray::new(hit.surface.p, wi);
+        self.t_min = surface_epsilon(hit.surface.p);
+    }
+
+    /// Go on from a scattering point `p` inside the current medium toward unit `wi`.
+    #[inline]
+    pub fn scatter_in_medium(&mut self, p: Vec3, wi: Vec3) {
+        self.ray = Ray::new(p, wi);
+        self.t_min = 0.0;
+    }
+}
+
+/// One piece of a shadow ray between two surfaces, handed to the visitor of
+/// [`walk_shadow_ray`].
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowSegment<'a> {
+    /// The medium the piece lies in.
+    pub medium: Option<MediumId>,
+    /// The ray of the piece; the piece is `[0, t_end)` of it.
+    pub ray: &'a Ray,
+    /// End of the piece (ray parameter).
+    pub t_end: f32,
+    /// Whether the piece ends at an opaque surface that blocks the shadow ray
+    /// (the walk stops after this piece and reports the ray blocked).
+    pub blocked: bool,
+}
+
+/// Walk the shadow ray from `p` (inside `medium`) along unit `wi` over
+/// `distance` (may be infinite), crossing index-matched boundaries, and hand
+/// each piece to `visit` in order. An opaque surface blocks the ray unless it
+/// is object `ignore` (the sampled light's own surface, where the ray ends).
+/// Returns `true` when the ray reached its end, `false` when it was blocked,
+/// `visit` stopped it or it crossed more than [`MAX_BOUNDARY_CROSSINGS`]
+/// boundaries.
+#[inline]
+pub fn walk_shadow_ray<F>(
+    scene: &Scene,
+    p: Vec3,
+    mut medium: Option<MediumId>,
+    wi: Vec3,
+    distance: f32,
+    ignore: Option<u32>,
+    mut visit: F,
+) -> bool
+where
+    F: FnMut(ShadowSegment) -> ControlFlow<()>,
+{
+    let mut ray = Ray::new(p, wi);
+    let mut remaining = distance;
+    let mut t_min = 0.0;
+    for _ in 0..MAX_BOUNDARY_CROSSINGS {
+        let hit = scene.intersect(&ray, t_min, remaining);
+        let t_end = hit.map_or(remaining, |h| h.surface.t);
+        // An opaque surface: the light's own (the ray ends there) or a blocker.
+        let opaque = hit.filter(|h| !scene.object(h).bsdf.is_null());
+        let blocked = opaque.is_some_and(|h| Some(h.object) != ignore);
+        if visit(ShadowSegment { medium, ray: &ray, t_end, blocked }).is_break() || blocked {
+            return false;
+        }
+        let Some(hit) = hit.filter(|_| opaque.is_none()) else {
+            return true;
+        };
+        medium = scene.medium_after_crossing(&hit, wi, medium);
+        remaining -= hit.surface.t;
+        ray = Ray::new(hit.surface.p, wi);
+        t_min = surface_epsilon(hit.surface.p);
+        if remaining <= t_min {
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::PixelSampler;
+    use crate::scene::{build_scene, parse_scene_str};
+    use crate::tracking::TransmittanceMethod;
+
+    /// Two nested index-matched boxes along +x from the origin (`inner` to
+    /// x = 1, `outer` to x = 2, vacuum beyond), a grey diffuse wall at x = 3.
+    fn nested_boxes() -> Scene {
+        let json = r#"{
+          "version": 1,
+          "camera": {"type": "perspective", "position": [0, 0, 10], "target": [0, 0, 0], "fov_y": 40,
+                     "width": 4, "height": 4},
+          "media": {
+            "inner": {"type": "homogeneous", "sigma_a": 0.5, "sigma_s": 0.0},
+            "outer": {"type": "homogeneous", "sigma_a": 0.25, "sigma_s": 0.0}
+          },
+          "shapes": [
+            {"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "interior": "inner", "bsdf": {"type": "null"}},
+            {"type": "box", "min": [-2, -2, -2], "max": [2, 2, 2], "interior": "outer", "bsdf": {"type": "null"}},
+            {"type": "rectangle", "to_world": {"rotate_y": -90, "translate": [3, 0, 0]},
+             "bsdf": {"type": "diffuse", "reflectance": 0.5}}
+          ]
+        }"#;
+        let desc = parse_scene_str(json, "<test>").unwrap();
+        build_scene(&desc, "<test>", std::path::Path::new(".")).unwrap().scene
+    }
+
+    #[test]
+    fn shadow_walk_visits_each_medium_piece_and_stops_at_blockers() {
+        let scene = nested_boxes();
+        let start = scene.medium_at(Vec3::ZERO);
+        assert!(start.is_some());
+        let mut pieces = Vec::new();
+        let reached = walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 2.5, None, |s| {
+            pieces.push((s.medium, s.ray.o.x, s.t_end, s.blocked));
+            ControlFlow::Continue(())
+        });
+        // Two boundaries crossed, three pieces: [0, 1] inner, [1, 2] outer, [2, 2.5] vacuum.
+        assert!(reached);
+        assert_eq!(pieces.len(), 3);
+        let (inner, outer) = (pieces[0].0, pieces[1].0);
+        assert!(inner.is_some() && outer.is_some() && inner != outer);
+        assert_eq!(pieces[2].0, None);
+        for (k, &(o, t_end)) in [(0.0, 1.0), (1.0, 1.0), (2.0, 0.5)].iter().enumerate() {
+            // Origins are hit points: box faces are exact in f32; a tolerance for the ray-box slab test.
+            assert!((pieces[k].1 - o).abs() < 1e-5 && (pieces[k].2 - t_end).abs() < 1e-5, "{pieces:?}");
+        }
+        assert!(pieces.iter().all(|p| !p.3));
+
+        // Past the wall at x = 3: blocked, the last piece flagged, unless the
+        // wall is the ignored object (the light's own surface).
+        let mut last = None;
+        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, None, |s| {
+            last = Some(s.blocked);
+            ControlFlow::Continue(())
+        }));
+        assert_eq!(last, Some(true));
+        assert!(walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, Some(2), |_| ControlFlow::Continue(())));
+
+        // Scene::transmittance over the walk: exp(-(0.5 * 1 + 0.25 * 1)).
+        let mut s = PixelSampler::from_key(1);
+        let tr = scene.transmittance(Vec3::ZERO, start, Vec3::X, 2.5, TransmittanceMethod::Analytic, &mut s);
+        assert!((tr[0] - (-0.75f32).exp()).abs() < 1e-5, "{tr:?}");
+    }
+
+    #[test]
+    fn path_ray_counts_crossings_and_tracks_the_medium() {
+        let scene = nested_boxes();
+        let start = scene.medium_at(Vec3::ZERO);
+        let mut path = PathRay::new(Ray::new(Vec3::ZERO, Vec3::X), start, 0.0);
+        let mut media = vec![path.medium];
+        let wall = loop {
+            let hit = path.intersect(&scene).unwrap();
+            if !scene.object(&hit).bsdf.is_null() {
+                break hit;
+            }
+            assert!(path.cross(&scene, &hit));
+            media.push(path.medium);
+        };
+        assert_eq!(path.crossings, 2);
+        assert_eq!(media.len(), 3);
+        assert_eq!(media[2], None);
+        assert!((wall.surface.p.x - 3.0).abs() < 1e-5);
+        // Leaving the wall by reflection keeps the medium and starts past epsilon.
+        path.leave_surface(&scene, &wall, -Vec3::X, false);
+        assert_eq!(path.medium, None);
+        assert_eq!(path.t_min, surface_epsilon(wall.surface.p));
+        // The limit: a path that has used up its crossings is refused one more.
+        let hit = path.intersect(&scene).unwrap();
+        path.crossings = MAX_PATH_BOUNDARY_CROSSINGS;
+        assert!(!path.cross(&scene, &hit));
+        assert_eq!(path.medium, None);
+    }
+}
