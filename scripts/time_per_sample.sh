@@ -12,7 +12,7 @@ runs=${4:-3}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 best() {
-  local bin=$1 scene=$2 t best=
+  local bin=$1 scene=$2 t best=""
   for _ in $(seq "$runs"); do
     t=$("$bin" render "$scene" --spp "$spp" --quiet -o "$out/x.exr" | sed -n 's/.* in \([0-9.]*\) s .*/\1/p')
     if [ -z "$best" ] || awk "BEGIN{exit !($t < $best)}"; then best=$t; fi
