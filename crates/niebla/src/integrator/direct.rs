@@ -103,3 +103,7 @@ pub fn light_in_scattered_radiance(
     let tr = scene.transmittance_ignoring(p, medium, ls.wi, ls.distance, ignore, method, sampler);
     ls.li * tr * (f / ls.pdf)
 }
+
+#[cfg(test)]
+#[path = "direct_tests.rs"]
+mod tests;
