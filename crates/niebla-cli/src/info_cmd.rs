@@ -72,10 +72,19 @@ pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
     println!("shapes ({}):", s.objects.len());
     for (i, o) in s.objects.iter().enumerate() {
         let (lo, hi) = o.shape.bounds();
-        let kind = match o.shape {
-            niebla::geometry::Shape::Sphere(_) => "sphere",
-            niebla::geometry::Shape::Box(_) => "box",
-            niebla::geometry::Shape::Rectangle(_) => "rectangle",
+        let kind = match &o.shape {
+            niebla::geometry::Shape::Sphere(_) => "sphere".to_string(),
+            niebla::geometry::Shape::Box(_) => "box".to_string(),
+            niebla::geometry::Shape::Rectangle(_) => "rectangle".to_string(),
+            niebla::geometry::Shape::Mesh(m) => format!(
+                "mesh ({} triangles, {} vertices{}, {} degenerate triangles skipped, {}, {})",
+                m.mesh.triangle_count(),
+                m.mesh.positions.len(),
+                if m.mesh.normals.is_some() { " with normals" } else { "" },
+                m.mesh.degenerate,
+                if m.closed { "closed" } else { "open" },
+                niebla::limits::format_bytes(m.mesh.memory_bytes() as u64)
+            ),
         };
         let media = if o.bounds_medium {
             format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))

@@ -60,7 +60,8 @@ impl AxisAlignedBox {
     #[inline]
     pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
         let p = ray.at(t);
-        SurfaceHit { t, p, n: self.face_normal(p) }
+        let n = self.face_normal(p);
+        SurfaceHit { t, p, n, ns: n }
     }
 
     /// Outward normal of the face nearest to `p`.

@@ -2,14 +2,21 @@
 //!
 //! Shapes are a closed set (`Shape` enum) so intersection is a `match`, not a
 //! virtual call. Normals returned by intersections are geometric and point
-//! outward (for the rectangle: along its local +z).
+//! outward (for the rectangle: along its local +z; for a mesh: by the
+//! right-hand rule of its counter-clockwise winding). Meshes carry their own
+//! hierarchy ([`bvh`]) and are intersected watertight ([`triangle`]).
 
 mod aabb_box;
+pub mod bvh;
+pub mod mesh;
 mod rectangle;
 mod sphere;
 mod transform;
+pub mod triangle;
 
 pub use aabb_box::AxisAlignedBox;
+pub use bvh::Bvh;
+pub use mesh::{MeshDataError, MeshInstance, TriangleMesh};
 pub use rectangle::Rectangle;
 pub use sphere::Sphere;
 pub use transform::Transform;
@@ -25,6 +32,58 @@ pub struct SurfaceHit {
     pub p: Vec3,
     /// Unit outward geometric normal.
     pub n: Vec3,
+    /// Unit shading normal: interpolated vertex normals of a smooth mesh,
+    /// on the geometric normal's side; `n` itself for every other shape.
+    pub ns: Vec3,
+}
+
+impl SurfaceHit {
+    /// The normal a BSDF at this hit is evaluated about, seen from unit
+    /// `wo` (pointing away from the surface): the shading normal, unless
+    /// `wo` lies on its other side than on the geometric normal's, where a
+    /// smooth normal would shade a face seen from behind and the geometric
+    /// normal is used instead.
+    #[inline]
+    pub fn shading_normal(&self, wo: Vec3) -> Vec3 {
+        if (wo.dot(self.ns) > 0.0) == (wo.dot(self.n) > 0.0) {
+            self.ns
+        } else {
+            self.n
+        }
+    }
+
+    /// Whether unit direction `w` lies on the same side of the shading
+    /// normal `ns_used` as of the geometric normal: a direction for which
+    /// they disagree is refused by the BSDF, so that smooth shading never
+    /// lets light pass through a surface that geometry says is closed
+    /// (light leaks; the remedy of Veach 1997, section 5.3, and Mitsuba 3).
+    #[inline]
+    pub fn sides_agree(&self, ns_used: Vec3, w: Vec3) -> bool {
+        (w.dot(ns_used) > 0.0) == (w.dot(self.n) > 0.0)
+    }
+}
+
+/// The nearest hit of a ray on one shape, before its hit record is made:
+/// the ray parameter, and for meshes the triangle and its barycentric
+/// weights of the second and third vertex (zero for other shapes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimitiveHit {
+    /// Ray parameter.
+    pub t: f32,
+    /// Triangle index (meshes) or 0.
+    pub prim: u32,
+    /// Barycentric weight of the triangle's second vertex.
+    pub b1: f32,
+    /// Barycentric weight of the triangle's third vertex.
+    pub b2: f32,
+}
+
+impl PrimitiveHit {
+    /// A hit at `t` on a shape without primitives.
+    #[inline]
+    pub fn at(t: f32) -> PrimitiveHit {
+        PrimitiveHit { t, prim: 0, b1: 0.0, b2: 0.0 }
+    }
 }
 
 /// A closed set of shapes (world space).
@@ -36,6 +95,8 @@ pub enum Shape {
     Box(AxisAlignedBox),
     /// A parallelogram (transformed unit square).
     Rectangle(Rectangle),
+    /// A triangle mesh placed by a transform.
+    Mesh(MeshInstance),
 }
 
 impl Shape {
@@ -46,35 +107,52 @@ impl Shape {
             Shape::Sphere(s) => s.intersect(ray, t_min, t_max),
             Shape::Box(b) => b.intersect(ray, t_min, t_max),
             Shape::Rectangle(r) => r.intersect(ray, t_min, t_max),
+            Shape::Mesh(m) => m.hit(ray, t_min, t_max).map(|h| m.surface_at(ray, &h)),
         }
     }
 
-    /// Parameter of the nearest intersection with `t` in `(t_min, t_max)`,
-    /// without the hit record (see [`Shape::surface_at`]); `inv` is the
-    /// reciprocal of the ray's direction.
+    /// The nearest intersection with `t` in `(t_min, t_max)`, without the
+    /// hit record (see [`Shape::surface_at`]); `inv` is the reciprocal of
+    /// the ray's direction.
     #[inline]
-    pub fn hit_t(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+    pub fn hit_t(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> Option<PrimitiveHit> {
         match self {
-            Shape::Sphere(s) => s.hit_t(ray, t_min, t_max),
-            Shape::Box(b) => b.hit_t(ray, inv, t_min, t_max),
-            Shape::Rectangle(r) => r.hit_t(ray, t_min, t_max),
+            Shape::Sphere(s) => s.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
+            Shape::Box(b) => b.hit_t(ray, inv, t_min, t_max).map(PrimitiveHit::at),
+            Shape::Rectangle(r) => r.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
+            Shape::Mesh(m) => m.hit(ray, t_min, t_max),
         }
     }
 
-    /// The hit record of an intersection at `t` found by [`Shape::hit_t`]
-    /// (the same record [`Shape::intersect`] returns).
+    /// Whether the shape is hit anywhere with `t` in `(t_min, t_max)` (for
+    /// meshes an any-hit query that stops at the first triangle found).
     #[inline]
-    pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
+    pub fn occludes(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> bool {
         match self {
-            Shape::Sphere(s) => s.surface_at(ray, t),
-            Shape::Box(b) => b.surface_at(ray, t),
-            Shape::Rectangle(r) => r.surface_at(ray, t),
+            Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
+            _ => self.hit_t(ray, inv, t_min, t_max).is_some(),
+        }
+    }
+
+    /// The hit record of an intersection found by [`Shape::hit_t`] (the same
+    /// record [`Shape::intersect`] returns).
+    #[inline]
+    pub fn surface_at(&self, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        match self {
+            Shape::Sphere(s) => s.surface_at(ray, hit.t),
+            Shape::Box(b) => b.surface_at(ray, hit.t),
+            Shape::Rectangle(r) => r.surface_at(ray, hit.t),
+            Shape::Mesh(m) => m.surface_at(ray, hit),
         }
     }
 
     /// True for shapes that enclose a volume (and so can hold a medium).
     pub fn is_closed(&self) -> bool {
-        !matches!(self, Shape::Rectangle(_))
+        match self {
+            Shape::Rectangle(_) => false,
+            Shape::Mesh(m) => m.closed,
+            _ => true,
+        }
     }
 
     /// True when `p` lies strictly inside a closed shape (false for open shapes).
@@ -83,6 +161,7 @@ impl Shape {
             Shape::Sphere(s) => (p - s.center).length_squared() < s.radius * s.radius,
             Shape::Box(b) => p.cmpgt(b.min).all() && p.cmplt(b.max).all(),
             Shape::Rectangle(_) => false,
+            Shape::Mesh(m) => m.contains(p),
         }
     }
 
@@ -92,6 +171,7 @@ impl Shape {
             Shape::Sphere(s) => 4.0 / 3.0 * crate::math::PI * s.radius.powi(3),
             Shape::Box(b) => (b.max - b.min).element_product(),
             Shape::Rectangle(_) => 0.0,
+            Shape::Mesh(m) => m.volume(),
         }
     }
 
@@ -101,6 +181,7 @@ impl Shape {
             Shape::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
             Shape::Box(b) => (b.min, b.max),
             Shape::Rectangle(r) => r.bounds(),
+            Shape::Mesh(m) => m.bounds(),
         }
     }
 }

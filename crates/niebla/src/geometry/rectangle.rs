@@ -46,7 +46,7 @@ impl Rectangle {
     /// The hit record at parameter `t` of an intersection found by [`Rectangle::hit_t`].
     #[inline]
     pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
-        SurfaceHit { t, p: ray.at(t), n: self.normal }
+        SurfaceHit { t, p: ray.at(t), n: self.normal, ns: self.normal }
     }
 
     /// World-space bounding box.

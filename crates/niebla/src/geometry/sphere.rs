@@ -49,7 +49,8 @@ impl Sphere {
     pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
         let p = ray.at(t);
         let n = (p - self.center) / self.radius;
-        SurfaceHit { t, p, n: n.normalize() }
+        let n = n.normalize();
+        SurfaceHit { t, p, n, ns: n }
     }
 }
 

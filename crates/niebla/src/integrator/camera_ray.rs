@@ -112,10 +112,14 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
                 break;
             }
             let u_lobe = sampler.next_1d();
-            let Some(bs) = object.bsdf.sample(hit.surface.n, -path.ray.d, u_lobe, sampler.next_2d()) else {
+            let ns = hit.surface.shading_normal(-path.ray.d);
+            let Some(bs) = object.bsdf.sample(ns, -path.ray.d, u_lobe, sampler.next_2d()) else {
                 break;
             };
-            beta *= bs.weight(hit.surface.n);
+            if !hit.surface.sides_agree(ns, bs.wi) {
+                break;
+            }
+            beta *= bs.weight(ns);
             path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
             continue;
         }
@@ -168,7 +172,7 @@ pub(crate) fn trace_camera_ray(
             sampler: &mut PixelSampler,
         ) -> Rgb {
             let bsdf = &scene.object(hit).bsdf;
-            direct_surface_radiance(scene, hit.surface.p, hit.surface.n, wo, bsdf, medium, self.method, sampler)
+            direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, self.method, sampler)
         }
     }
     walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method })

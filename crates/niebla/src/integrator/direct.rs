@@ -3,6 +3,7 @@
 //! transmittance through the media in between.
 
 use crate::color::Rgb;
+use crate::geometry::SurfaceHit;
 use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
@@ -10,36 +11,38 @@ use crate::sampling::PixelSampler;
 use crate::tracking::TransmittanceMethod;
 use crate::world::{offset_origin, Scene};
 
-/// Radiance scattered toward `wo` at surface point `p` (normal `n`, facing the
-/// side of `wo`), from one sample of every light, with shadow rays that start
-/// in `medium` (the medium on the side of `wo`).
-#[allow(clippy::too_many_arguments)]
+/// Radiance scattered toward `wo` at the surface point of `surface`, from
+/// one sample of every light, with shadow rays that start in `medium` (the
+/// medium on the side of `wo`). The BSDF is evaluated about the shading
+/// normal ([`SurfaceHit::shading_normal`]); light from below the geometric
+/// surface on the side of `wo` is refused (no leaks through smooth meshes).
 pub fn direct_surface_radiance(
     scene: &Scene,
-    p: Vec3,
-    n: Vec3,
+    surface: &SurfaceHit,
     wo: Vec3,
     bsdf: &crate::bsdf::Bsdf,
     medium: Option<MediumId>,
     method: TransmittanceMethod,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let n = if n.dot(wo) < 0.0 { -n } else { n };
+    let p = surface.p;
+    let ns = surface.shading_normal(wo);
+    let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -surface.n) } else { (ns, surface.n) };
     let mut l = Rgb::ZERO;
     for (index, light) in scene.lights.iter().enumerate() {
         let u = sampler.next_2d();
-        let Some(ls) = light.sample_li(p, Some(n), u) else {
+        let Some(ls) = light.sample_li(p, Some(ng), u) else {
             continue;
         };
         let cos = ls.wi.dot(n);
-        if cos <= 0.0 || ls.pdf == 0.0 {
+        if cos <= 0.0 || ls.wi.dot(ng) <= 0.0 || ls.pdf == 0.0 {
             continue;
         }
         let f = bsdf.eval(n, wo, ls.wi);
         if f.is_black() || ls.li.is_black() {
             continue;
         }
-        let origin = offset_origin(p, n);
+        let origin = offset_origin(p, ng);
         let tr = scene.transmittance_ignoring(
             origin,
             medium,

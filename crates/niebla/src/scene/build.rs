@@ -100,10 +100,12 @@ pub fn build_scene_with_options(
     };
 
     // Shapes.
+    let mut meshes = super::build_mesh::MeshLoader::default();
     let mut objects = Vec::new();
     let mut explicit_exterior = Vec::new();
     for (i, s) in desc.shapes.iter().enumerate() {
         let path = format!("shapes[{i}]");
+        let bounds_medium = s.interior.is_some() || s.exterior.is_some();
         let shape = match &s.geometry {
             GeometryDesc::Sphere(d) => Shape::Sphere(Sphere { center: Vec3::from(d.center), radius: d.radius }),
             GeometryDesc::Box(d) => Shape::Box(AxisAlignedBox { min: Vec3::from(d.min), max: Vec3::from(d.max) }),
@@ -111,6 +113,11 @@ pub fn build_scene_with_options(
                 let t = build_transform(&d.to_world)
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
                 Shape::Rectangle(Rectangle::new(t))
+            }
+            GeometryDesc::Mesh(d) => {
+                let t = build_transform(&d.to_world)
+                    .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
+                Shape::Mesh(meshes.instance(d, t, bounds_medium, &path, source, base_dir, &mut budget)?)
             }
         };
         let bsdf = match s.bsdf {
@@ -131,7 +138,7 @@ pub fn build_scene_with_options(
             bsdf,
             interior,
             exterior,
-            bounds_medium: s.interior.is_some() || s.exterior.is_some(),
+            bounds_medium,
             emitter: None,
         });
         explicit_exterior.push(s.exterior.is_some());
@@ -250,8 +257,17 @@ pub fn build_scene_with_options(
         }
     }
 
-    let mut scene =
-        Scene { camera, objects, media, medium_names, lights, ambient_medium, camera_medium: None, bounds: (lo, hi) };
+    let mut scene = Scene {
+        camera,
+        objects,
+        media,
+        medium_names,
+        lights,
+        ambient_medium,
+        camera_medium: None,
+        bounds: (lo, hi),
+        accel: Default::default(),
+    };
     assign_enclosing_exteriors(&mut scene, &explicit_exterior);
     scene.camera_medium = scene.medium_at(scene.camera.position);
 

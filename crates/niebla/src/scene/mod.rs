@@ -13,6 +13,7 @@
 
 mod build;
 mod build_medium;
+mod build_mesh;
 pub mod desc;
 mod error;
 mod parse;

@@ -538,6 +538,7 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
         "sphere" => rest(object).map(GeometryDesc::Sphere),
         "box" => rest(object).map(GeometryDesc::Box),
         "rectangle" => rest(object).map(GeometryDesc::Rectangle),
+        "mesh" => rest(object).map(GeometryDesc::Mesh),
         _ => Err(unknown_type("shape", &tag, GeometryDesc::TYPES)),
     };
     let geometry = geometry.map_err(|mut e| {

@@ -474,6 +474,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             }
         }
         GeometryDesc::Rectangle(r) => validate_transform(&format!("{base}.to_world"), &r.to_world)?,
+        GeometryDesc::Mesh(m) => validate_mesh(base, m)?,
     }
     if let Some(name) = &shape.interior {
         medium_exists(desc, &format!("{base}.interior"), name)?;
@@ -494,6 +495,32 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             color(&format!("{base}.bsdf.k"), k, non_negative)
         }
         BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => color(&format!("{base}.bsdf.reflectance"), r, below_one),
+    }
+}
+
+fn validate_mesh(base: &str, m: &MeshDesc) -> Check {
+    validate_transform(&format!("{base}.to_world"), &m.to_world)?;
+    match (&m.file, &m.positions, &m.indices) {
+        (Some(_), None, None) => {
+            for (field, given) in [("normals", m.normals.is_some()), ("uvs", m.uvs.is_some())] {
+                if given {
+                    return fail(format!("{base}.{field}"), "inline arrays go with `positions` and `indices`, not `file`");
+                }
+            }
+            Ok(())
+        }
+        (Some(_), _, _) => fail(format!("{base}.file"), "give either `file` or inline `positions` and `indices`, not both"),
+        (None, Some(_), None) => fail(format!("{base}.indices"), "inline `positions` need `indices` (triangles)"),
+        (None, None, Some(_)) => fail(format!("{base}.positions"), "inline `indices` need `positions`"),
+        (None, None, None) => {
+            fail(base.to_string(), "a mesh needs `file` (an .obj or .ply) or inline `positions` and `indices`")
+        }
+        (None, Some(_), Some(_)) => {
+            if m.object.is_some() {
+                return fail(format!("{base}.object"), "selects an object of an OBJ `file`; this mesh has none");
+            }
+            Ok(())
+        }
     }
 }
 

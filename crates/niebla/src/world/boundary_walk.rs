@@ -89,15 +89,14 @@ pub struct ShadowSegment<'a> {
     pub ray: &'a Ray,
     /// End of the piece (ray parameter).
     pub t_end: f32,
-    /// Whether the piece ends at an opaque surface that blocks the shadow ray
-    /// (the walk stops after this piece and reports the ray blocked).
-    pub blocked: bool,
 }
 
 /// Walk the shadow ray from `p` (inside `medium`) along unit `wi` over
 /// `distance` (may be infinite), crossing index-matched boundaries, and hand
 /// each piece to `visit` in order. An opaque surface blocks the ray unless it
-/// is object `ignore` (the sampled light's own surface, where the ray ends).
+/// is object `ignore` (the sampled light's own surface, where the ray ends):
+/// an any-hit query over the opaque surfaces first, so a blocked ray visits
+/// nothing, then nearest hits among the medium boundaries alone.
 /// Returns `true` when the ray reached its end, `false` when it was blocked,
 /// `visit` stopped it or it crossed more than [`MAX_BOUNDARY_CROSSINGS`]
 /// boundaries.
@@ -115,18 +114,18 @@ where
     F: FnMut(ShadowSegment) -> ControlFlow<()>,
 {
     let mut ray = Ray::new(p, wi);
+    if scene.occluded(&ray, 0.0, distance, ignore) {
+        return false;
+    }
     let mut remaining = distance;
     let mut t_min = 0.0;
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
-        let hit = scene.intersect(&ray, t_min, remaining);
+        let hit = scene.intersect_boundaries(&ray, t_min, remaining);
         let t_end = hit.map_or(remaining, |h| h.surface.t);
-        // An opaque surface: the light's own (the ray ends there) or a blocker.
-        let opaque = hit.filter(|h| !scene.object(h).bsdf.is_null());
-        let blocked = opaque.is_some_and(|h| Some(h.object) != ignore);
-        if visit(ShadowSegment { medium, ray: &ray, t_end, blocked }).is_break() || blocked {
+        if visit(ShadowSegment { medium, ray: &ray, t_end }).is_break() {
             return false;
         }
-        let Some(hit) = hit.filter(|_| opaque.is_none()) else {
+        let Some(hit) = hit else {
             return true;
         };
         medium = scene.medium_after_crossing(&hit, wi, medium);
@@ -176,7 +175,7 @@ mod tests {
         assert!(start.is_some());
         let mut pieces = Vec::new();
         let reached = walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 2.5, None, |s| {
-            pieces.push((s.medium, s.ray.o.x, s.t_end, s.blocked));
+            pieces.push((s.medium, s.ray.o.x, s.t_end));
             ControlFlow::Continue(())
         });
         // Two boundaries crossed, three pieces: [0, 1] inner, [1, 2] outer, [2, 2.5] vacuum.
@@ -189,16 +188,16 @@ mod tests {
             // Origins are hit points: box faces are exact in f32; a tolerance for the ray-box slab test.
             assert!((pieces[k].1 - o).abs() < 1e-5 && (pieces[k].2 - t_end).abs() < 1e-5, "{pieces:?}");
         }
-        assert!(pieces.iter().all(|p| !p.3));
 
-        // Past the wall at x = 3: blocked, the last piece flagged, unless the
-        // wall is the ignored object (the light's own surface).
-        let mut last = None;
-        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, None, |s| {
-            last = Some(s.blocked);
+        // Past the wall at x = 3: blocked before any piece is visited (the
+        // any-hit query over opaque surfaces comes first), unless the wall is
+        // the ignored object (the light's own surface).
+        let mut visited = 0;
+        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, None, |_| {
+            visited += 1;
             ControlFlow::Continue(())
         }));
-        assert_eq!(last, Some(true));
+        assert_eq!(visited, 0);
         assert!(walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, Some(2), |_| ControlFlow::Continue(())));
 
         // Scene::transmittance over the walk: exp(-(0.5 * 1 + 0.25 * 1)).

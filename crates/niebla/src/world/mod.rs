@@ -1,8 +1,10 @@
 //! The render-ready scene: typed ids, world-space shapes and lights, no strings
 //! on the per-sample path. Immutable and `Sync` while rendering.
 
+mod accel;
 mod boundary_walk;
 
+pub use accel::{ObjectTree, SceneAccel, SceneTrees};
 pub use boundary_walk::{walk_shadow_ray, PathRay, ShadowSegment, MAX_PATH_BOUNDARY_CROSSINGS};
 
 use std::ops::ControlFlow;
@@ -67,6 +69,8 @@ pub struct Scene {
     pub camera_medium: Option<MediumId>,
     /// World bounds of shapes, camera and positioned lights.
     pub bounds: (Vec3, Vec3),
+    /// The hierarchy over `objects` (built on first use; see [`SceneAccel`]).
+    pub accel: SceneAccel,
 }
 
 /// Offset from a surface point along `d` that moves a ray origin off the
@@ -87,17 +91,31 @@ impl Scene {
     /// Nearest surface hit along `ray` with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
-        // Nearest parameter first; the hit record only for the nearest object.
-        let inv = ray.d.recip();
-        let mut best: Option<usize> = None;
-        let mut t_best = t_max;
-        for (i, object) in self.objects.iter().enumerate() {
-            if let Some(t) = object.shape.hit_t(ray, inv, t_min, t_best) {
-                t_best = t;
-                best = Some(i);
-            }
-        }
-        best.map(|i| Hit { surface: self.objects[i].shape.surface_at(ray, t_best), object: i as u32 })
+        // Nearest hit first; the hit record only for the nearest object.
+        let (i, h) = self.trees().all.closest(&self.objects, ray, t_min, t_max)?;
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i })
+    }
+
+    /// Nearest hit among the index-matched medium boundaries (`null`
+    /// surfaces) alone.
+    #[inline]
+    pub fn intersect_boundaries(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
+        let (i, h) = self.trees().boundaries.closest(&self.objects, ray, t_min, t_max)?;
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i })
+    }
+
+    /// Whether an opaque surface (any object whose surface is not `null`)
+    /// other than object `ignore` lies along `ray` with `t` in `(t_min, t_max)`:
+    /// an any-hit query.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32, ignore: Option<u32>) -> bool {
+        self.trees().opaque.any(&self.objects, ray, t_min, t_max, ignore)
+    }
+
+    /// The scene's hierarchies (built on the first call).
+    #[inline]
+    pub fn trees(&self) -> &SceneTrees {
+        self.accel.get(&self.objects)
     }
 
     /// The medium with id `id`.

@@ -99,9 +99,10 @@ impl CameraRayVisitor for PhotonVisitor<'_, '_> {
     ) -> Rgb {
         let object = scene.object(hit);
         let p = hit.surface.p;
-        let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
+        let ns = hit.surface.shading_normal(wo);
+        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
         let method = self.integrator.single.transmittance;
-        direct_surface_radiance(scene, p, n, wo, &object.bsdf, medium, method, sampler)
+        direct_surface_radiance(scene, &hit.surface, wo, &object.bsdf, medium, method, sampler)
             + self.integrator.surface_estimate(p, n, wo, &object.bsdf, &mut self.heap)
     }
 }

@@ -341,14 +341,18 @@ impl Tracer<'_> {
             let u_lobe = sampler.next_1d();
             let u_bsdf = sampler.next_2d();
             let u_rr = sampler.next_1d();
-            let Some(bs) = object.bsdf.sample_with_mode(hit.surface.n, wo, u_lobe, u_bsdf, TransportMode::Importance)
-            else {
+            let ns = hit.surface.shading_normal(wo);
+            let Some(bs) = object.bsdf.sample_with_mode(ns, wo, u_lobe, u_bsdf, TransportMode::Importance) else {
                 return;
             };
-            if !(bs.pdf > 0.0) {
+            if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
                 return;
             }
-            beta *= bs.weight(hit.surface.n);
+            // Importance transport over shading normals: Veach's (1997, eq.
+            // 5.17) factor |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|) applied to
+            // f |wi.ns| / pdf leaves f |wo.ns| |wi.ng| / (|wo.ng| pdf); 1 for
+            // flat surfaces.
+            beta *= bs.weight(ns) * shading_adjoint_factor(hit.surface.n, ns, wo, bs.wi);
             direct = false;
             path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
 
@@ -402,5 +406,21 @@ mod tests {
         add(&mut sum, Rgb::splat(1e-8));
         assert!(sum[0] > 1.0);
         assert_eq!(a.lost_power[0], 1e-8f32 as f64);
+    }
+}
+
+/// Veach's (1997, eq. 5.17) correction of the adjoint BSDF for shading
+/// normals: `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)`, exactly 1 where the
+/// shading and geometric normals coincide.
+#[inline]
+fn shading_adjoint_factor(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    if ns == ng {
+        return 1.0;
+    }
+    let den = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if den > 0.0 {
+        wo.dot(ns).abs() * wi.dot(ng).abs() / den
+    } else {
+        0.0
     }
 }

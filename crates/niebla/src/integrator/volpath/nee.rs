@@ -23,8 +23,9 @@ use super::guiding::Guiding;
 #[derive(Clone, Copy)]
 pub(super) enum Scatter<'a> {
     Phase(&'a PhaseFunction),
-    /// Opaque surface with its normal facing `wo`.
-    Surface(&'a Bsdf, Vec3),
+    /// Opaque surface with its shading normal and its geometric normal,
+    /// both facing `wo`; directions below the geometric one get nothing.
+    Surface(&'a Bsdf, Vec3, Vec3),
 }
 
 impl Scatter<'_> {
@@ -36,9 +37,9 @@ impl Scatter<'_> {
                 let p = phase.eval(wo, wi);
                 (Rgb::splat(p), phase.pdf(wo, wi))
             }
-            Scatter::Surface(bsdf, n) => {
+            Scatter::Surface(bsdf, n, ng) => {
                 let cos = wi.dot(n);
-                if cos <= 0.0 {
+                if cos <= 0.0 || wi.dot(ng) <= 0.0 {
                     return (Rgb::ZERO, 0.0);
                 }
                 (bsdf.eval(n, wo, wi) * cos, bsdf.pdf(n, wo, wi))
@@ -185,7 +186,7 @@ fn sample_ld_light(
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
     let normal = match scatter {
-        Scatter::Surface(_, n) => Some(n),
+        Scatter::Surface(_, _, ng) => Some(ng),
         Scatter::Phase(_) => None,
     };
     let Some(ls) = light.sample_li(p, normal, u_dir) else {
@@ -251,9 +252,6 @@ fn shadow_transmittance(
     let mut r_l = Rgb::ONE;
     let mut r_u = Rgb::ONE;
     let reached = walk_shadow_ray(scene, p, medium, wi, distance, ignore, |s| {
-        if s.blocked {
-            return ControlFlow::Break(());
-        }
         if let Some(id) = s.medium {
             let m = scene.medium(id);
             if let Some(homogeneous) = m.as_homogeneous() {

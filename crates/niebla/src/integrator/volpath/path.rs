@@ -208,7 +208,10 @@ impl VolPathIntegrator {
             }
             depth += 1;
             let wo = -ray.d;
-            let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };
+            // The BSDF is evaluated about the shading normal `ns` (outward),
+            // light sampling faces `wo`'s side (`n`, and the geometric `ng`).
+            let ns = hit.surface.shading_normal(wo);
+            let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -hit.surface.n) } else { (ns, hit.surface.n) };
             let p = hit.surface.p;
             // Guiding toward lights inside a medium, for non-specular surfaces
             // whose side of `wo` lies in a medium.
@@ -217,7 +220,7 @@ impl VolPathIntegrator {
                 let vertex = NeeVertex {
                     p,
                     wo,
-                    scatter: Scatter::Surface(&object.bsdf, n),
+                    scatter: Scatter::Surface(&object.bsdf, n, ng),
                     medium,
                     beta,
                     r_p: r_u,
@@ -226,13 +229,13 @@ impl VolPathIntegrator {
                 };
                 l += sample_ld(scene, &vertex, group, hero, lights, sampler);
             }
-            let Some(bs) = sample_bsdf(&object.bsdf, hit.surface.n, p, wo, surface_guiding, sampler) else {
+            let Some(bs) = sample_bsdf(&object.bsdf, ns, p, wo, surface_guiding, sampler) else {
                 return l;
             };
-            if !(bs.pdf > 0.0) {
+            if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
                 return l;
             }
-            beta *= bs.weight(hit.surface.n);
+            beta *= bs.weight(ns);
             r_l = r_u / bs.pdf;
             specular_bounce = bs.is_specular;
             if bs.is_transmission {

@@ -31,11 +31,58 @@ pub enum GeometryDesc {
     Box(BoxDesc),
     /// `"type": "rectangle"`.
     Rectangle(RectangleDesc),
+    /// `"type": "mesh"`: a triangle mesh from a file or inline arrays.
+    Mesh(MeshDesc),
 }
 
 impl GeometryDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["sphere", "box", "rectangle"];
+    pub const TYPES: &'static [&'static str] = &["sphere", "box", "rectangle", "mesh"];
+}
+
+/// A triangle mesh: read from `file` (Wavefront OBJ or PLY, ASCII or
+/// binary; polygons are triangulated) or given inline by `positions` and
+/// `indices` (with optional `normals` and `uvs`, one per vertex), placed by
+/// `to_world`. Triangles wind counter-clockwise seen from outside (the
+/// right-hand rule gives the outward normal). A mesh that bounds a medium
+/// (`interior` or `exterior`) must be closed unless `allow_open` is set.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshDesc {
+    /// Mesh file, relative to the scene file's folder (`.obj` or `.ply`).
+    #[serde(default)]
+    pub file: Option<String>,
+    /// OBJ only: the object or group to read (default: all of them).
+    #[serde(default)]
+    pub object: Option<String>,
+    /// Inline vertex positions `[[x, y, z], ...]`, in scene units (object space).
+    #[serde(default)]
+    pub positions: Option<Vec<[f32; 3]>>,
+    /// Inline triangles `[[i, j, k], ...]`: 0-based indices into `positions`.
+    #[serde(default)]
+    pub indices: Option<Vec<[u32; 3]>>,
+    /// Inline vertex normals (smooth shading), one per position.
+    #[serde(default)]
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// Inline vertex uv coordinates, one per position.
+    #[serde(default)]
+    pub uvs: Option<Vec<[f32; 2]>>,
+    /// Object-to-world transform; default identity.
+    #[serde(default)]
+    pub to_world: TransformDesc,
+    /// Turn the mesh inside out: reverse every triangle's winding and negate
+    /// the vertex normals (Mitsuba 3's `flip_normals`). Default false.
+    #[serde(default)]
+    pub flip_normals: bool,
+    /// Shade with the flat triangle normals even where the mesh has vertex
+    /// normals (Mitsuba 3's `face_normals`). Default false.
+    #[serde(default)]
+    pub face_normals: bool,
+    /// Let an open mesh (boundary edges, inconsistent winding) bound a
+    /// medium: it then acts like a rectangle, with the `interior` medium
+    /// behind its normals. Default false (such a mesh is an error).
+    #[serde(default)]
+    pub allow_open: bool,
 }
 
 /// A sphere; its normal points outward.

@@ -1,0 +1,147 @@
+//! Building the `mesh` shapes of a scene: reading the file (or the inline
+//! arrays), charging the memory budget before reading, turning the mesh
+//! inside out or flat where asked, checking that a mesh bounding a medium is
+//! closed, and sharing one mesh between shapes that read the same file with
+//! the same options (instances under different `to_world`).
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use niebla_mesh::MeshData;
+
+use super::desc::MeshDesc;
+use super::SceneError;
+use crate::geometry::{MeshInstance, Transform, TriangleMesh};
+use crate::limits::MemoryBudget;
+use crate::math::{Vec2, Vec3};
+
+/// What makes two mesh shapes share their mesh: the file, the OBJ object
+/// and the two options that change the data.
+type MeshKey = (PathBuf, Option<String>, bool, bool);
+
+/// A loaded mesh and whether it is closed (checked once per mesh).
+#[derive(Clone)]
+struct Loaded {
+    mesh: Arc<TriangleMesh>,
+    closedness: niebla_mesh::Closedness,
+}
+
+/// The meshes of one scene build, shared by key.
+#[derive(Default)]
+pub(super) struct MeshLoader {
+    cache: HashMap<MeshKey, Loaded>,
+}
+
+impl MeshLoader {
+    /// The instance of mesh shape `desc` at JSON path `path` (placed by
+    /// `transform`); `bounds_medium` when it has an `interior` or `exterior`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn instance(
+        &mut self,
+        desc: &MeshDesc,
+        transform: Transform,
+        bounds_medium: bool,
+        path: &str,
+        source: &str,
+        base_dir: &Path,
+        budget: &mut MemoryBudget,
+    ) -> Result<MeshInstance, SceneError> {
+        let err = |field: &str, message: String| SceneError::new(source, field, message);
+        let loaded = match &desc.file {
+            Some(file) => {
+                let full = base_dir.join(file);
+                let key = (full.clone(), desc.object.clone(), desc.flip_normals, desc.face_normals);
+                match self.cache.get(&key) {
+                    Some(l) => l.clone(),
+                    None => {
+                        let field = format!("{path}.file");
+                        let estimate = niebla_mesh::estimate_mesh_bytes(&full).map_err(|e| err(&field, e.to_string()))?;
+                        budget.charge(estimate).map_err(|why| err(&field, format!("mesh {file:?} {why}")))?;
+                        let options = niebla_mesh::MeshReadOptions { object: desc.object.clone() };
+                        let data = niebla_mesh::read_mesh(&full, &options).map_err(|e| err(&field, e.to_string()))?;
+                        let l = load(data, desc).map_err(|m| err(&field, format!("{file}: {m}")))?;
+                        self.cache.insert(key, l.clone());
+                        l
+                    }
+                }
+            }
+            None => {
+                let positions = desc.positions.clone().unwrap_or_default();
+                let indices = desc.indices.clone().unwrap_or_default();
+                let bytes = TriangleMesh::memory_estimate(
+                    positions.len(),
+                    indices.len(),
+                    desc.normals.is_some(),
+                    desc.uvs.is_some(),
+                ) as u64;
+                budget.charge(bytes).map_err(|why| err(path, format!("inline mesh {why}")))?;
+                let data = MeshData::from_arrays(positions, indices, desc.normals.clone(), desc.uvs.clone())
+                    .map_err(|e| inline_error(e, path, source))?;
+                load(data, desc).map_err(|m| err(path, m))?
+            }
+        };
+        let c = loaded.closedness;
+        if bounds_medium && !c.is_closed() && !desc.allow_open {
+            return Err(err(
+                path,
+                format!(
+                    "a mesh that bounds a medium (interior/exterior) must be closed, but this one has {} open \
+                     (boundary) edges, {} non-manifold edges and {} inconsistently wound edges; close it, or \
+                     set \"allow_open\": true to let it act as a one-sided boundary like a rectangle",
+                    c.boundary_edges, c.non_manifold_edges, c.inconsistent_edges
+                ),
+            ));
+        }
+        Ok(MeshInstance::new(loaded.mesh, transform, c.is_closed()))
+    }
+}
+
+/// An inline mesh's error at the JSON path of the offending array element
+/// (the message of [`MeshData::from_arrays`] starts with it, e.g.
+/// `indices[3][1]: ...`).
+fn inline_error(e: niebla_mesh::MeshError, path: &str, source: &str) -> SceneError {
+    let text = match &e {
+        niebla_mesh::MeshError::Invalid { what, .. } => what.clone(),
+        other => other.to_string(),
+    };
+    match text.split_once(": ") {
+        Some((field, message)) if field.ends_with(']') => {
+            SceneError::new(source, &format!("{path}.{field}"), message.to_string())
+        }
+        _ => SceneError::new(source, path, text),
+    }
+}
+
+/// The renderer's mesh from checked mesh data, with the shape's options.
+fn load(mut data: MeshData, desc: &MeshDesc) -> Result<Loaded, String> {
+    if desc.face_normals {
+        data.normals = None;
+    }
+    if desc.flip_normals {
+        for t in &mut data.indices {
+            t.swap(1, 2);
+        }
+        if let Some(normals) = &mut data.normals {
+            for n in normals.iter_mut() {
+                *n = n.map(|c| -c);
+            }
+        }
+    }
+    if data.indices.is_empty() {
+        return Err("the mesh has no triangles".into());
+    }
+    let closedness = data.closedness();
+    let MeshData { positions, normals, uvs, indices } = data;
+    let mesh = TriangleMesh::new(
+        positions.into_iter().map(Vec3::from).collect(),
+        indices,
+        normals.map(|n| n.into_iter().map(Vec3::from).collect()),
+        uvs.map(|u| u.into_iter().map(Vec2::from).collect()),
+    )
+    .map_err(|e| e.to_string())?;
+    if mesh.triangle_count() == 0 {
+        return Err(format!("all {} triangles are degenerate (no area)", mesh.degenerate));
+    }
+    Ok(Loaded { mesh: Arc::new(mesh), closedness })
+}

@@ -1,0 +1,127 @@
+//! The scene's acceleration structure: the top level of a two-level
+//! hierarchy. Its leaves are the scene's objects (spheres, boxes,
+//! rectangles and mesh instances, each mesh with its own hierarchy in object
+//! space). Three trees: over every object (nearest hits of paths), over the
+//! opaque ones (any-hit queries of shadow rays) and over the index-matched
+//! medium boundaries (the pieces of a shadow ray between media).
+
+use std::sync::{Arc, OnceLock};
+
+use crate::geometry::{AxisAlignedBox, Bvh, PrimitiveHit};
+use crate::math::Ray;
+
+use super::SceneObject;
+
+/// A hierarchy over a subset of the scene's objects.
+#[derive(Clone, Debug, Default)]
+pub struct ObjectTree {
+    /// Object index of each primitive of `bvh`.
+    objects: Vec<u32>,
+    bvh: Bvh,
+}
+
+impl ObjectTree {
+    fn build(all: &[SceneObject], keep: impl Fn(&SceneObject) -> bool) -> ObjectTree {
+        let objects: Vec<u32> = (0..all.len() as u32).filter(|&i| keep(&all[i as usize])).collect();
+        let boxes: Vec<AxisAlignedBox> = objects
+            .iter()
+            .map(|&i| {
+                let (min, max) = all[i as usize].shape.bounds();
+                AxisAlignedBox { min, max }
+            })
+            .collect();
+        ObjectTree { bvh: Bvh::build(&boxes), objects }
+    }
+
+    /// Nearest hit among the tree's objects with `t` in `(t_min, t_max)`:
+    /// the object's index and its hit. Of hits at the same `t`, the object
+    /// listed first in the scene wins (as a loop over the objects in order
+    /// would choose).
+    #[inline]
+    pub fn closest(&self, all: &[SceneObject], ray: &Ray, t_min: f32, t_max: f32) -> Option<(u32, PrimitiveHit)> {
+        let inv = ray.d.recip();
+        let mut best: Option<(u32, PrimitiveHit)> = None;
+        self.bvh.closest(ray, t_min, t_max, |leaf, t_closest| {
+            let object = self.objects[leaf as usize];
+            // A tie goes to the lower index: let it hit at exactly t_closest.
+            let bound = match best {
+                Some((b, _)) if object < b => next_up(t_closest),
+                _ => t_closest,
+            };
+            let h = all[object as usize].shape.hit_t(ray, inv, t_min, bound)?;
+            best = Some((object, h));
+            Some(h.t)
+        });
+        best
+    }
+
+    /// Whether any of the tree's objects other than `ignore` is hit with `t`
+    /// in `(t_min, t_max)`.
+    #[inline]
+    pub fn any(&self, all: &[SceneObject], ray: &Ray, t_min: f32, t_max: f32, ignore: Option<u32>) -> bool {
+        let inv = ray.d.recip();
+        self.bvh.any(ray, t_min, t_max, |leaf, t_max| {
+            let object = self.objects[leaf as usize];
+            Some(object) != ignore && all[object as usize].shape.occludes(ray, inv, t_min, t_max)
+        })
+    }
+
+    /// Whether the tree holds no object.
+    pub fn is_empty(&self) -> bool {
+        self.objects.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.objects.len() * 4 + self.bvh.memory_bytes()
+    }
+}
+
+/// The smallest `f32` above a finite non-negative `t` (`t` itself otherwise).
+#[inline]
+fn next_up(t: f32) -> f32 {
+    if t.is_finite() && t >= 0.0 {
+        f32::from_bits(t.to_bits() + 1)
+    } else {
+        t
+    }
+}
+
+/// The three trees of a scene.
+#[derive(Clone, Debug, Default)]
+pub struct SceneTrees {
+    /// Every object.
+    pub all: ObjectTree,
+    /// Objects whose surface is not `null` (they block shadow rays).
+    pub opaque: ObjectTree,
+    /// Objects with a `null` surface (index-matched medium boundaries).
+    pub boundaries: ObjectTree,
+}
+
+impl SceneTrees {
+    /// Builds the trees over `objects`.
+    pub fn build(objects: &[SceneObject]) -> SceneTrees {
+        SceneTrees {
+            all: ObjectTree::build(objects, |_| true),
+            opaque: ObjectTree::build(objects, |o| !o.bsdf.is_null()),
+            boundaries: ObjectTree::build(objects, |o| o.bsdf.is_null()),
+        }
+    }
+}
+
+/// The scene's trees, built on first use from the scene's objects (so that
+/// scenes assembled field by field, as tests do, need no extra step; the
+/// scene builder builds them at once). The objects must not change after
+/// the first query. Cloning shares the built trees.
+#[derive(Clone, Debug, Default)]
+pub struct SceneAccel {
+    cell: OnceLock<Arc<SceneTrees>>,
+}
+
+impl SceneAccel {
+    /// The trees of `objects`, built now if not yet.
+    #[inline]
+    pub fn get(&self, objects: &[SceneObject]) -> &SceneTrees {
+        self.cell.get_or_init(|| Arc::new(SceneTrees::build(objects)))
+    }
+}
