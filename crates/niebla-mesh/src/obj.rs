@@ -1,0 +1,280 @@
+//! Wavefront OBJ reader, through the `tobj` crate (triangulated, one index
+//! shared by position, normal and uv), with a line-numbered pre-scan for
+//! the faults whose `tobj` errors would not say where they are.
+//!
+//! What is read: `v` (with an optional `w` that divides x, y, z, or an
+//! optional r g b colour, ignored), `vt` (u and v; a 1-component `vt` is an
+//! error), `vn`, and `f` faces of any vertex count with 1-based or negative
+//! (relative) indices, triangulated as fans. Points and two-vertex faces
+//! and `l` polylines are skipped; materials (`mtllib`, `usemtl`) are
+//! ignored. `o` and `g` both start a named object (tobj's behaviour);
+//! faces before any of them belong to `unnamed_object`.
+//!
+//! Vertices are numbered in order of first use by the faces (unreferenced
+//! `v` lines are dropped): a vertex used with two different normal or uv
+//! indices becomes two vertices at the same position.
+//!
+//! **Partial attributes**: when some face corners have a uv (or normal)
+//! index and others do not, or when merged objects differ, uvs (or
+//! normals) are dropped for the whole mesh; positions and triangles are
+//! unaffected.
+
+use std::path::Path;
+
+use crate::{MeshData, MeshError};
+
+/// Reads an OBJ file: every object merged into one mesh (`object: None`),
+/// or only the objects and groups of the given name. See the module
+/// documentation for what is read.
+pub fn read_obj(path: impl AsRef<Path>, object: Option<&str>) -> Result<MeshData, MeshError> {
+    let path = path.as_ref();
+    let data = crate::read_file(path)?;
+    parse_obj(&data, path, object)
+}
+
+/// Parses OBJ text already in memory (`data` must be UTF-8); `path` is only
+/// used in error messages.
+///
+/// ```
+/// use std::path::Path;
+/// let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
+/// let err = niebla_mesh::parse_obj(obj, Path::new("bad.obj"), None).unwrap_err();
+/// assert_eq!(
+///     err.to_string(),
+///     "bad.obj: line 4: face vertex \"4\" refers to position 4 but the file has 3 positions"
+/// );
+/// ```
+pub fn parse_obj(data: &[u8], path: &Path, object: Option<&str>) -> Result<MeshData, MeshError> {
+    let text = match std::str::from_utf8(data) {
+        Ok(t) => t,
+        Err(e) => {
+            let line = 1 + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
+            return Err(parse_error(path, line, "not UTF-8 text".into()));
+        }
+    };
+    let scan = prescan(text, path)?;
+    let rewritten;
+    let text = if scan.rewrite {
+        rewritten = rewrite(text);
+        rewritten.as_str()
+    } else {
+        text
+    };
+    let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
+    let mut reader = std::io::Cursor::new(text.as_bytes());
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| MeshError::Parse {
+            path: path.to_path_buf(),
+            location: "OBJ".into(),
+            what: format!("{e} (reported by tobj)"),
+        })?;
+
+    let mut available: Vec<String> = Vec::new();
+    let mut merged = MeshData::default();
+    let mut matched = false;
+    for model in models {
+        let m = model.mesh;
+        if m.indices.is_empty() {
+            continue;
+        }
+        if !available.contains(&model.name) {
+            available.push(model.name.clone());
+        }
+        if object.is_some_and(|o| o != model.name) {
+            continue;
+        }
+        let n = m.positions.len() / 3;
+        if merged.positions.len().checked_add(n).is_none_or(|t| u32::try_from(t).is_err()) {
+            return Err(MeshError::Invalid {
+                origin: path.display().to_string(),
+                what: format!("more than {} vertices", u32::MAX),
+            });
+        }
+        let positions: Vec<[f32; 3]> = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let normals =
+            (m.normals.len() == 3 * n).then(|| m.normals.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
+        let uvs = (m.texcoords.len() == 2 * n).then(|| m.texcoords.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+        let indices = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let part = MeshData { positions, normals, uvs, indices };
+        if matched {
+            merged.append(part);
+        } else {
+            merged = part;
+            matched = true;
+        }
+    }
+    if let (Some(name), false) = (object, matched) {
+        return Err(MeshError::ObjectNotFound { path: path.to_path_buf(), name: name.into(), available });
+    }
+    if merged.indices.is_empty() {
+        return Err(MeshError::Invalid {
+            origin: path.display().to_string(),
+            what: "no triangles (faces with fewer than 3 vertices are skipped)".into(),
+        });
+    }
+    MeshData::from_arrays(merged.positions, merged.indices, merged.normals, merged.uvs)
+        .map_err(|e| e.with_origin(path.display().to_string()))
+}
+
+fn parse_error(path: &Path, line: usize, what: String) -> MeshError {
+    MeshError::Parse { path: path.to_path_buf(), location: format!("line {line}"), what }
+}
+
+/// What the pre-scan found that tobj would mishandle without an error.
+struct Prescan {
+    /// Some lines must be changed before tobj reads the text: polylines of
+    /// three or more vertices (tobj would make them faces) are blanked, and
+    /// vertex colours are removed when only some vertices have them (tobj
+    /// would fail with "face color out of bounds").
+    rewrite: bool,
+}
+
+/// Checks, with line numbers, what tobj reports without one: malformed or
+/// non-finite `v`, `vt`, `vn` values, face indices that are not integers or
+/// out of range, empty faces and `usemtl` lines. Positive indices are
+/// checked against the file's total counts (tobj resolves them after
+/// reading everything), negative ones against the counts so far.
+fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
+    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
+    let (mut colored, mut long_polylines) = (0usize, false);
+    let numbers = |words: &[&str], n: usize, line: usize, what: &str| -> Result<(), MeshError> {
+        if words.len() < n {
+            return Err(parse_error(path, line, format!("{what}: expected {n} numbers, found {}", words.len())));
+        }
+        for w in &words[..n] {
+            match w.parse::<f32>() {
+                Ok(x) if x.is_finite() => {}
+                Ok(_) => return Err(parse_error(path, line, format!("{what}: {w:?} is not a finite number"))),
+                Err(_) => return Err(parse_error(path, line, format!("{what}: {w:?} is not a number"))),
+            }
+        }
+        Ok(())
+    };
+    for (i, line) in text.split('\n').enumerate() {
+        let line_no = i + 1;
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.first().copied() {
+            Some("v") => {
+                let rest = &words[1..];
+                numbers(rest, 3, line_no, "vertex position")?;
+                match rest.len() {
+                    3 => {}
+                    4 => {
+                        numbers(&rest[3..], 1, line_no, "vertex w")?;
+                        if rest[3].parse::<f32>() == Ok(0.0) {
+                            return Err(parse_error(path, line_no, "vertex w is 0".into()));
+                        }
+                    }
+                    6 => {
+                        numbers(&rest[3..], 3, line_no, "vertex colour")?;
+                        colored += 1;
+                    }
+                    k => {
+                        return Err(parse_error(
+                            path,
+                            line_no,
+                            format!("vertex with {k} values; expected x y z, x y z w or x y z r g b"),
+                        ))
+                    }
+                }
+                nv += 1;
+            }
+            Some("vt") => {
+                numbers(&words[1..], 2, line_no, "texture coordinate (u v)")?;
+                nvt += 1;
+            }
+            Some("vn") => {
+                numbers(&words[1..], 3, line_no, "normal")?;
+                nvn += 1;
+            }
+            Some("l") if words.len() > 3 => long_polylines = true,
+            Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
+                return Err(parse_error(path, line_no, "usemtl without a material name".into()));
+            }
+            _ => {}
+        }
+    }
+    let (total_v, total_vt, total_vn) = (nv, nvt, nvn);
+    (nv, nvt, nvn) = (0, 0, 0);
+    for (i, line) in text.split('\n').enumerate() {
+        let line_no = i + 1;
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => nv += 1,
+            Some("vt") => nvt += 1,
+            Some("vn") => nvn += 1,
+            Some(kw @ ("f" | "l")) => {
+                let mut corners = 0;
+                for token in words {
+                    corners += 1;
+                    check_face_vertex(token, [nv, nvt, nvn], [total_v, total_vt, total_vn])
+                        .map_err(|what| parse_error(path, line_no, what))?;
+                }
+                if corners == 0 {
+                    let what = if kw == "f" { "face" } else { "polyline" };
+                    return Err(parse_error(path, line_no, format!("{what} without vertices")));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(Prescan { rewrite: long_polylines || (colored > 0 && colored < total_v) })
+}
+
+/// Checks one face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn` as tobj parses
+/// it: each index an integer (`isize`), not 0, and within range.
+fn check_face_vertex(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Result<(), String> {
+    const KIND: [&str; 3] = ["position", "texture coordinate", "normal"];
+    let parts: Vec<&str> = token.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!("face vertex {token:?}: more than three /-separated indices"));
+    }
+    if parts[0].is_empty() {
+        return Err(format!("face vertex {token:?}: no position index"));
+    }
+    for (k, part) in parts.iter().enumerate() {
+        if part.is_empty() {
+            continue;
+        }
+        let Ok(x) = part.parse::<isize>() else {
+            return Err(format!("face vertex {token:?}: {part:?} is not an integer"));
+        };
+        let plural = |n: usize| format!("{n} {}{}", KIND[k], if n == 1 { "" } else { "s" });
+        if x == 0 {
+            return Err(format!("face vertex {token:?}: index 0 (OBJ indices start at 1, negative ones count back)"));
+        } else if x > 0 {
+            if x as usize > total[k] {
+                return Err(format!(
+                    "face vertex {token:?} refers to {} {x} but the file has {}",
+                    KIND[k],
+                    plural(total[k])
+                ));
+            }
+        } else if x.unsigned_abs() > so_far[k] {
+            return Err(format!(
+                "face vertex {token:?}: relative {} index {x} but only {} precede this line",
+                KIND[k],
+                plural(so_far[k])
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The text with polylines of three or more vertices blanked and vertex
+/// colours removed; line numbers are kept.
+fn rewrite(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for (i, line) in text.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.first().copied() {
+            Some("l") => {}
+            Some("v") if words.len() == 7 => out.push_str(&words[..4].join(" ")),
+            _ => out.push_str(line),
+        }
+    }
+    out
+}
