@@ -318,9 +318,7 @@ impl Bvh {
         let mut stack = [0u32; STACK_DEPTH];
         let mut sp = 0usize;
         let mut index = 0usize;
-        if r.enter(&self.nodes[0], t_min, closest).is_none() {
-            return None;
-        }
+        r.enter(&self.nodes[0], t_min, closest)?;
         loop {
             let node = &self.nodes[index];
             if node.count > 0 {

@@ -56,7 +56,8 @@ fn lambertian_floor_sees_both_lights_through_fog_and_not_the_hidden_one() {
     // above the ceiling shadowed.
     let p = Vec3::ZERO;
     let surface = SurfaceHit { t: 0.0, p, n: Vec3::Y, ns: Vec3::Y };
-    let l = direct_surface_radiance(&scene, &surface, Vec3::Y, &bsdf, None, TransmittanceMethod::Analytic, &mut sampler);
+    let l =
+        direct_surface_radiance(&scene, &surface, Vec3::Y, &bsdf, None, TransmittanceMethod::Analytic, &mut sampler);
     let point = 0.5 / std::f32::consts::PI * 8.0 / 4.0 * (-0.5f32 * 1.5).exp();
     let sun = 0.5 / std::f32::consts::PI * 3.0 * 0.5 * (-0.5f32 * (3.0 / 0.8660254 - 1.0)).exp();
     for c in 0..3 {

@@ -133,14 +133,7 @@ pub fn build_scene_with_options(
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
-        objects.push(SceneObject {
-            shape,
-            bsdf,
-            interior,
-            exterior,
-            bounds_medium,
-            emitter: None,
-        });
+        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None });
         explicit_exterior.push(s.exterior.is_some());
     }
     let ambient_medium = medium_id(&desc.ambient_medium);
@@ -189,7 +182,7 @@ pub fn build_scene_with_options(
                         })?;
                         AreaShape::Rectangle(Rectangle::new(t))
                     }
-                    GeometryDesc::Box(_) => {
+                    GeometryDesc::Box(_) | GeometryDesc::Mesh(_) => {
                         return Err(err(&shape_path, "an area light is a rectangle or a sphere".into()))
                     }
                 };

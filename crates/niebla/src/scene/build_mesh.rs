@@ -56,9 +56,11 @@ impl MeshLoader {
                     Some(l) => l.clone(),
                     None => {
                         let field = format!("{path}.file");
-                        let estimate = niebla_mesh::estimate_mesh_bytes(&full).map_err(|e| err(&field, e.to_string()))?;
+                        let estimate =
+                            niebla_mesh::estimate_mesh_bytes(&full).map_err(|e| err(&field, e.to_string()))?;
                         budget.charge(estimate).map_err(|why| err(&field, format!("mesh {file:?} {why}")))?;
-                        let options = niebla_mesh::MeshReadOptions { object: desc.object.clone() };
+                        let options =
+                            niebla_mesh::MeshReadOptions { object: desc.object.clone(), ..Default::default() };
                         let data = niebla_mesh::read_mesh(&full, &options).map_err(|e| err(&field, e.to_string()))?;
                         let l = load(data, desc).map_err(|m| err(&field, format!("{file}: {m}")))?;
                         self.cache.insert(key, l.clone());
@@ -107,7 +109,7 @@ fn inline_error(e: niebla_mesh::MeshError, path: &str, source: &str) -> SceneErr
     };
     match text.split_once(": ") {
         Some((field, message)) if field.ends_with(']') => {
-            SceneError::new(source, &format!("{path}.{field}"), message.to_string())
+            SceneError::new(source, format!("{path}.{field}"), message.to_string())
         }
         _ => SceneError::new(source, path, text),
     }

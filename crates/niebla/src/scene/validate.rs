@@ -504,12 +504,17 @@ fn validate_mesh(base: &str, m: &MeshDesc) -> Check {
         (Some(_), None, None) => {
             for (field, given) in [("normals", m.normals.is_some()), ("uvs", m.uvs.is_some())] {
                 if given {
-                    return fail(format!("{base}.{field}"), "inline arrays go with `positions` and `indices`, not `file`");
+                    return fail(
+                        format!("{base}.{field}"),
+                        "inline arrays go with `positions` and `indices`, not `file`",
+                    );
                 }
             }
             Ok(())
         }
-        (Some(_), _, _) => fail(format!("{base}.file"), "give either `file` or inline `positions` and `indices`, not both"),
+        (Some(_), _, _) => {
+            fail(format!("{base}.file"), "give either `file` or inline `positions` and `indices`, not both")
+        }
         (None, Some(_), None) => fail(format!("{base}.indices"), "inline `positions` need `indices` (triangles)"),
         (None, None, Some(_)) => fail(format!("{base}.positions"), "inline `indices` need `positions`"),
         (None, None, None) => {
@@ -619,6 +624,12 @@ fn validate_light(desc: &SceneDesc, base: &str, light: &LightDesc) -> Check {
             let shape = format!("{base}.shape");
             if matches!(a.shape.geometry, GeometryDesc::Box(_)) {
                 return fail(format!("{shape}.type"), "an area light is a rectangle or a sphere, got box");
+            }
+            if matches!(a.shape.geometry, GeometryDesc::Mesh(_)) {
+                return fail(
+                    format!("{shape}.type"),
+                    "an area light is a rectangle or a sphere, got mesh (emitting meshes are not supported yet)",
+                );
             }
             if a.shape.interior.is_some() || a.shape.exterior.is_some() || a.shape.bsdf != BsdfDesc::Null {
                 return fail(shape, "an area light's shape takes no `interior`, `exterior` or `bsdf` (it is black)");

@@ -67,6 +67,7 @@ pub fn scene(
         ambient_medium: ambient,
         camera_medium: None,
         bounds: (lo, hi),
+        accel: Default::default(),
     };
     s.camera_medium = s.medium_at(s.camera.position);
     s

@@ -371,6 +371,22 @@ impl Tracer<'_> {
     }
 }
 
+/// Veach's (1997, eq. 5.17) correction of the adjoint BSDF for shading
+/// normals: `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)`, exactly 1 where the
+/// shading and geometric normals coincide.
+#[inline]
+fn shading_adjoint_factor(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    if ns == ng {
+        return 1.0;
+    }
+    let den = wo.dot(ng).abs() * wi.dot(ns).abs();
+    if den > 0.0 {
+        wo.dot(ns).abs() * wi.dot(ng).abs() / den
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -406,21 +422,5 @@ mod tests {
         add(&mut sum, Rgb::splat(1e-8));
         assert!(sum[0] > 1.0);
         assert_eq!(a.lost_power[0], 1e-8f32 as f64);
-    }
-}
-
-/// Veach's (1997, eq. 5.17) correction of the adjoint BSDF for shading
-/// normals: `|wo.ns| |wi.ng| / (|wo.ng| |wi.ns|)`, exactly 1 where the
-/// shading and geometric normals coincide.
-#[inline]
-fn shading_adjoint_factor(ng: Vec3, ns: Vec3, wo: Vec3, wi: Vec3) -> f32 {
-    if ns == ng {
-        return 1.0;
-    }
-    let den = wo.dot(ng).abs() * wi.dot(ns).abs();
-    if den > 0.0 {
-        wo.dot(ns).abs() * wi.dot(ng).abs() / den
-    } else {
-        0.0
     }
 }

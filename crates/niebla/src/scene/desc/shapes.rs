@@ -32,7 +32,7 @@ pub enum GeometryDesc {
     /// `"type": "rectangle"`.
     Rectangle(RectangleDesc),
     /// `"type": "mesh"`: a triangle mesh from a file or inline arrays.
-    Mesh(MeshDesc),
+    Mesh(Box<MeshDesc>),
 }
 
 impl GeometryDesc {
