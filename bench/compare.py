@@ -359,6 +359,9 @@ def main():
     ref_s = args.ref_seconds or (12.0 if args.quick else 40.0)
     sweep_s = args.sweep_seconds or (10.0 if args.quick else 40.0)
 
+    from llvm import use_newest_llvm
+
+    use_newest_llvm()
     import drjit as dr
     import mitsuba as mi
 

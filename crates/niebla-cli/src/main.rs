@@ -1,6 +1,7 @@
 //! The `niebla` command: render scenes, describe them, and measure the renderer.
 
 mod bench;
+mod bench_geometry;
 mod bench_interactive;
 mod bench_photons;
 mod bench_trackers;
@@ -57,6 +58,9 @@ enum BenchCommand {
     Interactive(bench_interactive::InteractiveBenchArgs),
     /// Photons traced/s, gather queries/s, time of photon, ppm and volpath to a relative MSE of 1e-2.
     Photons(bench_photons::PhotonBenchArgs),
+    /// Hierarchy build time and memory, closest-hit and any-hit rays/s on
+    /// generated meshes of 10^4 to 10^7 triangles.
+    Geometry(bench_geometry::GeometryBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -70,6 +74,7 @@ fn main() -> ExitCode {
         Command::Preview(args) => preview_cmd::run(&args),
         Command::Bench(BenchCommand::Interactive(args)) => bench_interactive::run(&args),
         Command::Bench(BenchCommand::Photons(args)) => bench_photons::run(&args),
+        Command::Bench(BenchCommand::Geometry(args)) => bench_geometry::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

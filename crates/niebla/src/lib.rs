@@ -26,5 +26,6 @@ pub mod progressive;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod texture;
 pub mod tracking;
 pub mod world;

@@ -429,3 +429,64 @@ fn bad_meshes_are_errors_naming_file_and_fault() {
     build(&ok, &dir);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A finely tessellated sphere (an icosphere of 20480 triangles with its
+/// exact vertex normals) renders like the analytic sphere: diffuse, glass
+/// holding a chromatic medium, and an index-matched boundary of fog. The
+/// image means agree within 4 combined standard errors (6 batches each, the
+/// same seeds) plus the tessellation's own effect: the faces lie inside the
+/// sphere by a mean radial deficit `eps = 1 - (V_mesh / V_sphere)^(1/3)`,
+/// which changes the projected area and the optical depths by about
+/// `2 eps`; 3 eps of the mean is allowed for it.
+#[test]
+fn a_tessellated_sphere_renders_like_the_analytic_sphere() {
+    let mut data = niebla_mesh::icosphere(5, 1.0);
+    data.normals = Some(data.positions.iter().map(|p| Vec3::from(*p).normalize().to_array()).collect());
+    let mesh = mesh_of(&data);
+    let eps = 1.0 - (mesh.volume() as f64 / (4.0 / 3.0 * std::f64::consts::PI)).cbrt();
+    assert!(eps > 0.0 && eps < 1e-3, "radial deficit {eps}");
+    let dir = temp_dir("tessellated");
+    niebla_mesh::write_ply_binary(dir.join("sphere.ply"), &data, niebla_mesh::ByteOrder::LittleEndian).unwrap();
+    let cases = [
+        ("diffuse", r#""bsdf": {"type": "diffuse", "reflectance": [0.7, 0.5, 0.3]}"#),
+        ("glass of milk", r#""bsdf": {"type": "dielectric", "int_ior": 1.4}, "interior": "milk""#),
+        ("fog boundary", r#""interior": "fog""#),
+    ];
+    for (label, surface) in cases {
+        let scene = |shape: &str| {
+            format!(
+                r#"{{"version": 1,
+                  "camera": {{"type": "perspective", "position": [0.4, 0.8, 4], "target": [0, 0, 0], "fov_y": 38,
+                             "width": 24, "height": 24}},
+                  "render": {{"integrator": {{"type": "volpath"}}}},
+                  "media": {{"milk": {{"type": "homogeneous", "sigma_t": [3, 4, 6], "albedo": 0.97}},
+                            "fog": {{"type": "homogeneous", "sigma_t": 1.2, "albedo": 0.9, "phase": {{"type": "hg", "g": 0.5}}}}}},
+                  "shapes": [{{{shape}, {surface}}},
+                             {{"type": "rectangle", "to_world": {{"scale": 4, "rotate_x": -90, "translate": [0, -1.05, 0]}},
+                               "bsdf": {{"type": "diffuse", "reflectance": 0.5}}}}],
+                  "lights": [{{"type": "point", "position": [1.5, 3, 2], "intensity": 12}},
+                             {{"type": "constant", "radiance": 0.15}}]}}"#
+            )
+        };
+        let analytic = build(&scene(r#""type": "sphere", "center": [0, 0, 0], "radius": 1"#), &dir);
+        let meshed = build(&scene(r#""type": "mesh", "file": "sphere.ply""#), &dir);
+        let (ma, sa) = batch_stats(&analytic, 16, 6);
+        let (mb, sb) = batch_stats(&meshed, 16, 6);
+        let n = ma.len() as f64;
+        for c in 0..3 {
+            let mean_a = ma.iter().map(|p| p[c]).sum::<f64>() / n;
+            let mean_b = mb.iter().map(|p| p[c]).sum::<f64>() / n;
+            // Standard error of the image mean from the per-pixel ones
+            // (pixels are independent).
+            let se_a = (sa.iter().map(|p| p[c] * p[c]).sum::<f64>()).sqrt() / n;
+            let se_b = (sb.iter().map(|p| p[c] * p[c]).sum::<f64>()).sqrt() / n;
+            let tolerance = 4.0 * (se_a * se_a + se_b * se_b).sqrt() + 3.0 * eps * mean_a;
+            println!("{label} channel {c}: sphere {mean_a:.5}, mesh {mean_b:.5}, tolerance {tolerance:.2e}");
+            assert!(
+                (mean_a - mean_b).abs() <= tolerance,
+                "{label} channel {c}: {mean_a} vs {mean_b} (tol {tolerance})"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -28,6 +28,7 @@ fn boundary(shape: Shape, interior: u32) -> SceneObject {
         exterior: None,
         bounds_medium: true,
         emitter: None,
+        texture: None,
     }
 }
 
@@ -40,6 +41,7 @@ fn black_plane(y: f32) -> SceneObject {
         exterior: None,
         bounds_medium: false,
         emitter: None,
+        texture: None,
     }
 }
 

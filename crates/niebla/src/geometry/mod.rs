@@ -146,6 +146,37 @@ impl Shape {
         }
     }
 
+    /// Texture coordinates of a hit found on this shape (the conventions of
+    /// [`crate::texture`]): interpolated vertex uvs on meshes (else the
+    /// barycentric `(b1, b2)`), azimuth and polar angle on spheres, the
+    /// local square on rectangles, the face's coordinates on boxes.
+    pub fn uv(&self, surface: &SurfaceHit, local: &PrimitiveHit) -> crate::math::Vec2 {
+        use crate::math::{Vec2, INV_PI, PI};
+        match self {
+            Shape::Sphere(s) => {
+                let n = (surface.p - s.center) / s.radius;
+                let u = n.y.atan2(n.x).rem_euclid(2.0 * PI) * (0.5 * INV_PI);
+                Vec2::new(u, n.z.clamp(-1.0, 1.0).acos() * INV_PI)
+            }
+            Shape::Rectangle(r) => {
+                let q = r.transform.to_local.transform_point3(surface.p);
+                Vec2::new(0.5 * (q.x + 1.0), 0.5 * (q.y + 1.0))
+            }
+            Shape::Box(b) => {
+                let f = (surface.p - b.min) / (b.max - b.min);
+                let n = surface.n;
+                if n.x != 0.0 {
+                    Vec2::new(f.z, f.y)
+                } else if n.y != 0.0 {
+                    Vec2::new(f.x, f.z)
+                } else {
+                    Vec2::new(f.x, f.y)
+                }
+            }
+            Shape::Mesh(m) => m.mesh.uv_at(local.prim, local.b1, local.b2),
+        }
+    }
+
     /// True for shapes that enclose a volume (and so can hold a medium).
     pub fn is_closed(&self) -> bool {
         match self {

@@ -171,7 +171,7 @@ pub(crate) fn trace_camera_ray(
             medium: Option<MediumId>,
             sampler: &mut PixelSampler,
         ) -> Rgb {
-            let bsdf = &scene.object(hit).bsdf;
+            let bsdf = &scene.surface_bsdf(hit);
             direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, self.method, sampler)
         }
     }

@@ -101,6 +101,7 @@ pub fn build_scene_with_options(
 
     // Shapes.
     let mut meshes = super::build_mesh::MeshLoader::default();
+    let mut textures = super::build_texture::TextureLoader::default();
     let mut objects = Vec::new();
     let mut explicit_exterior = Vec::new();
     for (i, s) in desc.shapes.iter().enumerate() {
@@ -120,10 +121,17 @@ pub fn build_scene_with_options(
                 Shape::Mesh(meshes.instance(d, t, bounds_medium, &path, source, base_dir, &mut budget)?)
             }
         };
-        let bsdf = match s.bsdf {
+        let mut texture = None;
+        let bsdf = match &s.bsdf {
             BsdfDesc::Null => Bsdf::Null,
-            BsdfDesc::Diffuse { reflectance } => Bsdf::Diffuse { reflectance: reflectance.to_rgb() },
-            BsdfDesc::Dielectric { int_ior, ext_ior } => Bsdf::dielectric(int_ior, ext_ior),
+            BsdfDesc::Diffuse { reflectance: ReflectanceDesc::Color(c) } => Bsdf::Diffuse { reflectance: c.to_rgb() },
+            BsdfDesc::Diffuse { reflectance: ReflectanceDesc::Texture(t) } => {
+                let field = format!("{path}.bsdf.reflectance");
+                texture = Some(std::sync::Arc::new(textures.texture(t, &field, source, base_dir, &mut budget)?));
+                // The constant is unused: every hit looks the texture up.
+                Bsdf::Diffuse { reflectance: Rgb::splat(0.5) }
+            }
+            BsdfDesc::Dielectric { int_ior, ext_ior } => Bsdf::dielectric(*int_ior, *ext_ior),
             BsdfDesc::Conductor(ConductorDesc::Material(name)) => Bsdf::conductor_preset(name)
                 .ok_or_else(|| err(&format!("{path}.bsdf.material"), format!("unknown conductor \"{name}\"")))?,
             BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
@@ -133,7 +141,7 @@ pub fn build_scene_with_options(
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
-        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None });
+        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None, texture });
         explicit_exterior.push(s.exterior.is_some());
     }
     let ambient_medium = medium_id(&desc.ambient_medium);
@@ -200,6 +208,7 @@ pub fn build_scene_with_options(
                     exterior: None,
                     bounds_medium: false,
                     emitter: Some(i as u32),
+                    texture: None,
                 });
                 explicit_exterior.push(false);
                 Light::Area(light)

@@ -14,6 +14,7 @@
 mod build;
 mod build_medium;
 mod build_mesh;
+mod build_texture;
 pub mod desc;
 mod error;
 mod parse;

@@ -557,11 +557,89 @@ deserialize_object!(BsdfDesc, "a bsdf object with a \"type\" field", parse_bsdf)
 #[serde(deny_unknown_fields)]
 struct RawDiffuse {
     #[serde(default = "half_gray")]
-    reflectance: ColorDesc,
+    reflectance: ReflectanceDesc,
 }
 
-fn half_gray() -> ColorDesc {
-    ColorDesc::Gray(0.5)
+fn half_gray() -> ReflectanceDesc {
+    ReflectanceDesc::Color(ColorDesc::Gray(0.5))
+}
+
+impl<'de> Deserialize<'de> for ReflectanceDesc {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<ReflectanceDesc, D::Error> {
+        match serde_json::Value::deserialize(deserializer)? {
+            serde_json::Value::Object(object) => {
+                parse_texture(object).map(ReflectanceDesc::Texture).map_err(Located::into_serde)
+            }
+            other => ColorDesc::deserialize(other).map(ReflectanceDesc::Color).map_err(|e| {
+                serde::de::Error::custom(format!("expected a color (a number or [r, g, b]) or a texture object: {e}"))
+            }),
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBitmap {
+    file: String,
+    #[serde(default)]
+    wrap: Option<String>,
+    #[serde(default)]
+    raw: bool,
+    #[serde(default = "unit_uv_scale")]
+    scale: [f32; 2],
+}
+
+fn unit_uv_scale() -> [f32; 2] {
+    [1.0, 1.0]
+}
+
+fn checker_uv_scale() -> [f32; 2] {
+    [2.0, 2.0]
+}
+
+fn checker_color0() -> ColorDesc {
+    ColorDesc::Gray(0.4)
+}
+
+fn checker_color1() -> ColorDesc {
+    ColorDesc::Gray(0.2)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCheckerboard {
+    #[serde(default = "checker_color0")]
+    color0: ColorDesc,
+    #[serde(default = "checker_color1")]
+    color1: ColorDesc,
+    #[serde(default = "checker_uv_scale")]
+    scale: [f32; 2],
+}
+
+fn parse_texture(mut object: Object) -> Result<TextureDesc, Located> {
+    let tag = take_tag(&mut object, "texture", TextureDesc::TYPES, None)?;
+    match tag.as_str() {
+        "bitmap" => {
+            let raw: RawBitmap = rest(object)?;
+            let wrap = match raw.wrap.as_deref() {
+                None | Some("repeat") => crate::texture::WrapMode::Repeat,
+                Some("mirror") => crate::texture::WrapMode::Mirror,
+                Some("clamp") => crate::texture::WrapMode::Clamp,
+                Some(other) => {
+                    return Err(Located::new(
+                        "wrap",
+                        format!("unknown wrap mode \"{other}\"; expected \"repeat\", \"mirror\" or \"clamp\""),
+                    ))
+                }
+            };
+            Ok(TextureDesc::Bitmap { file: raw.file, wrap, raw: raw.raw, scale: raw.scale })
+        }
+        "checkerboard" => {
+            let raw: RawCheckerboard = rest(object)?;
+            Ok(TextureDesc::Checkerboard { color0: raw.color0, color1: raw.color1, scale: raw.scale })
+        }
+        _ => Err(unknown_type("texture", &tag, TextureDesc::TYPES)),
+    }
 }
 
 #[derive(Deserialize)]

@@ -484,7 +484,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
     }
     match &shape.bsdf {
         BsdfDesc::Null => Ok(()),
-        BsdfDesc::Diffuse { reflectance } => color(&format!("{base}.bsdf.reflectance"), reflectance, in_unit_interval),
+        BsdfDesc::Diffuse { reflectance } => validate_reflectance(&format!("{base}.bsdf.reflectance"), reflectance),
         BsdfDesc::Dielectric { int_ior, ext_ior } => {
             positive(&format!("{base}.bsdf.int_ior"), *int_ior)?;
             positive(&format!("{base}.bsdf.ext_ior"), *ext_ior)
@@ -495,6 +495,31 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             color(&format!("{base}.bsdf.k"), k, non_negative)
         }
         BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => color(&format!("{base}.bsdf.reflectance"), r, below_one),
+    }
+}
+
+fn validate_reflectance(base: &str, r: &ReflectanceDesc) -> Check {
+    let scale = |s: &[f32; 2]| -> Check {
+        for (i, v) in s.iter().enumerate() {
+            if !v.is_finite() || *v == 0.0 {
+                return fail(format!("{base}.scale[{i}]"), format!("must be a finite non-zero number, got {v}"));
+            }
+        }
+        Ok(())
+    };
+    match r {
+        ReflectanceDesc::Color(c) => color(base, c, in_unit_interval),
+        ReflectanceDesc::Texture(TextureDesc::Bitmap { scale: s, file, .. }) => {
+            if file.is_empty() {
+                return fail(format!("{base}.file"), "must name an image file (.png, .jpg or .exr)");
+            }
+            scale(s)
+        }
+        ReflectanceDesc::Texture(TextureDesc::Checkerboard { color0, color1, scale: s }) => {
+            color(&format!("{base}.color0"), color0, in_unit_interval)?;
+            color(&format!("{base}.color1"), color1, in_unit_interval)?;
+            scale(s)
+        }
     }
 }
 

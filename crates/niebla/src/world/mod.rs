@@ -12,7 +12,7 @@ use std::ops::ControlFlow;
 use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
 use crate::color::Rgb;
-use crate::geometry::{Shape, SurfaceHit};
+use crate::geometry::{PrimitiveHit, Shape, SurfaceHit};
 use crate::light::Light;
 use crate::math::{Ray, Vec3};
 use crate::medium::{Medium, MediumId};
@@ -35,6 +35,9 @@ pub struct SceneObject {
     pub bounds_medium: bool,
     /// Index in [`Scene::lights`] of the area light this shape emits as.
     pub emitter: Option<u32>,
+    /// A texture giving a diffuse surface's reflectance at each uv point
+    /// (replacing `bsdf`'s constant one; see [`Scene::surface_bsdf`]).
+    pub texture: Option<std::sync::Arc<crate::texture::Texture>>,
 }
 
 /// A surface hit with the object it belongs to.
@@ -44,6 +47,8 @@ pub struct Hit {
     pub surface: SurfaceHit,
     /// Index into [`Scene::objects`].
     pub object: u32,
+    /// The hit on the object's shape (for a mesh: triangle and barycentrics).
+    pub local: PrimitiveHit,
 }
 
 /// Maximum number of index-matched boundaries a ray may cross before it is
@@ -93,7 +98,7 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         // Nearest hit first; the hit record only for the nearest object.
         let (i, h) = self.trees().all.closest(&self.objects, ray, t_min, t_max)?;
-        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i })
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
     }
 
     /// Nearest hit among the index-matched medium boundaries (`null`
@@ -101,7 +106,21 @@ impl Scene {
     #[inline]
     pub fn intersect_boundaries(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let (i, h) = self.trees().boundaries.closest(&self.objects, ray, t_min, t_max)?;
-        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i })
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
+    }
+
+    /// The surface model at `hit`: the object's BSDF, with a textured
+    /// diffuse reflectance looked up at the hit's uv.
+    #[inline]
+    pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
+        let object = self.object(hit);
+        match (&object.texture, object.bsdf) {
+            (Some(texture), Bsdf::Diffuse { .. }) => {
+                let uv = object.shape.uv(&hit.surface, &hit.local);
+                Bsdf::Diffuse { reflectance: texture.eval(uv).map(|c| c.clamp(0.0, 1.0)) }
+            }
+            (_, bsdf) => bsdf,
+        }
     }
 
     /// Whether an opaque surface (any object whose surface is not `null`)

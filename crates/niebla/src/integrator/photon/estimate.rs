@@ -97,13 +97,13 @@ impl CameraRayVisitor for PhotonVisitor<'_, '_> {
         medium: Option<MediumId>,
         sampler: &mut PixelSampler,
     ) -> Rgb {
-        let object = scene.object(hit);
         let p = hit.surface.p;
         let ns = hit.surface.shading_normal(wo);
         let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
         let method = self.integrator.single.transmittance;
-        direct_surface_radiance(scene, &hit.surface, wo, &object.bsdf, medium, method, sampler)
-            + self.integrator.surface_estimate(p, n, wo, &object.bsdf, &mut self.heap)
+        let bsdf = scene.surface_bsdf(hit);
+        direct_surface_radiance(scene, &hit.surface, wo, &bsdf, medium, method, sampler)
+            + self.integrator.surface_estimate(p, n, wo, &bsdf, &mut self.heap)
     }
 }
 

@@ -342,7 +342,8 @@ impl Tracer<'_> {
             let u_bsdf = sampler.next_2d();
             let u_rr = sampler.next_1d();
             let ns = hit.surface.shading_normal(wo);
-            let Some(bs) = object.bsdf.sample_with_mode(ns, wo, u_lobe, u_bsdf, TransportMode::Importance) else {
+            let bsdf = scene.surface_bsdf(&hit);
+            let Some(bs) = bsdf.sample_with_mode(ns, wo, u_lobe, u_bsdf, TransportMode::Importance) else {
                 return;
             };
             if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {

@@ -215,12 +215,13 @@ impl VolPathIntegrator {
             let p = hit.surface.p;
             // Guiding toward lights inside a medium, for non-specular surfaces
             // whose side of `wo` lies in a medium.
-            let surface_guiding = guiding.filter(|_| medium.is_some() && !object.bsdf.is_specular());
-            if !object.bsdf.is_specular() {
+            let bsdf = scene.surface_bsdf(&hit);
+            let surface_guiding = guiding.filter(|_| medium.is_some() && !bsdf.is_specular());
+            if !bsdf.is_specular() {
                 let vertex = NeeVertex {
                     p,
                     wo,
-                    scatter: Scatter::Surface(&object.bsdf, n, ng),
+                    scatter: Scatter::Surface(&bsdf, n, ng),
                     medium,
                     beta,
                     r_p: r_u,
@@ -229,7 +230,7 @@ impl VolPathIntegrator {
                 };
                 l += sample_ld(scene, &vertex, group, hero, lights, sampler);
             }
-            let Some(bs) = sample_bsdf(&object.bsdf, ns, p, wo, surface_guiding, sampler) else {
+            let Some(bs) = sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler) else {
                 return l;
             };
             if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {

@@ -118,8 +118,61 @@ pub struct RectangleDesc {
     pub to_world: TransformDesc,
 }
 
+/// A surface color: one color, or a texture over the surface's uv
+/// coordinates (`{"type": "bitmap", ...}` or `{"type": "checkerboard", ...}`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ReflectanceDesc {
+    /// The same color everywhere.
+    Color(ColorDesc),
+    /// A texture.
+    Texture(TextureDesc),
+}
+
+impl ReflectanceDesc {
+    /// The color, for a constant; `None` for a texture.
+    pub fn color(&self) -> Option<&ColorDesc> {
+        match self {
+            ReflectanceDesc::Color(c) => Some(c),
+            ReflectanceDesc::Texture(_) => None,
+        }
+    }
+}
+
+/// A texture, tagged by `type`. uv conventions are in [`crate::texture`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureDesc {
+    /// `"bitmap"`: an image file (`.png`, `.jpg`, `.exr`), relative to the
+    /// scene file's folder, filtered bilinearly.
+    Bitmap {
+        /// Image file.
+        file: String,
+        /// `"repeat"` (default), `"mirror"` or `"clamp"`.
+        wrap: crate::texture::WrapMode,
+        /// Keep 8/16-bit values as they are instead of decoding sRGB
+        /// (default false; EXR is always linear).
+        raw: bool,
+        /// uv scale `[su, sv]` (default `[1, 1]`): repetitions of the image.
+        scale: [f32; 2],
+    },
+    /// `"checkerboard"`: two colors on a grid of `scale` cells per unit uv.
+    Checkerboard {
+        /// Color of the cell at uv (0, 0) and every other cell (default 0.4).
+        color0: ColorDesc,
+        /// Color of the other cells (default 0.2).
+        color1: ColorDesc,
+        /// Cells per unit of u and v (default `[2, 2]`, four cells over the
+        /// unit square, as Mitsuba 3's checkerboard).
+        scale: [f32; 2],
+    },
+}
+
+impl TextureDesc {
+    /// The `type` names, in the order of the variants.
+    pub const TYPES: &'static [&'static str] = &["bitmap", "checkerboard"];
+}
+
 /// Surface scattering, tagged by `type` in the file; default `null`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub enum BsdfDesc {
     /// `"null"`: no surface; light passes unchanged (an index-matched
     /// boundary between media).
@@ -127,8 +180,9 @@ pub enum BsdfDesc {
     Null,
     /// `"diffuse"`: Lambertian reflection.
     Diffuse {
-        /// Reflectance (albedo), each channel in [0, 1]; default 0.5.
-        reflectance: ColorDesc,
+        /// Reflectance (albedo), each channel in [0, 1]; default 0.5; a
+        /// color or a texture.
+        reflectance: ReflectanceDesc,
     },
     /// `"dielectric"`: smooth glass-like interface (Fresnel reflection and
     /// refraction; absorption belongs to the media on either side).
