@@ -828,9 +828,8 @@ impl Body for AsciiBody<'_> {
                 return Err(MeshError::Truncated {
                     path: self.path.to_path_buf(),
                     what: format!(
-                        "the file ends after line {} but the header declares {declared} {} elements and this is \
-                         number {index}",
-                        self.line, element
+                        "the file ends after line {}, before {element} {index} (the header declares {declared})",
+                        self.line
                     ),
                 });
             }
