@@ -32,8 +32,10 @@ pub fn read_obj(path: impl AsRef<Path>, object: Option<&str>) -> Result<MeshData
     parse_obj(&data, path, object)
 }
 
-/// Parses OBJ text already in memory (`data` must be UTF-8); `path` is only
-/// used in error messages.
+/// Parses OBJ text already in memory; `path` is only used in error
+/// messages. Bytes that are not UTF-8 are replaced by U+FFFD (harmless in
+/// names and comments, an error in numbers); a UTF-8 byte order mark is
+/// skipped; UTF-16 text is an error.
 ///
 /// ```
 /// use std::path::Path;
@@ -45,13 +47,14 @@ pub fn read_obj(path: impl AsRef<Path>, object: Option<&str>) -> Result<MeshData
 /// );
 /// ```
 pub fn parse_obj(data: &[u8], path: &Path, object: Option<&str>) -> Result<MeshData, MeshError> {
-    let text = match std::str::from_utf8(data) {
-        Ok(t) => t,
-        Err(e) => {
-            let line = 1 + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-            return Err(parse_error(path, line, "not UTF-8 text".into()));
-        }
-    };
+    if data.starts_with(&[0xFE, 0xFF]) || data.starts_with(&[0xFF, 0xFE]) {
+        return Err(parse_error(path, 1, "UTF-16 text (byte order mark); OBJ files must be ASCII or UTF-8".into()));
+    }
+    // Bytes that are not UTF-8 (Latin-1 object or material names) become
+    // U+FFFD; a UTF-8 byte order mark is dropped (tobj would read it as part
+    // of the first keyword and silently skip that line).
+    let text = String::from_utf8_lossy(data);
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let scan = prescan(text, path)?;
     let rewritten;
     let text = if scan.rewrite {
@@ -125,18 +128,20 @@ struct Prescan {
     /// Some lines must be changed before tobj reads the text: polylines of
     /// three or more vertices (tobj would make them faces) are blanked, and
     /// vertex colours are removed when only some vertices have them (tobj
-    /// would fail with "face color out of bounds").
+    /// would fail with "face color out of bounds"), and `usemtl` lines
+    /// without a name (tobj would fail; materials are ignored anyway) are
+    /// blanked.
     rewrite: bool,
 }
 
 /// Checks, with line numbers, what tobj reports without one: malformed or
 /// non-finite `v`, `vt`, `vn` values, face indices that are not integers or
-/// out of range, empty faces and `usemtl` lines. Positive indices are
+/// out of range, and empty faces. Positive indices are
 /// checked against the file's total counts (tobj resolves them after
 /// reading everything), negative ones against the counts so far.
 fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    let (mut colored, mut long_polylines) = (0usize, false);
+    let (mut colored, mut rewrite_needed) = (0usize, false);
     let numbers = |words: &[&str], n: usize, line: usize, what: &str| -> Result<(), MeshError> {
         if words.len() < n {
             return Err(parse_error(path, line, format!("{what}: expected {n} numbers, found {}", words.len())));
@@ -187,10 +192,8 @@ fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
                 numbers(&words[1..], 3, line_no, "normal")?;
                 nvn += 1;
             }
-            Some("l") if words.len() > 3 => long_polylines = true,
-            Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
-                return Err(parse_error(path, line_no, "usemtl without a material name".into()));
-            }
+            Some("l") if words.len() > 3 => rewrite_needed = true,
+            Some("usemtl") if unnamed_usemtl(line) => rewrite_needed = true,
             _ => {}
         }
     }
@@ -218,7 +221,7 @@ fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
             _ => {}
         }
     }
-    Ok(Prescan { rewrite: long_polylines || (colored > 0 && colored < total_v) })
+    Ok(Prescan { rewrite: rewrite_needed || (colored > 0 && colored < total_v) })
 }
 
 /// Checks one face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn` as tobj parses
@@ -261,7 +264,13 @@ fn check_face_vertex(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Resu
     Ok(())
 }
 
-/// The text with polylines of three or more vertices blanked and vertex
+/// Whether tobj would reject this `usemtl` line for lacking a name (it
+/// takes the name after the first space).
+fn unnamed_usemtl(line: &str) -> bool {
+    line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty())
+}
+
+/// The text with polylines and unnamed `usemtl` lines blanked and vertex
 /// colours removed; line numbers are kept.
 fn rewrite(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
@@ -272,6 +281,7 @@ fn rewrite(text: &str) -> String {
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.first().copied() {
             Some("l") => {}
+            Some("usemtl") if unnamed_usemtl(line) => {}
             Some("v") if words.len() == 7 => out.push_str(&words[..4].join(" ")),
             _ => out.push_str(line),
         }

@@ -79,6 +79,15 @@ fn a_vertex_used_with_two_uvs_becomes_two_vertices() {
 }
 
 #[test]
+fn byte_order_mark_latin1_names_and_unnamed_usemtl_are_accepted() {
+    let mut data = b"\xef\xbb\xbf".to_vec();
+    data.extend_from_slice(FIVE.as_bytes());
+    data.extend_from_slice(b"o caf\xe9\nusemtl\nusemtl Terraind\xe6k\nf 1 2 3\n");
+    let m = parse_obj(&data, Path::new("latin1.obj"), Some("caf\u{fffd}")).unwrap();
+    assert_eq!(m.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+}
+
+#[test]
 fn partial_vertex_colours_are_ignored() {
     let m = obj(&format!("v 0 0 0 1 0 0\n{FIVE}f 2 3 4\n"), None).unwrap();
     assert_eq!(m.positions, vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
@@ -121,14 +130,15 @@ fn bad_files_name_the_line() {
         ),
         (format!("{FIVE}vt 0.5\nf 1 2 3\n"), "line 6: texture coordinate (u v): expected 2 numbers, found 1"),
         (format!("{FIVE}vn 0 inf 1\nf 1 2 3\n"), "line 6: normal: \"inf\" is not a finite number"),
-        (format!("{FIVE}usemtl\nf 1 2 3\n"), "line 6: usemtl without a material name"),
         (format!("{FIVE}\n"), "no triangles (faces with fewer than 3 vertices are skipped)"),
     ];
     for (text, expected) in cases {
         assert_eq!(err(&text), format!("test.obj: {expected}"), "{text}");
     }
     let e = parse_obj(b"v 0 0 0\nv \xff 0 0\n", Path::new("bin.obj"), None).unwrap_err().to_string();
-    assert_eq!(e, "bin.obj: line 2: not UTF-8 text");
+    assert_eq!(e, "bin.obj: line 2: vertex position: \"\u{fffd}\" is not a number");
+    let e = parse_obj(b"\xff\xfe\0v\0 \x000", Path::new("utf16.obj"), None).unwrap_err().to_string();
+    assert_eq!(e, "utf16.obj: line 1: UTF-16 text (byte order mark); OBJ files must be ASCII or UTF-8");
     // A position overflowing f32 after the division by w.
     let e = err("v 0 0 0\nv 1e30 0 0 1e-30\nv 0 1 0\nf 1 2 3\n");
     assert_eq!(e, "test.obj: positions[1][0]: inf is not a finite number");

@@ -286,8 +286,8 @@ fn malformed_headers_name_the_line() {
         "test.ply: no triangles (faces with fewer than 3 vertices are skipped)"
     );
     assert_eq!(
-        err("ply\nformat ascii 1.0\nelement vertex 0\nmaterial red\nend_header\n"),
-        "test.ply: PLY header line 4: unknown keyword \"material\"; expected format, comment, obj_info, element, \
+        err("ply\nformat ascii 1.0\nCreated by hand\nelement vertex 0\nmaterial red\nend_header\n"),
+        "test.ply: PLY header line 5: unknown keyword \"material\"; expected format, comment, obj_info, element, \
          property or end_header"
     );
 }
