@@ -129,7 +129,7 @@ fn bad_files_name_the_line() {
             "line 2: vertex with 5 values; expected x y z, x y z w or x y z r g b",
         ),
         (format!("{FIVE}vt 0.5\nf 1 2 3\n"), "line 6: texture coordinate (u v): expected 2 numbers, found 1"),
-        (format!("{FIVE}vn 0 inf 1\nf 1 2 3\n"), "line 6: normal: \"inf\" is not a finite number"),
+        (format!("{FIVE}vn 0 inf 1\nf 1//1 2//1 3//1\n"), "line 6: normal: \"inf\" is not a finite number"),
         (format!("{FIVE}\n"), "no triangles (faces with fewer than 3 vertices are skipped)"),
     ];
     for (text, expected) in cases {
