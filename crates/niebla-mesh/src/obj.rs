@@ -249,9 +249,10 @@ fn check_face_vertex(token: &str, so_far: [usize; 3], total: Option<[usize; 3]>)
             largest[k] = x;
         } else if x.unsigned_abs() > so_far[k] {
             return Err(format!(
-                "face vertex {token:?}: relative {} index {x} but only {} precede this line",
+                "face vertex {token:?}: relative {} index {x} but only {} {} this line",
                 KIND[k],
-                plural(so_far[k])
+                plural(so_far[k]),
+                if so_far[k] == 1 { "precedes" } else { "precede" }
             ));
         }
     }

@@ -116,6 +116,12 @@ fn bad_files_name_the_line() {
             format!("{FIVE}vn 0 0 1\nf 1//1 2//2 3//1\n"),
             "line 7: face vertex \"2//2\" refers to normal 2 but the file has 1 normal",
         ),
+        // Indices whose arithmetic overflows inside tobj 4.0.5 (`vn * 3 + 2`,
+        // `vt * 2 + 1` after a relative index wraps): it panics on them.
+        (format!("{FIVE}vn 0 0 1\nf 1//6148914691236517206 2//1 3//1\n"), "line 7: face vertex \"1//6148914691236517206\" refers to normal 6148914691236517206 but the file has 1 normal"),
+        (format!("{FIVE}vt 0 0\nf 1/-9223372036854775808 2/1 3/1\n"), "line 7: face vertex \"1/-9223372036854775808\": relative texture coordinate index -9223372036854775808 but only 1 texture coordinate precedes this line"),
+        (format!("{FIVE}f -9223372036854775808 1 2\n"), "line 6: face vertex \"-9223372036854775808\": relative position index -9223372036854775808 but only 5 positions precede this line"),
+        (format!("{FIVE}f 1 2 9223372036854775808\n"), "line 6: face vertex \"9223372036854775808\": \"9223372036854775808\" is not an integer"),
         (format!("{FIVE}f 1 2 x\n"), "line 6: face vertex \"x\": \"x\" is not an integer"),
         (format!("{FIVE}f 1 2 3/4/5/6\n"), "line 6: face vertex \"3/4/5/6\": more than three /-separated indices"),
         (format!("{FIVE}f 1 /2 3\n"), "line 6: face vertex \"/2\": no position index"),
