@@ -310,3 +310,20 @@ fn missing_file_unknown_format_and_object_for_ply_are_errors() {
     let e = read_mesh(&path, &options).unwrap_err().to_string();
     assert!(e.ends_with("object.ply: object \"bunny\" requested, but only OBJ files have named objects"), "{e}");
 }
+
+#[test]
+fn faces_before_vertices_and_partial_normals() {
+    // The face element comes first; indices are checked against the
+    // declared vertex count. nx and ny without nz are not normals.
+    let text = "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n\
+                element vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n\
+                property float ny\nend_header\n3 2 1 0\n0 0 0 1 1\n1 0 0 1 1\n0 1 0 1 1\n";
+    let m = ply(text).unwrap();
+    assert_eq!(m.indices, vec![[2, 1, 0]]);
+    assert_eq!(m.positions[2], [0.0, 1.0, 0.0]);
+    assert!(m.normals.is_none());
+    assert_eq!(
+        err(&text.replace("3 2 1 0", "3 2 1 3")),
+        "test.ply: line 12 (face 0): vertex_indices[2]: vertex index 3 out of range (the file has 3 vertices)"
+    );
+}
