@@ -4,7 +4,7 @@
 # into findings. Crashes land in fuzz/artifacts/<target>/; the log in
 # fuzz/logs/<target>.log ends with libFuzzer's execution count.
 #
-# Usage: fuzz/run.sh scene|render|vdb|vol|npy [SECONDS]
+# Usage: fuzz/run.sh scene|render|vdb|vol|npy|ply|obj [SECONDS]
 # Run the targets one at a time (each uses a core and up to 2 GiB).
 set -euo pipefail
 cd "$(dirname "$0")"

@@ -32,8 +32,10 @@ pub fn read_obj(path: impl AsRef<Path>, object: Option<&str>) -> Result<MeshData
     parse_obj(&data, path, object)
 }
 
-/// Parses OBJ text already in memory (`data` must be UTF-8); `path` is only
-/// used in error messages.
+/// Parses OBJ text already in memory; `path` is only used in error
+/// messages. Bytes that are not UTF-8 are replaced by U+FFFD (harmless in
+/// names and comments, an error in numbers); a UTF-8 byte order mark is
+/// skipped; UTF-16 text is an error.
 ///
 /// ```
 /// use std::path::Path;
@@ -45,21 +47,34 @@ pub fn read_obj(path: impl AsRef<Path>, object: Option<&str>) -> Result<MeshData
 /// );
 /// ```
 pub fn parse_obj(data: &[u8], path: &Path, object: Option<&str>) -> Result<MeshData, MeshError> {
-    let text = match std::str::from_utf8(data) {
-        Ok(t) => t,
-        Err(e) => {
-            let line = 1 + data[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count();
-            return Err(parse_error(path, line, "not UTF-8 text".into()));
-        }
-    };
-    let scan = prescan(text, path)?;
+    if data.starts_with(&[0xFE, 0xFF]) || data.starts_with(&[0xFF, 0xFE]) {
+        return Err(parse_error(path, 1, "UTF-16 text (byte order mark); OBJ files must be ASCII or UTF-8".into()));
+    }
+    // Bytes that are not UTF-8 (Latin-1 object or material names) become
+    // U+FFFD; a UTF-8 byte order mark is dropped (tobj would read it as part
+    // of the first keyword and silently skip that line).
+    let text = String::from_utf8_lossy(data);
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let rewrite_needed = check_structure(text, path)?;
     let rewritten;
-    let text = if scan.rewrite {
+    let tobj_text = if rewrite_needed {
         rewritten = rewrite(text);
         rewritten.as_str()
     } else {
         text
     };
+    match load(tobj_text, path, object) {
+        // tobj's errors and non-finite values say neither line nor value:
+        // look for the first malformed v, vt or vn line and report it instead.
+        Err(e @ (MeshError::Parse { .. } | MeshError::Invalid { .. })) => {
+            Err(diagnose_values(text, path).err().unwrap_or(e))
+        }
+        other => other,
+    }
+}
+
+/// Reads structurally checked text with tobj and assembles the mesh.
+fn load(text: &str, path: &Path, object: Option<&str>) -> Result<MeshData, MeshError> {
     let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
     let mut reader = std::io::Cursor::new(text.as_bytes());
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
@@ -120,23 +135,135 @@ fn parse_error(path: &Path, line: usize, what: String) -> MeshError {
     MeshError::Parse { path: path.to_path_buf(), location: format!("line {line}"), what }
 }
 
-/// What the pre-scan found that tobj would mishandle without an error.
-struct Prescan {
-    /// Some lines must be changed before tobj reads the text: polylines of
-    /// three or more vertices (tobj would make them faces) are blanked, and
-    /// vertex colours are removed when only some vertices have them (tobj
-    /// would fail with "face color out of bounds").
-    rewrite: bool,
+/// Checks, before tobj reads the text, what tobj would get wrong or panic
+/// on: face indices that are not integers, 0, or out of range (tobj's index
+/// arithmetic can overflow on huge ones), and faces without vertices. One
+/// pass counts `v`, `vt`, `vn` lines, checks relative (negative) indices
+/// against the counts so far and remembers the largest positive ones (tobj
+/// resolves those after reading everything); only when something is wrong
+/// does a second pass find the first offending line.
+///
+/// Returns whether the text must be rewritten before tobj reads it
+/// ([`rewrite`]): polylines of three or more vertices (tobj would make them
+/// faces), `usemtl` lines without a name (tobj fails on them; materials are
+/// ignored anyway), vertex colours given for some vertices only (tobj would
+/// fail with "face color out of bounds").
+fn check_structure(text: &str, path: &Path) -> Result<bool, MeshError> {
+    let mut counts = [0usize; 3];
+    let mut largest = [0usize; 3];
+    let (mut colored, mut rewrite_needed, mut faulty) = (0usize, false, false);
+    for line in text.split('\n') {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                counts[0] += 1;
+                if words.count() == 6 {
+                    colored += 1;
+                }
+            }
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some(kw @ ("f" | "l")) => {
+                let mut corners = 0;
+                for token in words {
+                    corners += 1;
+                    match check_face_vertex(token, counts, None) {
+                        Ok(max) => (0..3).for_each(|k| largest[k] = largest[k].max(max[k])),
+                        Err(_) => faulty = true,
+                    }
+                }
+                faulty |= corners == 0;
+                rewrite_needed |= kw == "l" && corners >= 3;
+            }
+            Some("usemtl") => rewrite_needed |= unnamed_usemtl(line),
+            _ => {}
+        }
+    }
+    if faulty || (0..3).any(|k| largest[k] > counts[k]) {
+        return Err(first_face_error(text, path, counts));
+    }
+    Ok(rewrite_needed || (colored > 0 && colored < counts[0]))
 }
 
-/// Checks, with line numbers, what tobj reports without one: malformed or
-/// non-finite `v`, `vt`, `vn` values, face indices that are not integers or
-/// out of range, empty faces and `usemtl` lines. Positive indices are
-/// checked against the file's total counts (tobj resolves them after
-/// reading everything), negative ones against the counts so far.
-fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
-    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    let (mut colored, mut long_polylines) = (0usize, false);
+/// The first face or polyline line with a bad index or no vertices, given
+/// the file's total `v`, `vt`, `vn` counts.
+fn first_face_error(text: &str, path: &Path, total: [usize; 3]) -> MeshError {
+    let mut counts = [0usize; 3];
+    for (i, line) in text.split('\n').enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some(kw @ ("f" | "l")) => {
+                let mut corners = 0;
+                for token in words {
+                    corners += 1;
+                    if let Err(what) = check_face_vertex(token, counts, Some(total)) {
+                        return parse_error(path, i + 1, what);
+                    }
+                }
+                if corners == 0 {
+                    let what = if kw == "f" { "face" } else { "polyline" };
+                    return parse_error(path, i + 1, format!("{what} without vertices"));
+                }
+            }
+            _ => {}
+        }
+    }
+    MeshError::Parse { path: path.to_path_buf(), location: "OBJ".into(), what: "bad face index".into() }
+}
+
+/// Checks one face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn` as tobj parses
+/// it: each index an integer (`isize`), not 0, a relative one within the
+/// `so_far` counts, a positive one within `total` when given. Returns the
+/// largest positive index of each kind (0 for none).
+fn check_face_vertex(token: &str, so_far: [usize; 3], total: Option<[usize; 3]>) -> Result<[usize; 3], String> {
+    const KIND: [&str; 3] = ["position", "texture coordinate", "normal"];
+    if token.split('/').count() > 3 {
+        return Err(format!("face vertex {token:?}: more than three /-separated indices"));
+    }
+    let mut largest = [0usize; 3];
+    for (k, part) in token.split('/').enumerate() {
+        if part.is_empty() {
+            if k == 0 {
+                return Err(format!("face vertex {token:?}: no position index"));
+            }
+            continue;
+        }
+        let Ok(x) = part.parse::<isize>() else {
+            return Err(format!("face vertex {token:?}: {part:?} is not an integer"));
+        };
+        let plural = |n: usize| format!("{n} {}{}", KIND[k], if n == 1 { "" } else { "s" });
+        if x == 0 {
+            return Err(format!("face vertex {token:?}: index 0 (OBJ indices start at 1, negative ones count back)"));
+        } else if x > 0 {
+            let x = x as usize;
+            if let Some(total) = total.filter(|t| x > t[k]) {
+                return Err(format!(
+                    "face vertex {token:?} refers to {} {x} but the file has {}",
+                    KIND[k],
+                    plural(total[k])
+                ));
+            }
+            largest[k] = x;
+        } else if x.unsigned_abs() > so_far[k] {
+            return Err(format!(
+                "face vertex {token:?}: relative {} index {x} but only {} {} this line",
+                KIND[k],
+                plural(so_far[k]),
+                if so_far[k] == 1 { "precedes" } else { "precede" }
+            ));
+        }
+    }
+    Ok(largest)
+}
+
+/// The first malformed `v`, `vt` or `vn` line, if any: a missing or
+/// non-numeric value, a non-finite one, `w = 0`, or a vertex with a value
+/// count other than 3 (x y z), 4 (x y z w) or 6 (x y z r g b). Run only
+/// after tobj or the validation failed, to say where.
+fn diagnose_values(text: &str, path: &Path) -> Result<(), MeshError> {
     let numbers = |words: &[&str], n: usize, line: usize, what: &str| -> Result<(), MeshError> {
         if words.len() < n {
             return Err(parse_error(path, line, format!("{what}: expected {n} numbers, found {}", words.len())));
@@ -165,10 +292,7 @@ fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
                             return Err(parse_error(path, line_no, "vertex w is 0".into()));
                         }
                     }
-                    6 => {
-                        numbers(&rest[3..], 3, line_no, "vertex colour")?;
-                        colored += 1;
-                    }
+                    6 => numbers(&rest[3..], 3, line_no, "vertex colour")?,
                     k => {
                         return Err(parse_error(
                             path,
@@ -177,91 +301,22 @@ fn prescan(text: &str, path: &Path) -> Result<Prescan, MeshError> {
                         ))
                     }
                 }
-                nv += 1;
             }
-            Some("vt") => {
-                numbers(&words[1..], 2, line_no, "texture coordinate (u v)")?;
-                nvt += 1;
-            }
-            Some("vn") => {
-                numbers(&words[1..], 3, line_no, "normal")?;
-                nvn += 1;
-            }
-            Some("l") if words.len() > 3 => long_polylines = true,
-            Some("usemtl") if line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty()) => {
-                return Err(parse_error(path, line_no, "usemtl without a material name".into()));
-            }
+            Some("vt") => numbers(&words[1..], 2, line_no, "texture coordinate (u v)")?,
+            Some("vn") => numbers(&words[1..], 3, line_no, "normal")?,
             _ => {}
-        }
-    }
-    let (total_v, total_vt, total_vn) = (nv, nvt, nvn);
-    (nv, nvt, nvn) = (0, 0, 0);
-    for (i, line) in text.split('\n').enumerate() {
-        let line_no = i + 1;
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => nv += 1,
-            Some("vt") => nvt += 1,
-            Some("vn") => nvn += 1,
-            Some(kw @ ("f" | "l")) => {
-                let mut corners = 0;
-                for token in words {
-                    corners += 1;
-                    check_face_vertex(token, [nv, nvt, nvn], [total_v, total_vt, total_vn])
-                        .map_err(|what| parse_error(path, line_no, what))?;
-                }
-                if corners == 0 {
-                    let what = if kw == "f" { "face" } else { "polyline" };
-                    return Err(parse_error(path, line_no, format!("{what} without vertices")));
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(Prescan { rewrite: long_polylines || (colored > 0 && colored < total_v) })
-}
-
-/// Checks one face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn` as tobj parses
-/// it: each index an integer (`isize`), not 0, and within range.
-fn check_face_vertex(token: &str, so_far: [usize; 3], total: [usize; 3]) -> Result<(), String> {
-    const KIND: [&str; 3] = ["position", "texture coordinate", "normal"];
-    let parts: Vec<&str> = token.split('/').collect();
-    if parts.len() > 3 {
-        return Err(format!("face vertex {token:?}: more than three /-separated indices"));
-    }
-    if parts[0].is_empty() {
-        return Err(format!("face vertex {token:?}: no position index"));
-    }
-    for (k, part) in parts.iter().enumerate() {
-        if part.is_empty() {
-            continue;
-        }
-        let Ok(x) = part.parse::<isize>() else {
-            return Err(format!("face vertex {token:?}: {part:?} is not an integer"));
-        };
-        let plural = |n: usize| format!("{n} {}{}", KIND[k], if n == 1 { "" } else { "s" });
-        if x == 0 {
-            return Err(format!("face vertex {token:?}: index 0 (OBJ indices start at 1, negative ones count back)"));
-        } else if x > 0 {
-            if x as usize > total[k] {
-                return Err(format!(
-                    "face vertex {token:?} refers to {} {x} but the file has {}",
-                    KIND[k],
-                    plural(total[k])
-                ));
-            }
-        } else if x.unsigned_abs() > so_far[k] {
-            return Err(format!(
-                "face vertex {token:?}: relative {} index {x} but only {} precede this line",
-                KIND[k],
-                plural(so_far[k])
-            ));
         }
     }
     Ok(())
 }
 
-/// The text with polylines of three or more vertices blanked and vertex
+/// Whether tobj would reject this `usemtl` line for lacking a name (it
+/// takes the name after the first space).
+fn unnamed_usemtl(line: &str) -> bool {
+    line.split_once(' ').is_none_or(|(_, name)| name.trim().is_empty())
+}
+
+/// The text with polylines and unnamed `usemtl` lines blanked and vertex
 /// colours removed; line numbers are kept.
 fn rewrite(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
@@ -272,6 +327,7 @@ fn rewrite(text: &str) -> String {
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.first().copied() {
             Some("l") => {}
+            Some("usemtl") if unnamed_usemtl(line) => {}
             Some("v") if words.len() == 7 => out.push_str(&words[..4].join(" ")),
             _ => out.push_str(line),
         }

@@ -14,7 +14,9 @@
 //! Polygons are triangulated as fans `(v0, v1, v2), (v0, v2, v3), ...`;
 //! faces with fewer than three vertices are skipped. Every other element
 //! and property (lists included) is skipped; so is anything after the last
-//! declared element. `comment` and `obj_info` header lines are ignored.
+//! declared element. `comment` and `obj_info` header lines are ignored, and
+//! so are unknown lines before the first `element` (Blender 2.4x's
+//! exporter writes an uncommented "Created by Blender" line there).
 //!
 //! ASCII bodies hold one element per line (blank lines are skipped), values
 //! separated by whitespace; integer properties must be written as integers
@@ -462,6 +464,11 @@ fn parse_header(data: &[u8], path: &Path) -> Result<Header, MeshError> {
                 };
                 return Ok(Header { format, elements, body_start: next, lines: line_no });
             }
+            // Blender 2.4x writes an uncommented "Created by Blender ..." line
+            // after the format line: unknown lines before the first element
+            // are read as comments. Later, where a misspelled keyword would
+            // change how the body is read, they are errors.
+            _ if elements.is_empty() => {}
             other => {
                 return Err(header_error(
                     path,
@@ -828,9 +835,8 @@ impl Body for AsciiBody<'_> {
                 return Err(MeshError::Truncated {
                     path: self.path.to_path_buf(),
                     what: format!(
-                        "the file ends after line {} but the header declares {declared} {} elements and this is \
-                         number {index}",
-                        self.line, element
+                        "the file ends after line {}, before {element} {index} (the header declares {declared})",
+                        self.line
                     ),
                 });
             }
