@@ -45,18 +45,14 @@ pub struct GeometryBenchArgs {
     pub threads: ThreadsFlag,
 }
 
-/// The measured mesh: an icosphere of level `level`, displaced when `rough`.
+/// The measured mesh: an icosphere of level `level`, displaced into a bumpy
+/// blob (amplitude 8% of the radius) when `rough`.
 fn generate(level: u32, rough: bool) -> niebla_mesh::MeshData {
-    let mut data = niebla_mesh::icosphere(level, 1.0);
     if rough {
-        for p in &mut data.positions {
-            let v = Vec3::from(*p);
-            // Smooth bumps of +-8% of the radius: sums of a few sines.
-            let bump = 0.04 * ((7.0 * v.x).sin() + (9.0 * v.y + 1.0).sin() * (5.0 * v.z).cos());
-            *p = (v * (1.0 + bump)).to_array();
-        }
+        niebla_mesh::blob(level, 0.08)
+    } else {
+        niebla_mesh::icosphere(level, 1.0)
     }
-    data
 }
 
 fn primary_rays(n: usize, lo: Vec3, hi: Vec3) -> Vec<Ray> {

@@ -91,7 +91,19 @@ pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
         } else {
             String::new()
         };
-        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{media}", lo.to_array(), hi.to_array(), o.bsdf);
+        let texture = match o.texture.as_deref() {
+            Some(niebla::texture::Texture::Bitmap { image, .. }) => {
+                format!(" with a {}x{} bitmap reflectance", image.width, image.height)
+            }
+            Some(niebla::texture::Texture::Checkerboard { .. }) => " with a checkerboard reflectance".to_string(),
+            None => String::new(),
+        };
+        println!(
+            "  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{texture}{media}",
+            lo.to_array(),
+            hi.to_array(),
+            o.bsdf
+        );
     }
     println!("lights ({}):", s.lights.len());
     for (i, l) in s.lights.iter().enumerate() {

@@ -1,11 +1,12 @@
 //! Writes a generated mesh, for benchmarks and for trying readers:
-//! `meshgen icosphere SUBDIVISIONS OUT`, `meshgen uvsphere N_THETA N_PHI OUT`
-//! or `meshgen soup TRIANGLES SEED OUT`, where OUT ends in `.obj` or `.ply`
+//! `meshgen icosphere SUBDIVISIONS OUT`, `meshgen uvsphere N_THETA N_PHI OUT`,
+//! `meshgen blob SUBDIVISIONS AMPLITUDE_PERCENT OUT` or
+//! `meshgen soup TRIANGLES SEED OUT`, where OUT ends in `.obj` or `.ply`
 //! (binary little-endian; `--ascii` or `--big-endian` before the kind
 //! change that; `--positions-only` drops normals and uvs). Radius 1 for the
 //! spheres.
 
-use niebla_mesh::{icosphere, random_soup, uv_sphere, write_obj, write_ply_ascii, write_ply_binary, ByteOrder};
+use niebla_mesh::{blob, icosphere, random_soup, uv_sphere, write_obj, write_ply_ascii, write_ply_binary, ByteOrder};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -17,6 +18,7 @@ fn main() {
         Some("icosphere") => (icosphere(n(1) as u32, 1.0), args.get(2)),
         Some("uvsphere") => (uv_sphere(n(1) as u32, n(2) as u32, 1.0), args.get(3)),
         Some("soup") => (random_soup(n(1) as u32, n(2)), args.get(3)),
+        Some("blob") => (blob(n(1) as u32, n(2) as f32 / 100.0), args.get(3)),
         _ => usage(),
     };
     let out = out.unwrap_or_else(|| usage()).clone();
@@ -46,6 +48,6 @@ fn take_flag(args: &mut Vec<String>, flag: &str) -> bool {
 }
 
 fn usage() -> ! {
-    eprintln!("usage: meshgen [--ascii] [--big-endian] [--positions-only] icosphere S OUT | uvsphere NT NP OUT | soup N SEED OUT");
+    eprintln!("usage: meshgen [--ascii] [--big-endian] [--positions-only] icosphere S OUT | uvsphere NT NP OUT | blob S PERCENT OUT | soup N SEED OUT");
     std::process::exit(2);
 }

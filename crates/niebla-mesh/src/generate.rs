@@ -15,6 +15,43 @@ pub const MAX_ICOSPHERE_SUBDIVISIONS: u32 = 10;
 /// vertex index fits in `u32`).
 pub const MAX_SOUP_TRIANGLES: u32 = 1 << 30;
 
+/// A rounded, bumpy closed surface: the [`icosphere`] of `subdivisions`
+/// with each vertex pushed along its radius by `1 + amplitude * b(p)`, where
+/// `b(p) = (sin 7x + sin(9y + 1) cos 5z) / 2` (in [-1, 1]) is a smooth
+/// bump field, and area-weighted vertex normals of the displaced faces.
+/// Non-convex for amplitudes above a few percent; closed and welded like
+/// the sphere. Used by `niebla bench geometry` and the mesh showcase scene.
+pub fn blob(subdivisions: u32, amplitude: f32) -> MeshData {
+    let mut mesh = icosphere(subdivisions, 1.0);
+    for p in &mut mesh.positions {
+        let b = 0.5 * ((7.0 * p[0]).sin() + (9.0 * p[1] + 1.0).sin() * (5.0 * p[2]).cos());
+        let k = 1.0 + amplitude * b;
+        *p = p.map(|c| c * k);
+    }
+    let mut normals = vec![[0f64; 3]; mesh.positions.len()];
+    for t in &mesh.indices {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].map(f64::from));
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+        for &i in t {
+            for k in 0..3 {
+                normals[i as usize][k] += n[k];
+            }
+        }
+    }
+    mesh.normals = Some(
+        normals
+            .into_iter()
+            .map(|n| {
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt().max(1e-300);
+                [(n[0] / len) as f32, (n[1] / len) as f32, (n[2] / len) as f32]
+            })
+            .collect(),
+    );
+    mesh
+}
+
 /// A geodesic sphere of the given `radius` centered at the origin: the
 /// regular icosahedron (20 triangles, 12 vertices) with each triangle split
 /// into 4 `subdivisions` times (`20 * 4^s` triangles, `10 * 4^s + 2`

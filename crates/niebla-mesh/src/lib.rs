@@ -40,7 +40,7 @@ use std::path::Path;
 
 pub use data::MeshData;
 pub use error::MeshError;
-pub use generate::{icosphere, random_soup, uv_sphere, MAX_ICOSPHERE_SUBDIVISIONS, MAX_SOUP_TRIANGLES};
+pub use generate::{blob, icosphere, random_soup, uv_sphere, MAX_ICOSPHERE_SUBDIVISIONS, MAX_SOUP_TRIANGLES};
 pub use obj::{parse_obj, read_obj};
 pub use ply::{parse_ply, read_ply};
 pub use topology::Closedness;

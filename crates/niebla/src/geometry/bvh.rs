@@ -229,18 +229,16 @@ fn flatten(node: &BuildNode, nodes: &mut Vec<BvhNode>) {
     }
 }
 
-/// A ray prepared for box tests: origin, reciprocal direction and its signs.
+/// A ray prepared for box tests: origin and reciprocal direction.
 #[derive(Clone, Copy, Debug)]
 struct BoxRay {
     o: Vec3,
     inv: Vec3,
-    negative: [bool; 3],
 }
 
 impl BoxRay {
     fn new(ray: &Ray) -> BoxRay {
-        let inv = ray.d.recip();
-        BoxRay { o: ray.o, inv, negative: [ray.d.x < 0.0, ray.d.y < 0.0, ray.d.z < 0.0] }
+        BoxRay { o: ray.o, inv: ray.d.recip() }
     }
 
     /// Entry parameter of the ray into the node's box within `[t_min, t_max]`,
@@ -380,29 +378,44 @@ impl Bvh {
             return false;
         }
         let r = BoxRay::new(ray);
+        if r.enter(&self.nodes[0], t_min, t_max).is_none() {
+            return false;
+        }
         let mut stack = [0u32; STACK_DEPTH];
         let mut sp = 0usize;
         let mut index = 0usize;
         loop {
             let node = &self.nodes[index];
-            if r.enter(node, t_min, t_max).is_some() {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for &p in &self.order[first..first + node.count as usize] {
-                        if hit(p, t_max) {
-                            return true;
+            if node.count > 0 {
+                let first = node.offset as usize;
+                for &p in &self.order[first..first + node.count as usize] {
+                    if hit(p, t_max) {
+                        return true;
+                    }
+                }
+            } else {
+                // Both children's boxes are tested here; only those the ray
+                // enters are visited, the nearer first.
+                let (a, b) = (index + 1, node.offset as usize);
+                match (r.enter(&self.nodes[a], t_min, t_max), r.enter(&self.nodes[b], t_min, t_max)) {
+                    (Some(x), Some(y)) => {
+                        let (near, far) = if y < x { (b, a) } else { (a, b) };
+                        if sp < STACK_DEPTH {
+                            stack[sp] = far as u32;
+                            sp += 1;
                         }
+                        index = near;
+                        continue;
                     }
-                } else {
-                    // Visit the child on the ray's side of the split first.
-                    let (a, b) = (index + 1, node.offset as usize);
-                    let (near, far) = if r.negative[node.axis as usize] { (b, a) } else { (a, b) };
-                    if sp < STACK_DEPTH {
-                        stack[sp] = far as u32;
-                        sp += 1;
+                    (Some(_), None) => {
+                        index = a;
+                        continue;
                     }
-                    index = near;
-                    continue;
+                    (None, Some(_)) => {
+                        index = b;
+                        continue;
+                    }
+                    (None, None) => {}
                 }
             }
             if sp == 0 {

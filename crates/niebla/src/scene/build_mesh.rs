@@ -85,10 +85,11 @@ impl MeshLoader {
         };
         let c = loaded.closedness;
         if bounds_medium && !c.is_closed() && !desc.allow_open {
+            let what = desc.file.as_ref().map_or(String::new(), |f| format!("{f}: "));
             return Err(err(
                 path,
                 format!(
-                    "a mesh that bounds a medium (interior/exterior) must be closed, but this one has {} open \
+                    "{what}a mesh that bounds a medium (interior/exterior) must be closed, but this one has {} open \
                      (boundary) edges, {} non-manifold edges and {} inconsistently wound edges; close it, or \
                      set \"allow_open\": true to let it act as a one-sided boundary like a rectangle",
                     c.boundary_edges, c.non_manifold_edges, c.inconsistent_edges
