@@ -4,15 +4,21 @@
 //! failed or killed run never leaves a half-written image. A checkpoint is
 //! an EXR whose header also records how it was rendered (samples per pixel
 //! so far, seed, scene hash, integrator), so that a killed progressive
-//! render can be continued exactly (`checkpoint.rs`).
+//! render can be continued exactly (`checkpoint.rs`). Renders accumulate
+//! exact fixed-point sums per pixel (`sums.rs`), so that sample ranges
+//! rendered apart add up to the image of one render, bit for bit.
 
 mod checkpoint;
 mod exr_read;
 mod output;
+mod sums;
 
-pub use checkpoint::{read_checkpoint, scene_hash, write_checkpoint, CheckpointError, CheckpointInfo};
+pub use checkpoint::{
+    read_checkpoint, read_checkpoint_full, scene_hash, write_checkpoint, Checkpoint, CheckpointError, CheckpointInfo,
+};
 pub use exr_read::{read_exr, ExrImage, ExrReadError};
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
+pub use sums::{mean_of_sum, quantize_sample, SampleSums, FRACTION_BITS, SAMPLE_LIMIT};
 
 use crate::color::Rgb;
 
