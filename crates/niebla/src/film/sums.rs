@@ -142,7 +142,7 @@ mod tests {
         assert_eq!(quantize_sample(1e-20), 0);
         assert_eq!(quantize_sample(-3.0), -3i128 << 60);
         // 2^35 samples at the limit stay below i128::MAX.
-        assert!((1i128 << 92).checked_mul(1 << 35).is_some());
+        assert!(((1i128 << 92) - 1).checked_mul(1 << 35).is_some());
     }
 
     #[test]

@@ -1,0 +1,92 @@
+"""Overhead and scaling of niebla.distributed on this machine (not a test).
+
+    .venv-py/bin/python bench/distributed.py            # about 2-3 minutes
+    .venv-py/bin/python bench/distributed.py --seconds 10   # shorter
+
+Measures, on scenes/default.json at 240x180 with volpath:
+1. a local render (Scene.render, 2 threads) of about --seconds seconds, and the
+   same render through niebla.distributed on a LocalCluster of 2 worker
+   processes with 1 thread each (equal total threads): the overhead;
+2. the same fixed-spp render with 1 and with 2 single-threaded workers;
+3. the round trip of an empty Dask task (scheduler latency) and the bytes of
+   one chunk's sums (48 per pixel), the inputs of the 16-machine estimate in
+   README.md.
+Every distributed image is checked bit for bit against the local render.
+"""
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+import niebla
+import niebla.distributed as nd
+from distributed import Client, LocalCluster
+
+REPO = Path(__file__).resolve().parents[1]
+# The default scene (a hazy room, spot and point lights) at 240x180 with volpath.
+SCENE = json.loads((REPO / "scenes" / "default.json").read_text())
+SCENE["camera"].update(width=240, height=180)
+SCENE["render"]["integrator"] = {"type": "volpath"}
+
+
+def timed(f):
+    start = time.perf_counter()
+    value = f()
+    return value, time.perf_counter() - start
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seconds", type=float, default=30.0, help="target length of the local render")
+    args = parser.parse_args()
+
+    scene = niebla.Scene.from_dict(SCENE)
+    _, t4 = timed(lambda: scene.render(spp=4, threads=2, progress=False))
+    spp = max(8, int(round(args.seconds / (t4 / 4) / 8)) * 8)
+    print(f"scene {scene.width}x{scene.height} volpath; {t4 / 4 * 1000:.0f} ms per spp on 2 threads -> spp {spp}")
+
+    local, t_local = timed(lambda: scene.render(spp=spp, threads=2, progress=False))
+    print(f"local render, 2 threads:                 {t_local:7.2f} s")
+
+    cluster, t_start = timed(lambda: LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=40))
+    client = Client(cluster)
+    print(f"LocalCluster start (2 processes):        {t_start:7.2f} s (not counted below)")
+    for chunk_spp in (spp // 8, spp // 2):
+        result, t = timed(lambda: nd.render(SCENE, spp=spp, chunk_spp=chunk_spp, client=client, threads=1, progress=False))
+        same = np.array_equal(result.image().view(np.uint32), local.view(np.uint32))
+        print(
+            f"distributed, 2 workers x 1 thread, {spp // chunk_spp:2d} chunks of {chunk_spp:3d} spp: {t:7.2f} s "
+            f"(overhead {100 * (t / t_local - 1):+.1f}%), bit-identical: {same}"
+        )
+
+    # Scaling at fixed spp: 1 worker, then 2.
+    fixed = max(4, spp // 2)
+    reference = scene.render(spp=fixed, threads=1, progress=False)
+    times = {}
+    for workers in (1, 2):
+        cluster.scale(workers)
+        while len(client.scheduler_info()["workers"]) != workers:
+            time.sleep(0.05)
+        result, times[workers] = timed(
+            lambda: nd.render(SCENE, spp=fixed, chunk_spp=max(1, fixed // 8), client=client, threads=1, progress=False)
+        )
+        assert np.array_equal(result.image().view(np.uint32), reference.view(np.uint32))
+        print(f"{fixed} spp on {workers} single-threaded worker(s): {times[workers]:7.2f} s")
+    print(f"speed-up 1 -> 2 workers: {times[1] / times[2]:.2f}x")
+
+    # Scheduler round trip of an empty task, and bytes of a chunk's sums.
+    client.submit(int, 0, pure=False).result()
+    n = 200
+    _, t_tasks = timed(lambda: client.gather([client.submit(int, i, pure=False) for i in range(n)]))
+    _, t_one = timed(lambda: [client.submit(int, i, pure=False).result() for i in range(20)])
+    print(f"empty tasks: {1000 * t_tasks / n:.2f} ms each when {n} are queued, {1000 * t_one / 20:.2f} ms round trip one at a time")
+    print(f"sums per chunk: {48 * scene.width * scene.height / 1e6:.2f} MB ({scene.width}x{scene.height} x 48 bytes); 1920x1080: 99.5 MB")
+    client.close()
+    cluster.close()
+
+
+if __name__ == "__main__":
+    main()
