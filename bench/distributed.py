@@ -9,8 +9,8 @@ Measures, on scenes/default.json at 240x180 with volpath:
    processes with 1 thread each (equal total threads): the overhead;
 2. the same fixed-spp render with 1 and with 2 single-threaded workers;
 3. the round trip of an empty Dask task (scheduler latency) and the bytes of
-   one chunk's sums (48 per pixel), the inputs of the 16-machine estimate in
-   README.md.
+   one chunk's sums (48 per pixel: 12 32-bit words), the inputs of the
+   16-machine estimate in README.md.
 Every distributed image is checked bit for bit against the local render.
 """
 

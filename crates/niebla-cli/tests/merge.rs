@@ -81,7 +81,10 @@ fn mismatched_or_overlapping_inputs_are_refused_with_the_file_and_why() {
     let dir = temp_dir("cli_merge_refused");
     run_ok(&dir, &["render", "fog.json", "--spp", "4", "-o", "a.exr", "--quiet"]);
     run_ok(&dir, &["render", "fog.json", "--first-sample", "2", "--spp", "4", "-o", "over.exr", "--quiet"]);
-    run_ok(&dir, &["render", "fog.json", "--first-sample", "4", "--spp", "4", "--seed", "3", "-o", "seed.exr", "--quiet"]);
+    run_ok(
+        &dir,
+        &["render", "fog.json", "--first-sample", "4", "--spp", "4", "--seed", "3", "-o", "seed.exr", "--quiet"],
+    );
     let other = SCENE.replace("\"intensity\": 10", "\"intensity\": 12");
     std::fs::write(dir.join("other.json"), other).unwrap();
     run_ok(&dir, &["render", "other.json", "--first-sample", "4", "--spp", "4", "-o", "scene.exr", "--quiet"]);

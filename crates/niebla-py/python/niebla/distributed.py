@@ -213,9 +213,29 @@ def _render_chunk(
     seed: Optional[int],
     threads: Optional[int],
 ) -> SampleSums:
-    """Task: the sums of samples ``first .. end`` of the job's scene."""
+    """Task: the sums of samples ``first .. end`` of the job's scene, packed
+    for the trip to the client (:func:`_pack`)."""
     scene = _worker_scene(job, files)
-    return scene.render_sums(integrator, first_sample=first, spp=end - first, seed=seed, threads=threads, progress=False)
+    sums = scene.render_sums(integrator, first_sample=first, spp=end - first, seed=seed, threads=threads, progress=False)
+    return _pack(sums)
+
+
+def _pack(sums: SampleSums) -> Tuple[np.ndarray, np.ndarray, List[Tuple[int, int]], int, str]:
+    """Sums as a chunk sends them: the words of a render's sums are
+    normalized (words 0..2 in [0, 2**32), word 3 a signed 32-bit value), so
+    uint32 and int32 arrays hold them losslessly in half the bytes (48 per
+    pixel instead of 96)."""
+    low = sums.words[..., :3].astype(np.uint32)
+    high = sums.words[..., 3].astype(np.int32)
+    assert np.array_equal(low, sums.words[..., :3]) and np.array_equal(high, sums.words[..., 3])
+    return low, high, sums.ranges, sums.seed, sums.integrator
+
+
+def _unpack(packed: Tuple[np.ndarray, np.ndarray, List[Tuple[int, int]], int, str]) -> SampleSums:
+    """The sums of :func:`_pack`, as int64 words again."""
+    low, high, ranges, seed, integrator = packed
+    words = np.concatenate([low.astype(np.int64), high.astype(np.int64)[..., None]], axis=-1)
+    return SampleSums(words, list(ranges), seed, integrator)
 
 
 def _render_frame(
@@ -310,20 +330,22 @@ def render(
       samples per task (default: ``spp`` split into about 4 tasks per
       worker thread). Smaller chunks balance load better and lose less
       work when a worker dies; each costs one task's overhead (scheduling
-      and the transfer of 48 bytes per pixel of sums).
+      and the transfer of its sums, 48 bytes per pixel).
     - ``integrator``, ``seed``: as in :meth:`niebla.Scene.render`;
       ``threads``: render threads per task (1: one per Dask worker thread).
     - ``client``: a ``dask.distributed.Client`` (None: the current one, or a
       new ``LocalCluster`` closed afterwards).
-    - ``time_budget`` (seconds): no chunk is started after it runs out; the
-      chunks already running finish and the result holds the samples done
-      (``result.spp``, less than ``spp``).
+    - ``time_budget`` (seconds): chunks are dispatched a few at a time (two
+      per worker thread) and none after the budget runs out; those already
+      dispatched finish, and the result holds the samples done
+      (``result.spp``, less than ``spp``, from sample 0 on).
     - ``progress``: a tqdm bar over samples (True), nothing (False), or a
       callable ``progress(samples_done, samples_total)``.
     - ``ship_files``: send the files the scene names to the workers (no
       shared filesystem) instead of letting them read the same paths.
-    - ``checkpoint``: an EXR rewritten (atomically) after each finished
-      chunk with the sums so far and their sample ranges in its header;
+    - ``checkpoint``: an EXR rewritten (atomically) after finished chunks,
+      at most once a second and at the end, with the sums so far and their
+      sample ranges in its header (``niebla merge`` reads it too);
       ``resume``: such a file (of the same scene, seed and integrator), whose
       samples are not rendered again.
 
@@ -336,6 +358,9 @@ def render(
     client, close = _client(client)
     try:
         shipped = _ship(client, files)
+        # The description travels to each worker once, not with every chunk
+        # (a scene with numpy densities carries them inline).
+        job = client.scatter([job])[0]
         # The scene is built on a worker first: its size, defaults and
         # integrator key, and any file a worker cannot read, are known before
         # the chunks are sent (the client need not read the files at all).
@@ -447,7 +472,7 @@ def _run_chunks(
             if future.status == "error":
                 raise future.exception()
             index = index_of[future.key]
-            results[index] = future.result()
+            results[index] = _unpack(future.result())
             future.release()
             first, end = chunks[index]
             advance((end - first) * pixels)
