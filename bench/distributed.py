@@ -16,14 +16,21 @@ Every distributed image is checked bit for bit against the local render.
 
 import argparse
 import json
+import os
+import sys
 import time
 from pathlib import Path
 
-import numpy as np
+# Run as a script, this file's folder comes first on sys.path, and its name
+# would shadow the `distributed` package: take the folder out.
+_HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path[:] = [p for p in sys.path if os.path.abspath(p or ".") != _HERE]
 
-import niebla
-import niebla.distributed as nd
-from distributed import Client, LocalCluster
+import numpy as np  # noqa: E402
+
+import niebla  # noqa: E402
+import niebla.distributed as nd  # noqa: E402
+from distributed import Client, LocalCluster  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 # The default scene (a hazy room, spot and point lights) at 240x180 with volpath.
