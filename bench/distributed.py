@@ -50,6 +50,7 @@ def main():
     parser.add_argument("--seconds", type=float, default=30.0, help="target length of the local render")
     args = parser.parse_args()
 
+    print("load average at start: %.2f %.2f %.2f (other processes share the cores)" % os.getloadavg())
     scene = niebla.Scene.from_dict(SCENE)
     _, t4 = timed(lambda: scene.render(spp=4, threads=2, progress=False))
     spp = max(8, int(round(args.seconds / (t4 / 4) / 8)) * 8)
@@ -91,6 +92,7 @@ def main():
     _, t_one = timed(lambda: [client.submit(int, i, pure=False).result() for i in range(20)])
     print(f"empty tasks: {1000 * t_tasks / n:.2f} ms each when {n} are queued, {1000 * t_one / 20:.2f} ms round trip one at a time")
     print(f"sums per chunk: {48 * scene.width * scene.height / 1e6:.2f} MB ({scene.width}x{scene.height} x 48 bytes); 1920x1080: 99.5 MB")
+    print("load average at end: %.2f %.2f %.2f" % os.getloadavg())
     client.close()
     cluster.close()
 
