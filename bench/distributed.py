@@ -6,8 +6,12 @@
 Measures, on scenes/default.json at 240x180 with volpath:
 1. a local render (Scene.render, 2 threads) of about --seconds seconds, and the
    same render through niebla.distributed on a LocalCluster of 2 worker
-   processes with 1 thread each (equal total threads): the overhead;
-2. the same fixed-spp render with 1 and with 2 single-threaded workers;
+   processes with 1 thread each (equal total threads): the overhead in wall
+   time, and in CPU time of every process (robust to other processes sharing
+   the cores), and the CPU Dask spends idle (heartbeats, profiler);
+2. the same fixed-spp render with 1 and with 2 single-threaded workers: wall
+   time, and the largest CPU time of one worker (the wall time the render
+   would take with a free core per worker);
 3. the round trip of an empty Dask task (scheduler latency) and the bytes of
    one chunk's sums (48 per pixel: 12 32-bit words), the inputs of the
    16-machine estimate in README.md.
@@ -56,34 +60,59 @@ def main():
     spp = max(8, int(round(args.seconds / (t4 / 4) / 8)) * 8)
     print(f"scene {scene.width}x{scene.height} volpath; {t4 / 4 * 1000:.0f} ms per spp on 2 threads -> spp {spp}")
 
+    cpu0 = time.process_time()
     local, t_local = timed(lambda: scene.render(spp=spp, threads=2, progress=False))
-    print(f"local render, 2 threads:                 {t_local:7.2f} s")
+    cpu_local = time.process_time() - cpu0
+    print(f"local render, 2 threads:                 {t_local:7.2f} s wall, {cpu_local:7.2f} s CPU")
 
     cluster, t_start = timed(lambda: LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None, silence_logs=40))
     client = Client(cluster)
     print(f"LocalCluster start (2 processes):        {t_start:7.2f} s (not counted below)")
+    def cpu_everywhere():
+        """CPU seconds so far of the workers, the scheduler and this process
+        (contention from other processes inflates wall time, hardly CPU time)."""
+        workers = sum(client.run(time.process_time).values())
+        return workers + client.run_on_scheduler(time.process_time) + time.process_time()
+
+    cpu0, wall0 = cpu_everywhere(), time.perf_counter()
+    time.sleep(5)
+    idle = (cpu_everywhere() - cpu0) / (time.perf_counter() - wall0)
+    print(f"idle Dask (scheduler, 2 workers, client): {100 * idle:.1f}% of one core")
+
     for chunk_spp in (spp // 8, spp // 2):
+        cpu0 = cpu_everywhere()
         result, t = timed(lambda: nd.render(SCENE, spp=spp, chunk_spp=chunk_spp, client=client, threads=1, progress=False))
+        cpu = cpu_everywhere() - cpu0
         same = np.array_equal(result.image().view(np.uint32), local.view(np.uint32))
         print(
-            f"distributed, 2 workers x 1 thread, {spp // chunk_spp:2d} chunks of {chunk_spp:3d} spp: {t:7.2f} s "
-            f"(overhead {100 * (t / t_local - 1):+.1f}%), bit-identical: {same}"
+            f"distributed, 2 workers x 1 thread, {spp // chunk_spp:2d} chunks of {chunk_spp:3d} spp: {t:7.2f} s wall "
+            f"(overhead {100 * (t / t_local - 1):+.1f}%), {cpu:7.2f} s CPU ({100 * (cpu / cpu_local - 1):+.1f}%), "
+            f"bit-identical: {same}"
         )
 
     # Scaling at fixed spp: 1 worker, then 2.
     fixed = max(4, spp // 2)
     reference = scene.render(spp=fixed, threads=1, progress=False)
-    times = {}
+    times, busiest = {}, {}
     for workers in (1, 2):
         cluster.scale(workers)
         while len(client.scheduler_info()["workers"]) != workers:
             time.sleep(0.05)
+        before = client.run(time.process_time)
         result, times[workers] = timed(
             lambda: nd.render(SCENE, spp=fixed, chunk_spp=max(1, fixed // 8), client=client, threads=1, progress=False)
         )
+        after = client.run(time.process_time)
+        busiest[workers] = max(after[w] - before.get(w, 0.0) for w in after)
         assert np.array_equal(result.image().view(np.uint32), reference.view(np.uint32))
-        print(f"{fixed} spp on {workers} single-threaded worker(s): {times[workers]:7.2f} s")
-    print(f"speed-up 1 -> 2 workers: {times[1] / times[2]:.2f}x")
+        print(
+            f"{fixed} spp on {workers} single-threaded worker(s): {times[workers]:7.2f} s wall, "
+            f"busiest worker {busiest[workers]:7.2f} s CPU"
+        )
+    print(
+        f"speed-up 1 -> 2 workers: {times[1] / times[2]:.2f}x in wall time, "
+        f"{busiest[1] / busiest[2]:.2f}x in the busiest worker's CPU time"
+    )
 
     # Scheduler round trip of an empty task, and bytes of a chunk's sums.
     client.submit(int, 0, pure=False).result()
