@@ -44,7 +44,7 @@ from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Seque
 
 import numpy as np
 
-from . import SampleSums, Scene, SceneError, _json_default, scene_hash, write_image
+from . import SampleSums, Scene, SceneError, _join_ranges, _json_default, scene_hash, write_image
 
 __all__ = ["ChunkError", "SceneSpec", "render", "render_frames", "split_samples"]
 
@@ -220,7 +220,11 @@ def _render_chunk(
     return _pack(sums)
 
 
-def _pack(sums: SampleSums) -> Tuple[np.ndarray, np.ndarray, List[Tuple[int, int]], int, str]:
+#: A chunk's sums as sent: words 0..2 (uint32), word 3 (int32), ranges, seed, integrator key.
+_Packed = Tuple[np.ndarray, np.ndarray, List[Tuple[int, int]], int, str]
+
+
+def _pack(sums: SampleSums) -> _Packed:
     """Sums as a chunk sends them: the words of a render's sums are
     normalized (words 0..2 in [0, 2**32), word 3 a signed 32-bit value), so
     uint32 and int32 arrays hold them losslessly in half the bytes (48 per
@@ -229,13 +233,6 @@ def _pack(sums: SampleSums) -> Tuple[np.ndarray, np.ndarray, List[Tuple[int, int
     high = sums.words[..., 3].astype(np.int32)
     assert np.array_equal(low, sums.words[..., :3]) and np.array_equal(high, sums.words[..., 3])
     return low, high, sums.ranges, sums.seed, sums.integrator
-
-
-def _unpack(packed: Tuple[np.ndarray, np.ndarray, List[Tuple[int, int]], int, str]) -> SampleSums:
-    """The sums of :func:`_pack`, as int64 words again."""
-    low, high, ranges, seed, integrator = packed
-    words = np.concatenate([low.astype(np.int64), high.astype(np.int64)[..., None]], axis=-1)
-    return SampleSums(words, list(ranges), seed, integrator)
 
 
 def _render_frame(
@@ -278,7 +275,7 @@ def _ship(client: Any, files: Dict[str, bytes]) -> Any:
     """The files' bytes scattered once to every worker (a future), or None."""
     if not files:
         return None
-    return client.scatter([files], broadcast=True)[0]
+    return client.scatter([files], broadcast=True, hash=False)[0]
 
 
 def _bar(progress: Union[bool, Callable[[int, int], Any]], total: int, unit: str) -> Tuple[Callable[[int], None], Callable[[], None]]:
@@ -360,7 +357,7 @@ def render(
         shipped = _ship(client, files)
         # The description travels to each worker once, not with every chunk
         # (a scene with numpy densities carries them inline).
-        job = client.scatter([job])[0]
+        job = client.scatter([job], hash=False)[0]
         # The scene is built on a worker first: its size, defaults and
         # integrator key, and any file a worker cannot read, are known before
         # the chunks are sent (the client need not read the files at all).
@@ -379,20 +376,20 @@ def render(
             chunk_spp = max(1, -(-spp // (4 * slots)))
         chunks = [c for part in todo for c in split_samples(part[0], part[1], int(chunk_spp))]
         empty = SampleSums(np.zeros((height, width, 3, 4), np.int64), [], seed, key)
-        start = done if done is not None else empty
+        total = _Running(done if done is not None else empty)
         last_write = [time.monotonic()]
 
-        def on_chunk(results: Dict[int, SampleSums]) -> None:
+        def on_chunk(packed: _Packed) -> None:
+            total.add(packed)
             if checkpoint is not None and time.monotonic() - last_write[0] >= 1.0:
-                _sum(start, results).write_exr(checkpoint, hash_)
+                total.sums().write_exr(checkpoint, hash_)
                 last_write[0] = time.monotonic()
 
         pixels = width * height
-        results = _run_chunks(client, chunks, job, shipped, integrator, seed, threads, time_budget, progress, pixels, on_chunk)
-        total = _sum(start, results)
+        _run_chunks(client, chunks, job, shipped, integrator, seed, threads, time_budget, progress, pixels, on_chunk)
         if checkpoint is not None:
-            total.write_exr(checkpoint, hash_)
-        return total
+            total.sums().write_exr(checkpoint, hash_)
+        return total.sums()
     finally:
         close()
 
@@ -429,22 +426,37 @@ def _result(client: Any, futures: List[Any]) -> List[Any]:
         raise
 
 
-def _sum(start: SampleSums, results: Mapping[int, SampleSums]) -> SampleSums:
-    """``start`` plus the chunk sums in chunk order (integer sums: exact in
-    any order; the fixed order only keeps the ranges' bookkeeping simple)."""
-    total = start
-    for index in sorted(results):
-        total = total + results[index]
-    return total
+class _Running:
+    """The running total of a render's chunks, added in place as they arrive.
+    Integer sums are exact, so the total does not depend on the order in
+    which chunks arrive (nor on retries: a chunk's sums depend only on its
+    samples); only the list of ranges is kept sorted."""
+
+    def __init__(self, start: SampleSums) -> None:
+        self.words = start.words.astype(np.int64, copy=True)
+        self.ranges = list(start.ranges)
+        self.seed, self.integrator = start.seed, start.integrator
+
+    def add(self, packed: "_Packed") -> None:
+        """Add a chunk's packed sums (:func:`_pack`)."""
+        low, high, ranges, seed, integrator = packed
+        assert (seed, integrator) == (self.seed, self.integrator), "a chunk of another render"
+        self.ranges = _join_ranges(self.ranges + [tuple(r) for r in ranges])
+        # Each word gains less than 2**32 per chunk: int64 holds 2**31 chunks.
+        self.words[..., :3] += low
+        self.words[..., 3] += high
+
+    def sums(self) -> SampleSums:
+        """The total so far (a view of the running words)."""
+        return SampleSums(self.words, list(self.ranges), self.seed, self.integrator)
 
 
 def _run_chunks(
     client, chunks, job, shipped, integrator, seed, threads, time_budget, progress, pixels, on_chunk
-) -> Dict[int, SampleSums]:
+) -> None:
     """Submit the chunks (all at once, or a few at a time under a time
-    budget), collect their sums by chunk index, and call
-    ``on_chunk(results)`` after each. An error of a task or Ctrl-C cancels
-    every task and is raised."""
+    budget) and hand each result to ``on_chunk(packed sums)`` as it arrives.
+    An error of a task or Ctrl-C cancels every task and is raised."""
     from distributed import as_completed
 
     start = time.monotonic()
@@ -465,18 +477,16 @@ def _run_chunks(
     for i in range(min(window, len(chunks))):
         submit(i)
     next_index = len(futures)
-    results: Dict[int, SampleSums] = {}
     try:
         pending = as_completed(list(futures))
         for future in pending:
             if future.status == "error":
                 raise future.exception()
             index = index_of[future.key]
-            results[index] = _unpack(future.result())
+            on_chunk(future.result())
             future.release()
             first, end = chunks[index]
             advance((end - first) * pixels)
-            on_chunk(results)
             out_of_time = time_budget is not None and time.monotonic() - start > time_budget
             if next_index < len(chunks) and not out_of_time:
                 pending.add(submit(next_index))
@@ -486,7 +496,6 @@ def _run_chunks(
         raise
     finally:
         close_bar()
-    return results
 
 
 # ------------------------------------------------------------------- frames
