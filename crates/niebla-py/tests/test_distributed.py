@@ -159,3 +159,17 @@ def test_time_budget_and_checkpoint_resume(client, tiny_scene, tmp_path):
     assert np.array_equal(bits(resumed.image()), bits(local.render(spp=12, progress=False)))
     with pytest.raises(ValueError, match="seed 1, not 2"):
         nd.render(tiny_scene, spp=12, seed=2, client=client, resume=tmp_path / "partial.exr", progress=False)
+
+
+def test_a_distributed_checkpoint_merges_with_a_command_line_render(client, tiny_scene, tmp_path, niebla_bin):
+    import json
+    import subprocess
+
+    scene = tmp_path / "fog.json"
+    scene.write_text(json.dumps(tiny_scene))
+    nd.render(scene, spp=5, chunk_spp=2, client=client, checkpoint=tmp_path / "py.exr", progress=False)
+    run = lambda *args: subprocess.run([niebla_bin, *args], cwd=tmp_path, check=True, capture_output=True)  # noqa: E731
+    run("render", "fog.json", "--first-sample", "5", "--spp", "4", "-o", "cli.exr", "--quiet")
+    run("merge", "py.exr", "cli.exr", "-o", "merged.exr")
+    run("render", "fog.json", "--spp", "9", "-o", "whole.exr", "--quiet")
+    assert np.array_equal(bits(niebla.read_exr(tmp_path / "merged.exr")), bits(niebla.read_exr(tmp_path / "whole.exr")))
