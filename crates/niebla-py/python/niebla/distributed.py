@@ -356,8 +356,9 @@ def render(
     try:
         shipped = _ship(client, files)
         # The description travels to each worker once, not with every chunk
-        # (a scene with numpy densities carries them inline).
-        job = client.scatter([job], hash=False)[0]
+        # (a scene with numpy densities carries them inline); a copy on every
+        # worker survives the death of any one of them.
+        job = client.scatter([job], broadcast=True, hash=False)[0]
         # The scene is built on a worker first: its size, defaults and
         # integrator key, and any file a worker cannot read, are known before
         # the chunks are sent (the client need not read the files at all).
