@@ -173,3 +173,23 @@ def test_a_distributed_checkpoint_merges_with_a_command_line_render(client, tiny
     run("merge", "py.exr", "cli.exr", "-o", "merged.exr")
     run("render", "fog.json", "--spp", "9", "-o", "whole.exr", "--quiet")
     assert np.array_equal(bits(niebla.read_exr(tmp_path / "merged.exr")), bits(niebla.read_exr(tmp_path / "whole.exr")))
+
+
+def test_keyboard_interrupt_cancels_the_tasks(client, tiny_scene):
+    tiny_scene["render"]["integrator"] = {"type": "volpath"}
+
+    def interrupt(done, total):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt) as interrupted:
+        nd.render(tiny_scene, spp=64, chunk_spp=1, client=client, progress=interrupt)
+    # The 63 chunks left were cancelled, so the scheduler forgets them even
+    # though the traceback (kept alive here) still holds their futures.
+    deadline = time.monotonic() + 10
+    def chunks_on_scheduler(dask_scheduler):
+        return sum(str(key).startswith("_render_chunk") for key in dask_scheduler.tasks)
+
+    while client.run_on_scheduler(chunks_on_scheduler):
+        assert time.monotonic() < deadline, "tasks still on the scheduler after KeyboardInterrupt"
+        time.sleep(0.05)
+    assert interrupted.traceback
