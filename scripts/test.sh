@@ -51,7 +51,7 @@ if [ ! -x "$venv/bin/python" ]; then
     fi
   fi
 fi
-"$venv/bin/python" -m pip install -q "maturin>=1.5,<2" numpy pytest tqdm
+"$venv/bin/python" -m pip install -q "maturin>=1.5,<2" numpy pytest tqdm "dask[distributed]"
 cargo build --release -p niebla-cli
 rm -rf target/py-wheels
 "$venv/bin/maturin" build --release -m crates/niebla-py/Cargo.toml -o target/py-wheels

@@ -116,6 +116,14 @@ pub enum CliError {
         /// How it differs, e.g. `was rendered with seed 3, not --seed 4`.
         problem: String,
     },
+    /// An input of `niebla merge` cannot be merged with the others.
+    #[error("merge: {}: {problem}", path.display())]
+    Merge {
+        /// The input file.
+        path: PathBuf,
+        /// Why, e.g. `was rendered with seed 3, not seed 4 as a.exr`.
+        problem: String,
+    },
     /// `niebla compare --reference` names a file that does not exist.
     #[error("{}: reference image not found", .0.display())]
     ReferenceNotFound(PathBuf),

@@ -10,6 +10,7 @@ mod error;
 mod flags;
 mod info_cmd;
 mod load;
+mod merge_cmd;
 mod preview_cmd;
 mod render_cmd;
 
@@ -33,6 +34,9 @@ enum Command {
     Render(render_cmd::RenderArgs),
     /// Render a scene with several integrators under one time budget and write an HTML report.
     Compare(compare::CompareArgs),
+    /// Add up renders of disjoint sample ranges of one scene (EXR outputs of
+    /// `niebla render --first-sample N --spp M`) into one EXR.
+    Merge(merge_cmd::MergeArgs),
     /// Print what a scene holds: camera, media, shapes, lights, render settings.
     Info {
         /// Scene file (JSON, version 1). Without it, describes the built-in default scene.
@@ -68,6 +72,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare::run(&args),
+        Command::Merge(args) => merge_cmd::run(&args),
         Command::Info { scene } => info_cmd::run(scene.as_deref()),
         Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
         Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),

@@ -6,9 +6,9 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use niebla::film::{read_checkpoint, render_memory, write_checkpoint, write_image, CheckpointInfo};
+use niebla::film::{read_checkpoint_full, render_memory, write_checkpoint, write_image, Checkpoint, CheckpointInfo};
 use niebla::integrator::IntegratorSettings;
-use niebla::progressive::{resume_progressive, Accumulator, Budget, PassInfo, ProgressiveOptions};
+use niebla::progressive::{resume_progressive_sums, Accumulator, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::IntegratorSpec;
 
 use crate::error::CliError;
@@ -30,6 +30,12 @@ pub struct RenderArgs {
     /// Samples per pixel (overrides the scene's `render.spp`).
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u32>,
+    /// Index of the first sample: render samples N .. N + spp of every
+    /// pixel (one machine's share of a render; the EXR header records the
+    /// range, and `niebla merge` adds disjoint ranges up to the image of one
+    /// render of all of them, bit for bit).
+    #[arg(long, value_name = "N", default_value_t = 0, conflicts_with = "resume")]
+    pub first_sample: u64,
     /// Render for about this many seconds instead of a sample count: passes
     /// double the sample count while the next pass fits in the time left.
     #[arg(long)]
@@ -171,7 +177,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let scene = &built.scene;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let (start_acc, seed) = match &args.resume {
-        None => (Accumulator::new(scene.camera.width, scene.camera.height), args.seed.or(built.settings.seed)),
+        None => (
+            Accumulator::starting_at(scene.camera.width, scene.camera.height, args.first_sample),
+            args.seed.or(built.settings.seed),
+        ),
         Some(path) => resume_state(path, scene, &hash, &integrator, args.seed.seed)?,
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
@@ -209,22 +218,32 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let mut spp_done = start_acc.spp;
     let mut spp_written = start_acc.spp;
     let mut last_write = Instant::now();
-    let write_outputs = |image: &niebla::film::Image, spp: u64| -> Result<(), CliError> {
-        let checkpoint = CheckpointInfo { spp, seed, scene_hash: hash.clone(), integrator: integrator.key() };
+    let write_outputs = |acc: &Accumulator| -> Result<(), CliError> {
+        let checkpoint = CheckpointInfo {
+            spp: acc.spp,
+            seed,
+            scene_hash: hash.clone(),
+            integrator: integrator.key(),
+            ranges: vec![(acc.first_sample, acc.next_sample())],
+        };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            if is_exr { write_checkpoint(image, &checkpoint, out) } else { write_image(image, out, exposure) }?;
+            if is_exr {
+                write_checkpoint(acc.sums(), &checkpoint, out)
+            } else {
+                write_image(&acc.image(), out, exposure)
+            }?;
         }
         Ok(())
     };
-    let on_pass = |image: &niebla::film::Image, info: PassInfo| {
+    let on_pass = |acc: &Accumulator, info: PassInfo| {
         samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
         spp_done = info.spp;
         bar.set_message(format!("({} spp)", info.spp));
         if last_write.elapsed() < CHECKPOINT_INTERVAL {
             return true;
         }
-        if let Err(e) = write_outputs(image, info.spp) {
+        if let Err(e) = write_outputs(acc) {
             write_error = Some(e);
             return false;
         }
@@ -234,7 +253,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     };
     let options =
         ProgressiveOptions { threads, progress: &progress, ..ProgressiveOptions::new(&integrator, seed, budget) };
-    let image = resume_progressive(scene, &options, start_acc, on_pass)?;
+    let acc = resume_progressive_sums(scene, &options, start_acc, on_pass)?;
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
     let seconds = start.elapsed().as_secs_f64();
@@ -243,7 +262,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         return Err(e);
     }
     if spp_written != spp_done {
-        write_outputs(&image, spp_done)?;
+        write_outputs(&acc)?;
     }
     bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
@@ -273,7 +292,7 @@ fn resume_state(
     integrator: &IntegratorSettings,
     seed: Option<u64>,
 ) -> Result<(Accumulator, u64), CliError> {
-    let (image, info) = read_checkpoint(path).map_err(CliError::CheckpointUnreadable)?;
+    let Checkpoint { image, info, sums } = read_checkpoint_full(path).map_err(CliError::CheckpointUnreadable)?;
     let mismatch = |problem: String| CliError::CheckpointMismatch { path: path.to_path_buf(), problem };
     if info.scene_hash != hash {
         return Err(mismatch(format!(
@@ -297,5 +316,16 @@ fn resume_state(
     if info.spp == 0 || image.pixels.iter().any(|p| !p.is_finite()) {
         return Err(mismatch("holds no samples or non-finite pixels; start a new render".to_string()));
     }
-    Ok((Accumulator::from_mean(image, info.spp), info.seed))
+    let acc = match (info.ranges.as_slice(), sums) {
+        (&[(first, _)], Some(sums)) => Accumulator::from_sums(sums, first, info.spp),
+        // Checkpoints of version 1 store the mean of samples 0 .. spp alone.
+        (&[(0, _)], None) => Accumulator::from_mean(image, info.spp),
+        _ => {
+            let ranges = CheckpointInfo::ranges_text(&info.ranges);
+            return Err(mismatch(format!(
+                "holds the sample ranges {ranges}; only a render of one range of samples can be continued"
+            )));
+        }
+    };
+    Ok((acc, info.seed))
 }

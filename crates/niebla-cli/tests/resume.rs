@@ -116,9 +116,9 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
 fn memory_limit_refuses_large_images_and_grids_before_rendering() {
     let dir = temp_dir("cli_max_memory");
     std::fs::write(dir.join("fog.json"), SCENE).unwrap();
-    // 40 x 30 pixels need about 94 KiB of image buffers.
+    // 40 x 30 pixels need about 338 KiB of image, exact sums and output buffers.
     let err = run_err(&dir, &["render", "fog.json", "-o", "x.exr", "--max-memory", "64K"]);
-    assert!(err.contains("camera.width, camera.height: rendering 40 x 30 pixels would need about 94 KiB"), "{err}");
+    assert!(err.contains("camera.width, camera.height: rendering 40 x 30 pixels would need about 338 KiB"), "{err}");
     assert!(err.contains("memory limit of 64 KiB"), "{err}");
     run_ok(&dir, &["render", "fog.json", "-o", "x.exr", "--max-memory", "1M", "--spp", "1", "--quiet"]);
 

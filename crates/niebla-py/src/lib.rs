@@ -10,7 +10,9 @@
 //!   grids;
 //! - [`render`]: a progressive render on a worker thread with the GIL
 //!   released, progress callbacks and Ctrl-C handled on the calling thread;
-//! - [`image`]: images as `(H, W, 3)` float32 arrays, EXR and PNG files.
+//! - [`image`]: images as `(H, W, 3)` float32 arrays, EXR and PNG files;
+//! - [`sums`]: exact per-pixel sums of sample ranges as int64 word arrays
+//!   that add up with numpy's `+`, and their checkpoint EXRs.
 //!
 //! Errors from the renderer arrive as Python exceptions carrying the
 //! renderer's message: [`SceneError`] (a `ValueError`, with `file`, `path`
@@ -19,6 +21,7 @@
 mod image;
 mod render;
 mod scene;
+mod sums;
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -67,5 +70,8 @@ fn _niebla(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(image::write_png, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_exr, m)?)?;
     m.add_function(wrap_pyfunction!(image::relative_mse, m)?)?;
+    m.add_function(wrap_pyfunction!(sums::sums_to_image, m)?)?;
+    m.add_function(wrap_pyfunction!(sums::write_sums_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(sums::read_sums_exr, m)?)?;
     Ok(())
 }

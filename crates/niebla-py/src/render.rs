@@ -17,9 +17,9 @@ use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use niebla::film::Image;
+use niebla::film::{Image, SampleSums};
 use niebla::integrator::IntegratorSettings;
-use niebla::progressive::{render_progressive, Budget, PassInfo, ProgressiveOptions};
+use niebla::progressive::{resume_progressive_sums, Accumulator, Budget, PassInfo, ProgressiveOptions};
 use niebla::scene::BuiltScene;
 use pyo3::prelude::*;
 
@@ -39,12 +39,16 @@ pub(crate) struct RenderRequest {
     pub budget: Budget,
     /// Worker threads; `None` uses all cores.
     pub threads: Option<usize>,
+    /// Index of the first sample (samples `first_sample ..` are rendered).
+    pub first_sample: u64,
 }
 
 /// A finished render.
 pub(crate) struct RenderDone {
     /// The mean image.
     pub image: Image,
+    /// The exact per-pixel sums of the samples rendered.
+    pub sums: SampleSums,
     /// Samples per pixel rendered.
     pub spp: u64,
     /// Wall-clock seconds.
@@ -67,7 +71,6 @@ pub(crate) fn render_blocking(
     let cancel = AtomicBool::new(false);
     let samples_before_pass = AtomicU64::new(0);
     let samples_in_pass = AtomicU64::new(0);
-    let spp_done = AtomicU64::new(0);
     let start = Instant::now();
     let done_so_far = || match request.budget {
         Budget::Samples(_) => {
@@ -78,14 +81,12 @@ pub(crate) fn render_blocking(
 
     std::thread::scope(|s| {
         let (sender, receiver) = mpsc::channel();
-        let (cancel, samples_before_pass, samples_in_pass, spp_done) =
-            (&cancel, &samples_before_pass, &samples_in_pass, &spp_done);
+        let (cancel, samples_before_pass, samples_in_pass) = (&cancel, &samples_before_pass, &samples_in_pass);
         s.spawn(move || {
             let on_progress = |done: u64, _total: u64| samples_in_pass.store(done, Ordering::Relaxed);
-            let on_pass = |_: &Image, info: PassInfo| {
+            let on_pass = |_: &Accumulator, info: PassInfo| {
                 samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
                 samples_in_pass.store(0, Ordering::Relaxed);
-                spp_done.store(info.spp, Ordering::Relaxed);
                 true
             };
             let options = ProgressiveOptions {
@@ -96,7 +97,8 @@ pub(crate) fn render_blocking(
                 progress: &on_progress,
                 cancel: Some(cancel),
             };
-            let result = render_progressive(scene, &options, on_pass);
+            let start = Accumulator::starting_at(scene.camera.width, scene.camera.height, request.first_sample);
+            let result = resume_progressive_sums(scene, &options, start, on_pass);
             // The receiver only goes away if the caller panicked.
             let _ = sender.send(result.map_err(|e| e.to_string()));
         });
@@ -137,12 +139,17 @@ pub(crate) fn render_blocking(
         if let Some(e) = raised {
             return Err(e);
         }
-        let image = result.map_err(RenderError::new_err)?;
+        let acc = result.map_err(RenderError::new_err)?;
         if let Some(callback) = progress {
             if reported != Some(total) {
                 callback.call1((total, total))?;
             }
         }
-        Ok(RenderDone { image, spp: spp_done.load(Ordering::Relaxed), seconds: start.elapsed().as_secs_f64() })
+        Ok(RenderDone {
+            image: acc.image(),
+            spp: acc.spp,
+            sums: acc.sums().clone(),
+            seconds: start.elapsed().as_secs_f64(),
+        })
     })
 }

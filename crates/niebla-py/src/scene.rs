@@ -26,7 +26,7 @@ use niebla::scene::{
     build_scene, load_scene_file, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc,
     MediumDesc, SceneDesc, SceneError as RustSceneError,
 };
-use numpy::{PyArray3, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{PyArray3, PyArray4, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde_json::{json, Value};
@@ -330,9 +330,57 @@ impl PyScene {
         if threads == Some(0) {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
-        let request = RenderRequest { settings, seed: seed.unwrap_or(self.built.settings.seed), budget, threads };
+        let seed = seed.unwrap_or(self.built.settings.seed);
+        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0 };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
         Ok((image_to_array(py, &done.image), done.spp, done.seconds))
+    }
+
+    /// The stable key of the integrator settings `integrator` (JSON text of
+    /// a `render.integrator` object; None: the scene's), as checkpoints
+    /// record it.
+    #[pyo3(signature = (integrator = None))]
+    fn integrator_key(&self, py: Python<'_>, integrator: Option<&str>) -> PyResult<String> {
+        Ok(match integrator {
+            Some(text) => self.integrator_from_json(py, text)?,
+            None => self.built.settings.integrator,
+        }
+        .key())
+    }
+
+    /// Render samples `first_sample .. first_sample + spp` of every pixel;
+    /// returns `(words, spp, seconds, integrator_key)` with `words` the exact
+    /// per-pixel sums as an (H, W, 3, 4) int64 array of 32-bit words
+    /// (`crate::sums`): arrays of disjoint sample ranges add up with `+`
+    /// to the sums of their union. The GIL is released while rendering, as
+    /// in `render`.
+    #[pyo3(signature = (integrator = None, first_sample = 0, spp = None, seed = None, threads = None, progress = None))]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn render_sums<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: Option<&str>,
+        first_sample: u64,
+        spp: Option<u32>,
+        seed: Option<u64>,
+        threads: Option<usize>,
+        progress: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray4<i64>>, u64, f64, String)> {
+        let settings = match integrator {
+            Some(text) => self.integrator_from_json(py, text)?,
+            None => self.built.settings.integrator,
+        };
+        let spp = spp.unwrap_or(self.built.settings.spp);
+        if spp == 0 {
+            return Err(PyValueError::new_err("spp: must be at least 1"));
+        }
+        if threads == Some(0) {
+            return Err(PyValueError::new_err("threads: must be at least 1"));
+        }
+        let seed = seed.unwrap_or(self.built.settings.seed);
+        let request = RenderRequest { settings, seed, budget: Budget::Samples(spp), threads, first_sample };
+        let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
+        Ok((crate::sums::sums_to_words(py, &done.sums), done.spp, done.seconds, settings.key()))
     }
 
     fn __repr__(&self) -> String {

@@ -6,21 +6,18 @@
 //! pixel means as one render of that many samples, and it does not depend
 //! on the thread count.
 //!
-//! **Exact continuation.** The accumulator holds the f32 mean image, the
-//! same numbers a checkpoint EXR stores, and folds each pass in with
-//! `mean = (mean_a * n_a + mean_b * n_b) / (n_a + n_b)` computed in f64
-//! from the f32 inputs and rounded to f32. Since the state between passes
-//! is exactly (f32 mean, n) and the pass sizes depend only on `n`, a
-//! render continued from a checkpoint ([`resume_progressive`] with
-//! [`Accumulator::from_mean`]) repeats the arithmetic of a render that was
-//! never stopped and gives a bit-identical image. (The price: each pass
-//! rounds the mean to f32 once, a relative 6e-8 per pass, about 20 passes
-//! for a million samples.)
+//! **Exact continuation.** The accumulator holds the per-pixel exact
+//! fixed-point sums of the samples rendered (`film::SampleSums`), which a
+//! checkpoint EXR stores beside the mean image. Integer sums are exact and
+//! associative, so the image after any passes, a render continued from a
+//! checkpoint ([`resume_progressive`] with [`Accumulator::from_sums`]), and
+//! sample ranges rendered apart and added up are all bit-identical to one
+//! render of the same samples ([`crate::render::render`]).
 
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use crate::film::Image;
+use crate::film::{Image, SampleSums};
 use crate::integrator::IntegratorSettings;
 use crate::render::{RenderError, RenderOptions};
 use crate::world::Scene;
@@ -35,68 +32,80 @@ pub enum Budget {
     Time(Duration),
 }
 
-/// The running per-pixel mean of a progressive render, as the f32 image a
-/// checkpoint stores, and its sample count (see the module docs for why it
-/// is not a sum).
+/// The running per-pixel sums of a progressive render (exact fixed-point
+/// sums, `film::SampleSums`), the range of sample indices they hold, and
+/// their mean image.
 ///
 /// ```
-/// use niebla::color::Rgb;
-/// use niebla::film::Image;
+/// use niebla::film::{quantize_sample, SampleSums};
 /// use niebla::progressive::Accumulator;
-/// let pass = |v: f32| Image { width: 1, height: 1, pixels: vec![Rgb::new(v, v, v)] };
+/// let pass = |v: f32, n: i128| SampleSums { width: 1, height: 1, sums: vec![[quantize_sample(v) * n; 3]] };
 /// let mut acc = Accumulator::new(1, 1);
-/// acc.add(&pass(1.0), 1);
-/// acc.add(&pass(4.0), 3);
+/// acc.add(&pass(1.0, 1), 1);
+/// acc.add(&pass(4.0, 3), 3);
 /// assert_eq!((acc.image().pixels[0][0], acc.spp), (3.25, 4));
-/// // Continuing from the stored mean is the same arithmetic.
-/// let mut resumed = Accumulator::from_mean(acc.image(), 4);
-/// resumed.add(&pass(0.5), 4);
-/// acc.add(&pass(0.5), 4);
+/// // Continuing from the stored sums is the same arithmetic.
+/// let mut resumed = Accumulator::from_sums(acc.sums().clone(), 0, 4);
+/// resumed.add(&pass(0.5, 4), 4);
+/// acc.add(&pass(0.5, 4), 4);
 /// assert_eq!(resumed.image(), acc.image());
 /// ```
 #[derive(Clone, Debug)]
 pub struct Accumulator {
-    mean: Image,
+    sums: SampleSums,
+    /// Index of the first sample accumulated (samples `first_sample ..
+    /// first_sample + spp` are in the sums; the next pass starts after them).
+    pub first_sample: u64,
     /// Samples per pixel accumulated so far.
     pub spp: u64,
 }
 
 impl Accumulator {
-    /// An empty accumulator for a `width` x `height` image.
+    /// An empty accumulator for a `width` x `height` image, starting at
+    /// sample index 0.
     pub fn new(width: u32, height: u32) -> Accumulator {
-        Accumulator { mean: Image::new(width, height), spp: 0 }
+        Accumulator::starting_at(width, height, 0)
     }
 
-    /// An accumulator continuing from `mean`, the mean of `spp` samples per
-    /// pixel (a checkpoint's image).
+    /// An empty accumulator whose first pass renders sample index
+    /// `first_sample` (a render of a sample range, e.g. one machine's share).
+    pub fn starting_at(width: u32, height: u32, first_sample: u64) -> Accumulator {
+        Accumulator { sums: SampleSums::new(width, height), first_sample, spp: 0 }
+    }
+
+    /// An accumulator continuing from `sums`, the sums of samples
+    /// `first_sample .. first_sample + spp` (a checkpoint's sums).
+    pub fn from_sums(sums: SampleSums, first_sample: u64, spp: u64) -> Accumulator {
+        Accumulator { sums, first_sample, spp }
+    }
+
+    /// An accumulator continuing from `mean`, the mean of samples `0 .. spp`
+    /// (a checkpoint written before checkpoints stored sums). Not exact:
+    /// the sums are recovered from the f32 mean, so the continued render
+    /// may differ from an uninterrupted one in the last bits.
     pub fn from_mean(mean: Image, spp: u64) -> Accumulator {
-        Accumulator { mean, spp }
+        Accumulator { sums: SampleSums::from_mean(&mean, spp), first_sample: 0, spp }
     }
 
-    /// Add a pass image that is the mean of `spp` samples per pixel:
-    /// `mean = (mean * n + pass * spp) / (n + spp)` in f64, rounded to f32.
-    pub fn add(&mut self, pass: &Image, spp: u64) {
-        debug_assert_eq!(pass.pixels.len(), self.mean.pixels.len(), "pass of another size");
-        let (n_a, n_b) = (self.spp as f64, spp as f64);
-        let n = n_a + n_b;
-        for (m, p) in self.mean.pixels.iter_mut().zip(&pass.pixels) {
-            debug_assert!(p.is_finite(), "non-finite pass pixel {p:?}");
-            for c in 0..3 {
-                m[c] = ((m[c] as f64 * n_a + p[c] as f64 * n_b) / n) as f32;
-            }
-            debug_assert!(m.is_finite(), "non-finite accumulated pixel {m:?}");
-        }
+    /// Add the sums of the `spp` samples per pixel of a pass (exact).
+    pub fn add(&mut self, pass: &SampleSums, spp: u64) {
+        self.sums.add(pass);
         self.spp += spp;
     }
 
-    /// The mean image so far.
+    /// The mean image so far (`film::mean_of_sum` per pixel and channel).
     pub fn image(&self) -> Image {
-        self.mean.clone()
+        self.sums.mean(self.spp)
     }
 
-    /// The mean image so far, without a copy.
-    pub fn mean(&self) -> &Image {
-        &self.mean
+    /// The sums so far.
+    pub fn sums(&self) -> &SampleSums {
+        &self.sums
+    }
+
+    /// The sample index the next pass starts at.
+    pub fn next_sample(&self) -> u64 {
+        self.first_sample + self.spp
     }
 }
 
@@ -192,18 +201,32 @@ pub fn render_progressive(
     resume_progressive(scene, options, start, on_pass)
 }
 
-/// [`render_progressive`] continuing from `acc` (for instance
-/// [`Accumulator::from_mean`] of a checkpoint): sample indices continue at
-/// `acc.spp`, `Budget::Samples(total)` counts the samples already in `acc`,
-/// and `Budget::Time` counts from this call. With the same scene, settings
-/// and seed, the result is bit-identical to an uninterrupted render that
-/// passed through the same `acc`.
+/// [`resume_progressive_sums`] with `on_pass` seeing the mean image so far
+/// and the result being the final mean image.
 pub fn resume_progressive(
     scene: &Scene,
     options: &ProgressiveOptions,
-    mut acc: Accumulator,
+    acc: Accumulator,
     mut on_pass: impl FnMut(&Image, PassInfo) -> bool,
 ) -> Result<Image, RenderError> {
+    let acc = resume_progressive_sums(scene, options, acc, |acc, info| on_pass(&acc.image(), info))?;
+    Ok(acc.image())
+}
+
+/// [`render_progressive`] continuing from `acc` (for instance
+/// [`Accumulator::from_sums`] of a checkpoint), with `on_pass` seeing the
+/// accumulator and the final accumulator returned: sample indices continue
+/// at `acc.next_sample()`, `Budget::Samples(total)` counts the samples
+/// already in `acc`,
+/// and `Budget::Time` counts from this call. With the same scene, settings
+/// and seed, the result is bit-identical to an uninterrupted render that
+/// passed through the same `acc`.
+pub fn resume_progressive_sums(
+    scene: &Scene,
+    options: &ProgressiveOptions,
+    mut acc: Accumulator,
+    mut on_pass: impl FnMut(&Accumulator, PassInfo) -> bool,
+) -> Result<Accumulator, RenderError> {
     let ProgressiveOptions { settings, seed, threads, budget, progress, cancel } = *options;
     let start = Instant::now();
     let mut k = 0u32;
@@ -227,17 +250,17 @@ pub fn resume_progressive(
                 }
             }
         }
-        let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.spp, threads };
+        let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.next_sample(), threads };
         let pass_start = Instant::now();
-        let image = prepared.render(scene, &pass, progress, cancel)?;
+        let sums = prepared.render_sums(scene, &pass, progress, cancel)?;
         seconds_per_spp = pass_start.elapsed().as_secs_f64() / size as f64;
-        acc.add(&image, size);
+        acc.add(&sums, size);
         rendered += size;
         let info = PassInfo { pass: k, spp: acc.spp, elapsed: start.elapsed() };
-        if !on_pass(acc.mean(), info) {
+        if !on_pass(&acc, info) {
             break;
         }
         k += 1;
     }
-    Ok(acc.image())
+    Ok(acc)
 }

@@ -1,11 +1,17 @@
 //! The render loop: 16x16 tiles on rayon, a counter-based sampler per pixel
 //! sample, progress reported per finished tile. The image depends only on the
 //! scene, seed and sample count, never on thread count or tile order.
+//!
+//! Each pixel accumulates the exact fixed-point sum of its samples
+//! (`film::SampleSums`); the image is `film::mean_of_sum` of it. So the
+//! sums of disjoint sample ranges add up exactly to the sum of their union,
+//! and an image assembled from ranges rendered apart (passes, checkpoints,
+//! machines) is bit-identical to one render of all its samples.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::color::Rgb;
-use crate::film::Image;
+use crate::film::{mean_of_sum, quantize_sample, Image, SampleSums};
 pub use crate::integrator::PreparedIntegrator;
 use crate::integrator::{Integrator, IntegratorSettings};
 use crate::sampling::PixelSampler;
@@ -59,7 +65,21 @@ pub fn render(
     PreparedIntegrator::new(scene, settings).render(scene, options, progress, cancel)
 }
 
-/// Render with a concrete integrator type (monomorphized per integrator).
+/// [`render`], returning the per-pixel fixed-point sums of samples
+/// `options.first_sample .. options.first_sample + options.spp` instead of
+/// their mean (what a distributed render adds up).
+pub fn render_sums(
+    scene: &Scene,
+    settings: &IntegratorSettings,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<SampleSums, RenderError> {
+    PreparedIntegrator::new(scene, settings).render_sums(scene, options, progress, cancel)
+}
+
+/// Render with a concrete integrator type (monomorphized per integrator):
+/// the mean of the sums of [`render_sums_with`].
 pub fn render_with<I: Integrator>(
     scene: &Scene,
     integrator: &I,
@@ -67,6 +87,18 @@ pub fn render_with<I: Integrator>(
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
 ) -> Result<Image, RenderError> {
+    Ok(render_sums_with(scene, integrator, options, progress, cancel)?.mean(options.spp as u64))
+}
+
+/// The per-pixel fixed-point sums of samples `options.first_sample ..
+/// options.first_sample + options.spp` with a concrete integrator type.
+pub fn render_sums_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<SampleSums, RenderError> {
     match options.threads {
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -85,14 +117,14 @@ fn render_tiles<I: Integrator>(
     options: &RenderOptions,
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
-) -> Result<Image, RenderError> {
+) -> Result<SampleSums, RenderError> {
     use rayon::prelude::*;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let tiles_x = w.div_ceil(TILE_SIZE);
     let tiles_y = h.div_ceil(TILE_SIZE);
     let total = w as u64 * h as u64 * options.spp as u64;
     let done = AtomicU64::new(0);
-    let tiles: Vec<(u32, u32, Vec<Rgb>)> = (0..tiles_x * tiles_y)
+    let tiles: Vec<(u32, u32, Vec<[i128; 3]>)> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
             let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
@@ -103,7 +135,7 @@ fn render_tiles<I: Integrator>(
             }
             for y in y0..y1 {
                 for x in x0..x1 {
-                    out.push(render_pixel(scene, integrator, options, x, y));
+                    out.push(pixel_sum(scene, integrator, options, x, y));
                 }
             }
             let n = (x1 - x0) as u64 * (y1 - y0) as u64 * options.spp as u64;
@@ -114,25 +146,36 @@ fn render_tiles<I: Integrator>(
     if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || tiles.iter().any(|t| t.1 == 0) {
         return Err(RenderError::Cancelled);
     }
-    let mut image = Image::new(w, h);
+    let mut image = SampleSums::new(w, h);
     for (tile, _, pixels) in tiles {
         let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
         let x1 = (x0 + TILE_SIZE).min(w);
         let tw = (x1 - x0) as usize;
         for (i, p) in pixels.into_iter().enumerate() {
             let (x, y) = (x0 + (i % tw) as u32, y0 + (i / tw) as u32);
-            image.pixels[(y * w + x) as usize] = p;
+            image.sums[(y * w + x) as usize] = p;
         }
     }
     Ok(image)
 }
 
-/// Mean radiance of `options.spp` samples of pixel `(x, y)`. Samples with a
-/// non-finite value are dropped (counted as zero) so that one numerical
-/// accident cannot poison a pixel; debug builds assert instead.
+/// Mean radiance of `options.spp` samples of pixel `(x, y)`:
+/// [`mean_of_sum`] of [`pixel_sum`].
 #[inline]
 pub fn render_pixel<I: Integrator>(scene: &Scene, integrator: &I, options: &RenderOptions, x: u32, y: u32) -> Rgb {
-    let mut sum = [0f64; 3];
+    let sum = pixel_sum(scene, integrator, options, x, y);
+    let n = options.spp as u64;
+    Rgb::new(mean_of_sum(sum[0], n), mean_of_sum(sum[1], n), mean_of_sum(sum[2], n))
+}
+
+/// Fixed-point sum (`film::quantize_sample` per channel) of the samples
+/// `options.first_sample .. options.first_sample + options.spp` of pixel
+/// `(x, y)`. Samples with a non-finite value are dropped (counted as zero)
+/// so that one numerical accident cannot poison a pixel; debug builds
+/// assert instead.
+#[inline]
+pub fn pixel_sum<I: Integrator>(scene: &Scene, integrator: &I, options: &RenderOptions, x: u32, y: u32) -> [i128; 3] {
+    let mut sum = [0i128; 3];
     for s in options.first_sample..options.first_sample + options.spp as u64 {
         let mut sampler = PixelSampler::new(options.seed, x, y, s);
         let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
@@ -140,13 +183,9 @@ pub fn render_pixel<I: Integrator>(scene: &Scene, integrator: &I, options: &Rend
         debug_assert!(l.is_finite(), "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}");
         if l.is_finite() {
             for c in 0..3 {
-                sum[c] += l[c] as f64;
+                sum[c] += quantize_sample(l[c]);
             }
         }
     }
-    let n = options.spp.max(1) as f64;
-    // A mean beyond f32's range would be infinite: dropped like the samples.
-    let mean = sum.map(|s| Some((s / n) as f32).filter(|m| m.is_finite()).unwrap_or(0.0));
-    debug_assert!(mean == sum.map(|s| (s / n) as f32), "pixel ({x}, {y}) mean {sum:?} / {n} overflows f32");
-    Rgb::new(mean[0], mean[1], mean[2])
+    sum
 }

@@ -46,11 +46,13 @@ __all__ = [
     "INTEGRATORS",
     "RenderError",
     "RenderStats",
+    "SampleSums",
     "Scene",
     "SceneError",
     "load_scene",
     "read_exr",
     "relative_mse",
+    "scene_hash",
     "write_exr",
     "write_image",
     "write_png",
@@ -275,6 +277,125 @@ class Scene:
             close()
         self.last_render = RenderStats(name, spp_done, seconds)
         return image
+
+    def render_sums(
+        self,
+        integrator: Optional[IntegratorSpec] = None,
+        *,
+        first_sample: int = 0,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Union[None, bool, ProgressCallback] = None,
+    ) -> "SampleSums":
+        """Render samples ``first_sample .. first_sample + spp`` of every
+        pixel and return their exact per-pixel sums (:class:`SampleSums`).
+
+        Sums of disjoint sample ranges add up (``a + b``) to the sums of
+        their union, exactly, and ``sums.image()`` is bit for bit the image
+        :meth:`render` gives for the same samples: a render can be split into
+        sample ranges over processes or machines (``niebla.distributed``).
+        The other arguments are those of :meth:`render`.
+        """
+        integrator_json = self._integrator_json(integrator)
+        callback, close = _progress_callback(progress, None)
+        try:
+            words, spp_done, seconds, key = self._native.render_sums(
+                integrator_json, int(first_sample), spp, seed, threads, callback
+            )
+        finally:
+            close()
+        used_seed = self.seed if seed is None else int(seed)
+        return SampleSums(words, [(int(first_sample), int(first_sample) + spp_done)], used_seed, key)
+
+    def integrator_key(self, integrator: Optional[IntegratorSpec] = None) -> str:
+        """The stable key of an integrator's settings (None: the scene's), as
+        checkpoints record it."""
+        return self._native.integrator_key(self._integrator_json(integrator))
+
+    def _integrator_json(self, integrator: Optional[IntegratorSpec]) -> Optional[str]:
+        """JSON text of an integrator argument for the native calls (None: the scene's)."""
+        if integrator is None or integrator == self.integrator:
+            return None
+        if isinstance(integrator, str):
+            return json.dumps({"type": integrator})
+        return json.dumps(integrator, default=_json_default, allow_nan=False)
+
+
+@dataclass
+class SampleSums:
+    """Exact per-pixel sums of the samples of some sample ranges of a render.
+
+    ``words`` is an (H, W, 3, 4) int64 array: per pixel and RGB channel the
+    fixed-point sum ``round(sample * 2**60)`` over the samples, written as
+    32-bit words ``w0 + w1 * 2**32 + w2 * 2**64 + w3 * 2**96``. Adding two
+    such arrays with numpy's ``+`` adds the sums exactly, in any order, so
+    renders of disjoint sample ranges merge to the render of their union bit
+    for bit. ``ranges`` are the half-open sample index ranges held, sorted;
+    ``seed`` the sampler seed; ``integrator`` the integrator's settings key.
+    """
+
+    words: np.ndarray
+    ranges: List[Tuple[int, int]]
+    seed: int
+    integrator: str
+
+    @property
+    def spp(self) -> int:
+        """Samples per pixel held."""
+        return sum(end - start for start, end in self.ranges)
+
+    def image(self) -> np.ndarray:
+        """The mean of the samples: an (H, W, 3) float32 array, bit for bit
+        the image of one render of these samples."""
+        return _niebla.sums_to_image(self.words, self.spp)
+
+    def __add__(self, other: "SampleSums") -> "SampleSums":
+        """The sums of both (same seed, integrator and size; disjoint ranges)."""
+        if (self.seed, self.integrator) != (other.seed, other.integrator):
+            raise ValueError(
+                f"cannot add sums of seed {other.seed} / {other.integrator} to seed {self.seed} / {self.integrator}"
+            )
+        if self.words.shape != other.words.shape:
+            raise ValueError(f"cannot add sums of shape {other.words.shape} to {self.words.shape}")
+        ranges = _join_ranges(self.ranges + other.ranges)
+        return SampleSums(self.words + other.words, ranges, self.seed, self.integrator)
+
+    def write_exr(self, path: PathLike, scene_hash: str) -> None:
+        """Write as a niebla checkpoint EXR (the mean image, the sums, the
+        sample ranges, seed, ``scene_hash`` and integrator in the header),
+        atomically; ``niebla merge`` and :meth:`read_exr` read it."""
+        _niebla.write_sums_exr(self.words, os.fspath(path), self.ranges, self.seed, scene_hash, self.integrator)
+
+    @staticmethod
+    def read_exr(path: PathLike) -> Tuple["SampleSums", str]:
+        """Read a checkpoint EXR (of :meth:`write_exr` or ``niebla render``):
+        the sums and the scene hash it records."""
+        words, ranges, seed, scene_hash, integrator = _niebla.read_sums_exr(os.fspath(path))
+        return SampleSums(words, [tuple(r) for r in ranges], seed, integrator), scene_hash
+
+
+def scene_hash(text: Union[str, bytes]) -> str:
+    """The 64-bit FNV-1a hash of a scene's text as 16 hex digits, as the
+    ``niebla`` command records it in checkpoints (of the scene file's bytes)."""
+    data = text.encode() if isinstance(text, str) else text
+    h = 0xCBF29CE484222325
+    for b in data:
+        h = ((h ^ b) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return f"{h:016x}"
+
+
+def _join_ranges(ranges: Sequence[Tuple[int, int]]) -> List[Tuple[int, int]]:
+    """Sorted half-open ranges with touching ones joined; ValueError if two overlap."""
+    out: List[Tuple[int, int]] = []
+    for start, end in sorted(ranges):
+        if out and start < out[-1][1]:
+            raise ValueError(f"sample ranges {out[-1][0]}..{out[-1][1]} and {start}..{end} overlap")
+        if out and start == out[-1][1]:
+            out[-1] = (out[-1][0], end)
+        else:
+            out.append((start, end))
+    return out
 
 
 def load_scene(path: PathLike) -> Scene:

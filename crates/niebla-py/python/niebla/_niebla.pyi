@@ -74,8 +74,29 @@ class Scene:
         progress: Optional[Callable[[int, int], Any]] = None,
     ) -> Tuple[npt.NDArray[np.float32], int, float]:
         """Returns (image (H, W, 3) float32 linear radiance, spp rendered, seconds)."""
+    def render_sums(
+        self,
+        integrator: Optional[str] = None,
+        first_sample: int = 0,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Optional[Callable[[int, int], Any]] = None,
+    ) -> Tuple[npt.NDArray[np.int64], int, float, str]:
+        """Returns (exact sums as (H, W, 3, 4) int64 32-bit words, spp rendered, seconds, integrator key)."""
+    def integrator_key(self, integrator: Optional[str] = None) -> str: ...
 
 def write_exr(image: npt.NDArray[np.floating[Any]], path: _Path) -> None: ...
 def write_png(image: npt.NDArray[np.floating[Any]], path: _Path, exposure: float = 0.0) -> None: ...
 def read_exr(path: _Path) -> npt.NDArray[np.float32]: ...
 def relative_mse(image: npt.NDArray[np.floating[Any]], reference: npt.NDArray[np.floating[Any]]) -> float: ...
+def sums_to_image(words: npt.NDArray[np.int64], spp: int) -> npt.NDArray[np.float32]: ...
+def write_sums_exr(
+    words: npt.NDArray[np.int64],
+    path: _Path,
+    ranges: Sequence[Tuple[int, int]],
+    seed: int,
+    scene_hash: str,
+    integrator: str,
+) -> None: ...
+def read_sums_exr(path: _Path) -> Tuple[npt.NDArray[np.int64], List[Tuple[int, int]], int, str, str]: ...

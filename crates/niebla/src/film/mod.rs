@@ -4,29 +4,35 @@
 //! failed or killed run never leaves a half-written image. A checkpoint is
 //! an EXR whose header also records how it was rendered (samples per pixel
 //! so far, seed, scene hash, integrator), so that a killed progressive
-//! render can be continued exactly (`checkpoint.rs`).
+//! render can be continued exactly (`checkpoint.rs`). Renders accumulate
+//! exact fixed-point sums per pixel (`sums.rs`), so that sample ranges
+//! rendered apart add up to the image of one render, bit for bit.
 
 mod checkpoint;
 mod exr_read;
 mod output;
+mod sums;
 
-pub use checkpoint::{read_checkpoint, scene_hash, write_checkpoint, CheckpointError, CheckpointInfo};
+pub use checkpoint::{
+    read_checkpoint, read_checkpoint_full, scene_hash, write_checkpoint, Checkpoint, CheckpointError, CheckpointInfo,
+};
 pub use exr_read::{read_exr, ExrImage, ExrReadError};
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
+pub use sums::{mean_of_sum, quantize_sample, SampleSums, FRACTION_BITS, SAMPLE_LIMIT};
 
 use crate::color::Rgb;
 
 /// Bytes per pixel a progressive render holds at once: the accumulated
-/// mean, the pass image and its tiles, the final copy (f32 RGB, 12 bytes
-/// each), the EXR's uncompressed and compressed buffers (24) and the PNG's
-/// (6), rounded up.
-pub const RENDER_BYTES_PER_PIXEL: u64 = 80;
+/// exact sums, the pass's sums and its tiles (`SampleSums`, 48 bytes
+/// each), the mean image (12), the checkpoint EXR's uncompressed and
+/// compressed buffers (mean and sums, 60 each) and the PNG's (6), rounded up.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 288;
 
 /// Memory a progressive render of a `width` x `height` image needs for its
 /// images and output buffers ([`RENDER_BYTES_PER_PIXEL`] per pixel).
 ///
 /// ```
-/// assert_eq!(niebla::film::render_memory(1920, 1080), 1920 * 1080 * 80);
+/// assert_eq!(niebla::film::render_memory(1920, 1080), 1920 * 1080 * 288);
 /// ```
 pub fn render_memory(width: u32, height: u32) -> u64 {
     u64::from(width) * u64::from(height) * RENDER_BYTES_PER_PIXEL

@@ -21,9 +21,9 @@ use super::{
     analytic, emission_absorption, hegeman, photon, single, volpath, zhou, AnalyticIntegrator, EmissionIntegrator,
     HegemanIntegrator, PrecomputeMemory, SingleIntegrator, SingleSampling, VolPathIntegrator, ZhouIntegrator,
 };
-use crate::film::Image;
+use crate::film::{Image, SampleSums};
 use crate::params::{describe, Located, Object};
-use crate::render::{render_with, ProgressFn, RenderError, RenderOptions};
+use crate::render::{render_sums_with, ProgressFn, RenderError, RenderOptions};
 use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
@@ -356,7 +356,7 @@ impl PreparedIntegrator {
     }
 
     /// Render `options.spp` samples per pixel of `scene` (the scene the
-    /// integrator was prepared for).
+    /// integrator was prepared for): the mean of [`Self::render_sums`].
     pub fn render(
         &self,
         scene: &Scene,
@@ -364,13 +364,25 @@ impl PreparedIntegrator {
         progress: ProgressFn,
         cancel: Option<&AtomicBool>,
     ) -> Result<Image, RenderError> {
+        Ok(self.render_sums(scene, options, progress, cancel)?.mean(options.spp as u64))
+    }
+
+    /// The per-pixel fixed-point sums (`film::SampleSums`) of samples
+    /// `options.first_sample .. options.first_sample + options.spp`.
+    pub fn render_sums(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        progress: ProgressFn,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<SampleSums, RenderError> {
         match self {
-            PreparedIntegrator::Emission(i) => render_with(scene, i, options, progress, cancel),
-            PreparedIntegrator::Single(i) => render_with(scene, i, options, progress, cancel),
-            PreparedIntegrator::VolPath(i) => render_with(scene, i.as_ref(), options, progress, cancel),
-            PreparedIntegrator::Analytic(i) => render_with(scene, i, options, progress, cancel),
-            PreparedIntegrator::Hegeman(i) => render_with(scene, i.as_ref(), options, progress, cancel),
-            PreparedIntegrator::Zhou(i) => render_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Emission(i) => render_sums_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::Single(i) => render_sums_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::VolPath(i) => render_sums_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Analytic(i) => render_sums_with(scene, i, options, progress, cancel),
+            PreparedIntegrator::Hegeman(i) => render_sums_with(scene, i.as_ref(), options, progress, cancel),
+            PreparedIntegrator::Zhou(i) => render_sums_with(scene, i.as_ref(), options, progress, cancel),
             PreparedIntegrator::Photon(p) => photon::render_photon(scene, p, options, progress, cancel),
             PreparedIntegrator::Ppm(p) => photon::render_ppm(scene, p, options, progress, cancel),
         }

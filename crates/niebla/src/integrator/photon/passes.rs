@@ -8,10 +8,9 @@ use super::estimate::{Kernel, PhotonIntegrator};
 use super::maps::{auto_radius, PhotonMaps};
 use super::trace::photon_stream;
 use super::{PhotonGather, PhotonSettings, PpmSettings, VolumeQuery};
-use crate::color::Rgb;
-use crate::film::Image;
+use crate::film::SampleSums;
 use crate::integrator::SingleIntegrator;
-use crate::render::{render_with, ProgressFn, RenderError, RenderOptions};
+use crate::render::{render_sums_with, ProgressFn, RenderError, RenderOptions};
 use crate::tracking::TransmittanceMethod;
 use crate::world::Scene;
 
@@ -91,14 +90,15 @@ fn radius_or_auto(radius: Option<f32>, measured: impl FnOnce() -> f32) -> f32 {
 
 /// Render with the `photon` integrator: one photon map traced from `seed`
 /// (the same for every pass of a progressive render), then `options.spp`
-/// camera samples per pixel. The image does not depend on the thread count.
+/// camera samples per pixel, returned as per-pixel fixed-point sums
+/// (`film::SampleSums`). The image does not depend on the thread count.
 pub fn render_photon(
     scene: &Scene,
     settings: &PhotonSettings,
     options: &RenderOptions,
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
-) -> Result<Image, RenderError> {
+) -> Result<SampleSums, RenderError> {
     with_pool(options.threads, || {
         let emitters = Emitters::new(scene);
         let mut maps = PhotonMaps::trace(scene, &emitters, settings, photon_stream(options.seed, PHOTON_PASS));
@@ -128,15 +128,15 @@ pub fn render_photon(
             step: settings.step,
             single: single_of(settings),
         };
-        render_with(scene, &integrator, &RenderOptions { threads: None, ..*options }, progress, cancel)
+        render_sums_with(scene, &integrator, &RenderOptions { threads: None, ..*options }, progress, cancel)
     })?
 }
 
 /// Render with `ppm`: every sample index `s` in
 /// `first_sample .. first_sample + spp` is one pass with its own photon map
 /// (stream `(seed, s)`) and radii `r_0 ppm_radius_factor(s + 1, alpha, d)`;
-/// each pass renders one sample per pixel and the image is the mean of the
-/// passes. A progressive render therefore continues the radius sequence
+/// each pass renders one sample per pixel and the result is the per-pixel
+/// fixed-point sum over the passes (`film::SampleSums`). A progressive render therefore continues the radius sequence
 /// across its passes, and the image does not depend on the thread count.
 pub fn render_ppm(
     scene: &Scene,
@@ -144,13 +144,13 @@ pub fn render_ppm(
     options: &RenderOptions,
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
-) -> Result<Image, RenderError> {
+) -> Result<SampleSums, RenderError> {
     let (w, h) = (scene.camera.width, scene.camera.height);
     let pixels = w as u64 * h as u64;
     let total = pixels * options.spp as u64;
     let done = AtomicU64::new(0);
     with_pool(options.threads, || {
-        let mut sum = vec![[0f64; 3]; pixels as usize];
+        let mut sum = SampleSums::new(w, h);
         let photon = settings.photon;
         let alpha = settings.alpha.clamp(1e-3, 1.0) as f64;
         let volume_dimension = if photon.query == VolumeQuery::Beam { 2 } else { 3 };
@@ -177,17 +177,11 @@ pub fn render_ppm(
             let pass_options = RenderOptions { spp: 1, seed: options.seed, first_sample: s, threads: None };
             let base = done.load(Ordering::Relaxed);
             let pass_progress = |d: u64, _: u64| progress(base + d, total);
-            let image = render_with(scene, &integrator, &pass_options, &pass_progress, cancel)?;
+            let pass = render_sums_with(scene, &integrator, &pass_options, &pass_progress, cancel)?;
             done.fetch_add(pixels, Ordering::Relaxed);
-            for (acc, p) in sum.iter_mut().zip(&image.pixels) {
-                for c in 0..3 {
-                    acc[c] += p[c] as f64;
-                }
-            }
+            sum.add(&pass);
         }
-        let n = options.spp.max(1) as f64;
-        let pixels = sum.iter().map(|s| Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)).collect();
-        Ok(Image { width: w, height: h, pixels })
+        Ok(sum)
     })?
 }
 
