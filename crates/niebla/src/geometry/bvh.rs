@@ -6,6 +6,8 @@
 //! nodes. Used for the triangles of a mesh and for the objects of a scene
 //! (the two levels of the scene's acceleration structure).
 
+use glam::Vec3A;
+
 use crate::math::{Ray, Vec3};
 
 use super::AxisAlignedBox;
@@ -229,16 +231,17 @@ fn flatten(node: &BuildNode, nodes: &mut Vec<BvhNode>) {
     }
 }
 
-/// A ray prepared for box tests: origin and reciprocal direction.
+/// A ray prepared for box tests: origin and reciprocal direction, in SIMD
+/// lanes.
 #[derive(Clone, Copy, Debug)]
 struct BoxRay {
-    o: Vec3,
-    inv: Vec3,
+    o: Vec3A,
+    inv: Vec3A,
 }
 
 impl BoxRay {
     fn new(ray: &Ray) -> BoxRay {
-        BoxRay { o: ray.o, inv: ray.d.recip() }
+        BoxRay { o: Vec3A::from(ray.o), inv: Vec3A::from(ray.d.recip()) }
     }
 
     /// Entry parameter of the ray into the node's box within `[t_min, t_max]`,
@@ -246,13 +249,13 @@ impl BoxRay {
     /// conservative bound) so that rounding never culls a box the ray grazes.
     #[inline(always)]
     fn enter(&self, n: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
-        let lo = (Vec3::from(n.min) - self.o) * self.inv;
-        let hi = (Vec3::from(n.max) - self.o) * self.inv;
-        // f32::min/max ignore the NaN of 0 * inf (a ray in a slab plane).
+        let lo = (Vec3A::from(n.min) - self.o) * self.inv;
+        let hi = (Vec3A::from(n.max) - self.o) * self.inv;
         let near = lo.min(hi);
-        let far = lo.max(hi);
+        let far = lo.max(hi) * GROW;
+        // f32::min/max ignore the NaN of 0 * inf (a ray in a slab plane).
         let t0 = t_min.max(near.x).max(near.y).max(near.z);
-        let t1 = t_max.min(far.x * GROW).min(far.y * GROW).min(far.z * GROW);
+        let t1 = t_max.min(far.x).min(far.y).min(far.z);
         (t0 <= t1).then_some(t0)
     }
 }
