@@ -98,12 +98,7 @@ pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
             Some(niebla::texture::Texture::Checkerboard { .. }) => " with a checkerboard reflectance".to_string(),
             None => String::new(),
         };
-        println!(
-            "  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{texture}{media}",
-            lo.to_array(),
-            hi.to_array(),
-            o.bsdf
-        );
+        println!("  [{i}] {kind}, bounds {:?}..{:?}, bsdf {:?}{texture}{media}", lo.to_array(), hi.to_array(), o.bsdf);
     }
     println!("lights ({}):", s.lights.len());
     for (i, l) in s.lights.iter().enumerate() {

@@ -2,11 +2,14 @@
 //! binned surface-area-heuristic build (Wald 2007, "On fast Construction of
 //! SAH-based Bounding Volume Hierarchies"; 16 bins on each axis), run in
 //! parallel over subtrees and deterministic (the tree depends only on the
-//! boxes, never on the thread count), flattened depth first into 32-byte
-//! nodes. Used for the triangles of a mesh and for the objects of a scene
-//! (the two levels of the scene's acceleration structure).
+//! boxes, never on the thread count), then collapsed into a 4-wide tree
+//! whose nodes hold their children's boxes side by side, so that one node
+//! visit tests four boxes in SIMD lanes (the layout of Wald, Benthin and
+//! Boulos 2008, "Getting rid of packets", and of Embree's BVH4). Used for
+//! the triangles of a mesh and for the objects of a scene (the two levels of
+//! the scene's acceleration structure).
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 use crate::math::{Ray, Vec3};
 
@@ -23,34 +26,49 @@ const TRAVERSAL_COST: f32 = 1.0;
 /// Depth below which the build stops trusting the SAH and splits at the
 /// median, so that no tree gets deeper than `MEDIAN_DEPTH + 32`.
 const MEDIAN_DEPTH: usize = 48;
-/// Deepest traversal stack: deeper than any tree the build makes.
-const STACK_DEPTH: usize = 96;
+/// Deepest traversal stack: a 4-wide node pushes at most three entries more
+/// than it pops, and the tree is at most `MEDIAN_DEPTH + 32` levels deep.
+const STACK_DEPTH: usize = 3 * (MEDIAN_DEPTH + 32) + 16;
 
-/// One node of the flattened tree (32 bytes). An interior node's first child
-/// follows it; `offset` is the second child's index. A leaf holds `count`
-/// primitives from `offset` in [`Bvh::order`].
+/// One node of the 4-wide tree (112 bytes): the boxes of up to four
+/// children, coordinate by coordinate, and what each child is.
 #[derive(Clone, Copy, Debug)]
-#[repr(C)]
+#[repr(C, align(16))]
 pub struct BvhNode {
-    /// Lower corner of the node's box.
-    pub min: [f32; 3],
-    /// Upper corner of the node's box.
-    pub max: [f32; 3],
-    /// Second child (interior) or first primitive slot (leaf).
-    pub offset: u32,
-    /// Number of primitives (0 for an interior node).
-    pub count: u16,
-    /// Split axis of an interior node (0, 1, 2): the child on the lower side
-    /// comes first.
-    pub axis: u16,
+    /// Lower x of each child's box.
+    pub min_x: [f32; 4],
+    /// Lower y of each child's box.
+    pub min_y: [f32; 4],
+    /// Lower z of each child's box.
+    pub min_z: [f32; 4],
+    /// Upper x of each child's box.
+    pub max_x: [f32; 4],
+    /// Upper y of each child's box.
+    pub max_y: [f32; 4],
+    /// Upper z of each child's box.
+    pub max_z: [f32; 4],
+    /// Each child: an inner node's index, or with [`LEAF`] set a leaf of
+    /// `child & 15` primitives from slot `(child & !LEAF) >> 4` of
+    /// [`Bvh::order`]. Children past `count` are unused.
+    pub child: [u32; 4],
+    /// Number of children in use (2 to 4; 1 only for a root that is a leaf).
+    pub count: u32,
 }
 
-/// A bounding volume hierarchy: flattened nodes and the primitive order of
-/// the leaves.
-#[derive(Clone, Debug, Default)]
+/// Flag of a leaf child in [`BvhNode::child`].
+pub const LEAF: u32 = 1 << 31;
+
+/// Most primitives a hierarchy holds (a leaf's first slot has 27 bits).
+pub const MAX_PRIMITIVES: usize = 1 << 27;
+
+/// A bounding volume hierarchy: 4-wide nodes and the primitive order of the
+/// leaves.
+#[derive(Clone, Debug)]
 pub struct Bvh {
     /// Nodes, depth first; node 0 is the root (absent for no primitives).
     pub nodes: Vec<BvhNode>,
+    /// Box of everything (meaningless without nodes).
+    root_box: AxisAlignedBox,
     /// Primitive indices in leaf order.
     pub order: Vec<u32>,
 }
@@ -67,7 +85,7 @@ struct PrimRef {
 /// The build's tree before flattening.
 enum BuildNode {
     Leaf { min: Vec3, max: Vec3, first: usize, count: usize },
-    Interior { min: Vec3, max: Vec3, axis: usize, children: Box<[BuildNode; 2]> },
+    Interior { min: Vec3, max: Vec3, children: Box<[BuildNode; 2]> },
 }
 
 fn surface_area(min: Vec3, max: Vec3) -> f32 {
@@ -188,7 +206,7 @@ fn build_node(prims: &mut [PrimRef], first: usize, depth: usize) -> BuildNode {
             (axis, n / 2)
         }
     };
-    let (axis, mid) = split;
+    let (_, mid) = split;
     let (left, right) = prims.split_at_mut(mid);
     let children = if n > PARALLEL_THRESHOLD {
         let (a, b) = rayon::join(|| build_node(left, first, depth + 1), || build_node(right, first + mid, depth + 1));
@@ -196,7 +214,7 @@ fn build_node(prims: &mut [PrimRef], first: usize, depth: usize) -> BuildNode {
     } else {
         [build_node(left, first, depth + 1), build_node(right, first + mid, depth + 1)]
     };
-    BuildNode::Interior { min, max, axis, children: Box::new(children) }
+    BuildNode::Interior { min, max, children: Box::new(children) }
 }
 
 /// Stable-enough in-place partition: elements satisfying `pred` first;
@@ -212,52 +230,140 @@ fn partition(prims: &mut [PrimRef], pred: impl Fn(&PrimRef) -> bool) -> usize {
     i
 }
 
-fn flatten(node: &BuildNode, nodes: &mut Vec<BvhNode>) {
-    match node {
-        BuildNode::Leaf { min, max, first, count } => nodes.push(BvhNode {
-            min: min.to_array(),
-            max: max.to_array(),
-            offset: *first as u32,
-            count: *count as u16,
-            axis: 0,
-        }),
-        BuildNode::Interior { min, max, axis, children } => {
-            let me = nodes.len();
-            nodes.push(BvhNode { min: min.to_array(), max: max.to_array(), offset: 0, count: 0, axis: *axis as u16 });
-            flatten(&children[0], nodes);
-            nodes[me].offset = nodes.len() as u32;
-            flatten(&children[1], nodes);
+impl BuildNode {
+    fn bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            BuildNode::Leaf { min, max, .. } | BuildNode::Interior { min, max, .. } => (*min, *max),
         }
     }
 }
 
-/// A ray prepared for box tests: origin and reciprocal direction, in SIMD
-/// lanes.
+/// The up to four subtrees a 4-wide node over `node` holds: its two
+/// children, the inner one of largest surface area replaced by its own two
+/// children while there is room.
+fn collapse(node: &BuildNode) -> Vec<&BuildNode> {
+    let BuildNode::Interior { children, .. } = node else { return vec![node] };
+    let mut kids: Vec<&BuildNode> = vec![&children[0], &children[1]];
+    while kids.len() < 4 {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, BuildNode::Interior { .. }))
+            .max_by(|a, b| {
+                let area = |k: &BuildNode| {
+                    let (lo, hi) = k.bounds();
+                    surface_area(lo, hi)
+                };
+                area(a.1).total_cmp(&area(b.1)).then(b.0.cmp(&a.0))
+            })
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let BuildNode::Interior { children, .. } = kids[i] else { break };
+        kids[i] = &children[0];
+        kids.insert(i + 1, &children[1]);
+    }
+    kids
+}
+
+/// Appends the 4-wide node over `node` and its subtrees depth first;
+/// returns its index.
+fn flatten(node: &BuildNode, nodes: &mut Vec<BvhNode>) -> u32 {
+    let me = nodes.len();
+    let empty = [0.0f32; 4];
+    nodes.push(BvhNode {
+        min_x: empty,
+        min_y: empty,
+        min_z: empty,
+        max_x: empty,
+        max_y: empty,
+        max_z: empty,
+        child: [0; 4],
+        count: 0,
+    });
+    let kids = collapse(node);
+    let mut out = nodes[me];
+    out.count = kids.len() as u32;
+    for (k, kid) in kids.iter().enumerate() {
+        let (lo, hi) = kid.bounds();
+        out.min_x[k] = lo.x;
+        out.min_y[k] = lo.y;
+        out.min_z[k] = lo.z;
+        out.max_x[k] = hi.x;
+        out.max_y[k] = hi.y;
+        out.max_z[k] = hi.z;
+        out.child[k] = match kid {
+            BuildNode::Leaf { first, count, .. } => LEAF | ((*first as u32) << 4) | *count as u32,
+            BuildNode::Interior { .. } => 0, // set below, after the earlier siblings' subtrees
+        };
+    }
+    nodes[me] = out;
+    for (k, kid) in kids.iter().enumerate() {
+        if let BuildNode::Interior { .. } = kid {
+            let index = flatten(kid, nodes);
+            nodes[me].child[k] = index;
+        }
+    }
+    me as u32
+}
+
+/// A ray prepared for box tests: origin and reciprocal direction, each
+/// coordinate in all four SIMD lanes.
 #[derive(Clone, Copy, Debug)]
 struct BoxRay {
-    o: Vec3A,
-    inv: Vec3A,
+    ox: Vec4,
+    oy: Vec4,
+    oz: Vec4,
+    ix: Vec4,
+    iy: Vec4,
+    iz: Vec4,
 }
 
 impl BoxRay {
     fn new(ray: &Ray) -> BoxRay {
-        BoxRay { o: Vec3A::from(ray.o), inv: Vec3A::from(ray.d.recip()) }
+        let inv = ray.d.recip();
+        BoxRay {
+            ox: Vec4::splat(ray.o.x),
+            oy: Vec4::splat(ray.o.y),
+            oz: Vec4::splat(ray.o.z),
+            ix: Vec4::splat(inv.x),
+            iy: Vec4::splat(inv.y),
+            iz: Vec4::splat(inv.z),
+        }
     }
 
-    /// Entry parameter of the ray into the node's box within `[t_min, t_max]`,
-    /// or `None`. The far parameter is widened by `1 + 2 gamma_3` (pbrt-v4's
-    /// conservative bound) so that rounding never culls a box the ray grazes.
+    /// Entry parameters of the ray into the node's four child boxes within
+    /// `[t_min, t_max]`, and the bit mask of the children it enters. The far
+    /// parameter is widened by `1 + 2 gamma_3` (pbrt-v4's conservative
+    /// bound) so that rounding never culls a box the ray grazes.
     #[inline(always)]
-    fn enter(&self, n: &BvhNode, t_min: f32, t_max: f32) -> Option<f32> {
-        let lo = (Vec3A::from(n.min) - self.o) * self.inv;
-        let hi = (Vec3A::from(n.max) - self.o) * self.inv;
-        let near = lo.min(hi);
-        let far = lo.max(hi) * GROW;
-        // f32::min/max ignore the NaN of 0 * inf (a ray in a slab plane).
-        let t0 = t_min.max(near.x).max(near.y).max(near.z);
-        let t1 = t_max.min(far.x).min(far.y).min(far.z);
-        (t0 <= t1).then_some(t0)
+    fn enter4(&self, n: &BvhNode, t_min: f32, t_max: f32) -> (Vec4, u32) {
+        let x0 = (Vec4::from_array(n.min_x) - self.ox) * self.ix;
+        let x1 = (Vec4::from_array(n.max_x) - self.ox) * self.ix;
+        let y0 = (Vec4::from_array(n.min_y) - self.oy) * self.iy;
+        let y1 = (Vec4::from_array(n.max_y) - self.oy) * self.iy;
+        let z0 = (Vec4::from_array(n.min_z) - self.oz) * self.iz;
+        let z1 = (Vec4::from_array(n.max_z) - self.oz) * self.iz;
+        // A NaN (0 * inf: a ray in a slab plane) makes min/max return their
+        // other operand, as the scalar test's f32::min/max did.
+        let near = x0.min(x1).max(y0.min(y1)).max(z0.min(z1)).max(Vec4::splat(t_min));
+        let far = (x0.max(x1).min(y0.max(y1)).min(z0.max(z1)) * GROW).min(Vec4::splat(t_max));
+        let used = (1u32 << n.count) - 1;
+        (near, near.cmple(far).bitmask() & used)
     }
+}
+
+/// Whether the ray's segment `[t_min, t_max]` meets `b` (for the root box).
+#[inline]
+fn enters_box(ray: &Ray, b: &AxisAlignedBox, t_min: f32, t_max: f32) -> bool {
+    let inv = Vec3A::from(ray.d.recip());
+    let o = Vec3A::from(ray.o);
+    let lo = (Vec3A::from(b.min) - o) * inv;
+    let hi = (Vec3A::from(b.max) - o) * inv;
+    let near = lo.min(hi);
+    let far = lo.max(hi) * GROW;
+    let t0 = t_min.max(near.x).max(near.y).max(near.z);
+    let t1 = t_max.min(far.x).min(far.y).min(far.z);
+    t0 <= t1
 }
 
 /// `1 + 2 gamma_3` with `gamma_n = n eps / (1 - n eps)` for `f32`'s unit roundoff.
@@ -265,8 +371,9 @@ const GROW: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPS
 
 impl Bvh {
     /// Builds the hierarchy over primitives with boxes `boxes` (primitive `i`
-    /// has box `boxes[i]`). Boxes with a NaN corner or `min > max` must not
-    /// be passed (callers leave such primitives out).
+    /// has box `boxes[i]`), at most [`MAX_PRIMITIVES`] of them (callers
+    /// refuse more). Boxes with a NaN corner or `min > max` must not be
+    /// passed (callers leave such primitives out).
     pub fn build(boxes: &[AxisAlignedBox]) -> Bvh {
         if boxes.is_empty() {
             return Bvh::default();
@@ -277,11 +384,13 @@ impl Bvh {
             .map(|(i, b)| PrimRef { min: b.min, max: b.max, centroid: 0.5 * (b.min + b.max), index: i as u32 })
             .collect();
         let root = build_node(&mut prims, 0, 0);
-        let mut nodes = Vec::with_capacity(2 * prims.len() / 2 + 1);
+        let (lo, hi) = root.bounds();
+        // A lone leaf becomes a root node with one child.
+        let mut nodes = Vec::with_capacity(prims.len() / 2 + 1);
         flatten(&root, &mut nodes);
         drop(root);
         nodes.shrink_to_fit();
-        Bvh { nodes, order: prims.iter().map(|p| p.index).collect() }
+        Bvh { nodes, root_box: AxisAlignedBox { min: lo, max: hi }, order: prims.iter().map(|p| p.index).collect() }
     }
 
     /// Bytes held by the nodes and the primitive order.
@@ -292,16 +401,16 @@ impl Bvh {
     /// Bytes the hierarchy over `n` primitives needs at most (two nodes per
     /// primitive bound, the order, and the build's temporary references).
     pub fn memory_estimate(n: usize) -> usize {
-        n * (2 * std::mem::size_of::<BvhNode>() + 4 + std::mem::size_of::<PrimRef>() + 48)
+        n * (std::mem::size_of::<BvhNode>() + 4 + std::mem::size_of::<PrimRef>() + 48 + 64)
     }
 
     /// World box of everything in the hierarchy (`None` when empty).
     pub fn bounds(&self) -> Option<AxisAlignedBox> {
-        self.nodes.first().map(|n| AxisAlignedBox { min: Vec3::from(n.min), max: Vec3::from(n.max) })
+        (!self.nodes.is_empty()).then_some(self.root_box)
     }
 
     /// Nearest hit: visits the leaves the ray may reach within `(t_min,
-    /// t_max)` in near-to-far order and calls `hit(primitive, t_closest)` for
+    /// t_max)`, nearer boxes first, and calls `hit(primitive, t_closest)` for
     /// each primitive there; `hit` returns the parameter of a hit closer than
     /// `t_closest` (and remembers what it needs), or `None`. Returns the
     /// parameter of the nearest hit reported.
@@ -310,64 +419,50 @@ impl Bvh {
     where
         F: FnMut(u32, f32) -> Option<f32>,
     {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !enters_box(ray, &self.root_box, t_min, t_max) {
             return None;
         }
         let r = BoxRay::new(ray);
         let mut closest = t_max;
         let mut found = false;
-        let mut stack = [0u32; STACK_DEPTH];
-        let mut sp = 0usize;
-        let mut index = 0usize;
-        r.enter(&self.nodes[0], t_min, closest)?;
-        loop {
-            let node = &self.nodes[index];
-            if node.count > 0 {
-                let first = node.offset as usize;
-                for &p in &self.order[first..first + node.count as usize] {
+        // Entries: a child word (inner node or leaf) and its entry parameter.
+        let mut stack = [(0u32, 0f32); STACK_DEPTH];
+        let mut sp = 1usize;
+        stack[0] = (0, t_min);
+        while sp > 0 {
+            sp -= 1;
+            let (child, t_enter) = stack[sp];
+            if t_enter > closest {
+                continue;
+            }
+            if child & LEAF != 0 {
+                let first = ((child & !LEAF) >> 4) as usize;
+                for &p in &self.order[first..first + (child & 15) as usize] {
                     if let Some(t) = hit(p, closest) {
                         closest = t;
                         found = true;
                     }
                 }
-            } else {
-                let (a, b) = (index + 1, node.offset as usize);
-                let ta = r.enter(&self.nodes[a], t_min, closest);
-                let tb = r.enter(&self.nodes[b], t_min, closest);
-                match (ta, tb) {
-                    (Some(x), Some(y)) => {
-                        let (near, far) = if y < x { (b, a) } else { (a, b) };
-                        if sp < STACK_DEPTH {
-                            stack[sp] = far as u32;
-                            sp += 1;
-                        }
-                        index = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        index = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        index = b;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
+                continue;
             }
-            // Pop the next node still in reach.
-            loop {
-                if sp == 0 {
-                    return found.then_some(closest);
+            let node = &self.nodes[child as usize];
+            let (near, mut mask) = r.enter4(node, t_min, closest);
+            // Push the entered children farthest first, so the nearest pops next.
+            let base = sp;
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let entry = (node.child[k], near[k]);
+                let mut j = sp;
+                while j > base && stack[j - 1].1 < entry.1 {
+                    stack[j] = stack[j - 1];
+                    j -= 1;
                 }
-                sp -= 1;
-                let candidate = stack[sp] as usize;
-                if r.enter(&self.nodes[candidate], t_min, closest).is_some() {
-                    index = candidate;
-                    break;
-                }
+                stack[j] = entry;
+                sp += 1;
             }
         }
+        found.then_some(closest)
     }
 
     /// Any hit: `true` as soon as `hit(primitive, t_max)` reports a hit for a
@@ -377,56 +472,41 @@ impl Bvh {
     where
         F: FnMut(u32, f32) -> bool,
     {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !enters_box(ray, &self.root_box, t_min, t_max) {
             return false;
         }
         let r = BoxRay::new(ray);
-        if r.enter(&self.nodes[0], t_min, t_max).is_none() {
-            return false;
-        }
         let mut stack = [0u32; STACK_DEPTH];
-        let mut sp = 0usize;
-        let mut index = 0usize;
-        loop {
-            let node = &self.nodes[index];
-            if node.count > 0 {
-                let first = node.offset as usize;
-                for &p in &self.order[first..first + node.count as usize] {
+        let mut sp = 1usize;
+        stack[0] = 0;
+        while sp > 0 {
+            sp -= 1;
+            let child = stack[sp];
+            if child & LEAF != 0 {
+                let first = ((child & !LEAF) >> 4) as usize;
+                for &p in &self.order[first..first + (child & 15) as usize] {
                     if hit(p, t_max) {
                         return true;
                     }
                 }
-            } else {
-                // Both children's boxes are tested here; only those the ray
-                // enters are visited, the nearer first.
-                let (a, b) = (index + 1, node.offset as usize);
-                match (r.enter(&self.nodes[a], t_min, t_max), r.enter(&self.nodes[b], t_min, t_max)) {
-                    (Some(x), Some(y)) => {
-                        let (near, far) = if y < x { (b, a) } else { (a, b) };
-                        if sp < STACK_DEPTH {
-                            stack[sp] = far as u32;
-                            sp += 1;
-                        }
-                        index = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        index = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        index = b;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
+                continue;
             }
-            if sp == 0 {
-                return false;
+            let node = &self.nodes[child as usize];
+            let (_, mut mask) = r.enter4(node, t_min, t_max);
+            while mask != 0 {
+                let k = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack[sp] = node.child[k];
+                sp += 1;
             }
-            sp -= 1;
-            index = stack[sp] as usize;
         }
+        false
+    }
+}
+
+impl Default for Bvh {
+    fn default() -> Bvh {
+        Bvh { nodes: Vec::new(), root_box: AxisAlignedBox { min: Vec3::ZERO, max: Vec3::ZERO }, order: Vec::new() }
     }
 }
 
@@ -453,17 +533,31 @@ mod tests {
         let mut seen = bvh.order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..5000u32).collect::<Vec<_>>());
-        for (i, n) in bvh.nodes.iter().enumerate() {
-            let inside = |m: &BvhNode| (0..3).all(|k| m.min[k] >= n.min[k] && m.max[k] <= n.max[k]);
-            if n.count == 0 {
-                assert!(inside(&bvh.nodes[i + 1]) && inside(&bvh.nodes[n.offset as usize]));
-            } else {
-                for &p in &bvh.order[n.offset as usize..(n.offset + n.count as u32) as usize] {
-                    let b = &boxes[p as usize];
-                    assert!((0..3).all(|k| b.min[k] >= n.min[k] && b.max[k] <= n.max[k]));
+        // Every child box holds what is below it.
+        fn check(bvh: &Bvh, boxes: &[AxisAlignedBox], node: usize) {
+            let n = &bvh.nodes[node];
+            assert!((1..=4).contains(&n.count));
+            for k in 0..n.count as usize {
+                let (lo, hi) =
+                    (Vec3::new(n.min_x[k], n.min_y[k], n.min_z[k]), Vec3::new(n.max_x[k], n.max_y[k], n.max_z[k]));
+                let child = n.child[k];
+                if child & LEAF != 0 {
+                    let first = ((child & !LEAF) >> 4) as usize;
+                    for &p in &bvh.order[first..first + (child & 15) as usize] {
+                        let b = &boxes[p as usize];
+                        assert!(b.min.cmpge(lo).all() && b.max.cmple(hi).all());
+                    }
+                } else {
+                    let c = &bvh.nodes[child as usize];
+                    for j in 0..c.count as usize {
+                        assert!(c.min_x[j] >= lo.x && c.min_y[j] >= lo.y && c.min_z[j] >= lo.z);
+                        assert!(c.max_x[j] <= hi.x && c.max_y[j] <= hi.y && c.max_z[j] <= hi.z);
+                    }
+                    check(bvh, boxes, child as usize);
                 }
             }
         }
+        check(&bvh, &boxes, 0);
         // Deterministic: the same boxes give the same tree.
         let again = Bvh::build(&boxes);
         assert_eq!(again.order, bvh.order);

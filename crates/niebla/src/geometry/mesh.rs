@@ -54,6 +54,14 @@ pub enum MeshDataError {
         /// Number of vertices.
         vertices: usize,
     },
+    /// More triangles than one hierarchy holds.
+    #[error("{count} triangles; a mesh holds at most {max}")]
+    TooManyTriangles {
+        /// Triangles given.
+        count: usize,
+        /// [`super::bvh::MAX_PRIMITIVES`].
+        max: usize,
+    },
     /// Per-vertex attributes whose count differs from the positions'.
     #[error("{field}: has {got} entries, expected one per vertex ({expected})")]
     CountMismatch {
@@ -81,6 +89,9 @@ impl TriangleMesh {
         uvs: Option<Vec<Vec2>>,
     ) -> Result<TriangleMesh, MeshDataError> {
         let nv = positions.len();
+        if triangles.len() > super::bvh::MAX_PRIMITIVES {
+            return Err(MeshDataError::TooManyTriangles { count: triangles.len(), max: super::bvh::MAX_PRIMITIVES });
+        }
         if let Some(n) = &normals {
             if n.len() != nv {
                 return Err(MeshDataError::CountMismatch { field: "normals", got: n.len(), expected: nv });
