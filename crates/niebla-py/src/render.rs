@@ -39,6 +39,8 @@ pub(crate) struct RenderRequest {
     pub budget: Budget,
     /// Worker threads; `None` uses all cores.
     pub threads: Option<usize>,
+    /// The numbers of the camera samples (the scene's `render.sampler`).
+    pub sampler: niebla::sampling::SamplerKind,
 }
 
 /// A finished render.
@@ -92,6 +94,7 @@ pub(crate) fn render_blocking(
                 settings: &request.settings,
                 seed: request.seed,
                 threads: request.threads,
+                sampler: request.sampler,
                 budget: request.budget,
                 progress: &on_progress,
                 cancel: Some(cancel),

@@ -330,7 +330,8 @@ impl PyScene {
         if threads == Some(0) {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
-        let request = RenderRequest { settings, seed: seed.unwrap_or(self.built.settings.seed), budget, threads };
+        let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
+        let request = RenderRequest { settings, seed, budget, threads, sampler };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
         Ok((image_to_array(py, &done.image), done.spp, done.seconds))
     }

@@ -180,7 +180,13 @@ fn scene_files_describe_area_lights_and_environment_maps() {
     let image = niebla::render::render(
         s,
         &niebla::integrator::IntegratorSettings::VolPath { max_depth: 4 },
-        &niebla::render::RenderOptions { spp: 4, seed: 0, first_sample: 0, threads: Some(1) },
+        &niebla::render::RenderOptions {
+            spp: 4,
+            seed: 0,
+            first_sample: 0,
+            threads: Some(1),
+            sampler: Default::default(),
+        },
         &|_, _| {},
         None,
     )

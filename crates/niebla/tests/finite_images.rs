@@ -182,7 +182,8 @@ fn every_integrator_gives_finite_pixels_on_adversarial_scenes() {
         let built = build(&text, &name);
         for (integrator_name, settings) in &integrators {
             let started = std::time::Instant::now();
-            let options = RenderOptions { spp: 4, seed: 7, first_sample: 0, threads: None };
+            let options =
+                RenderOptions { spp: 4, seed: 7, first_sample: 0, threads: None, sampler: Default::default() };
             let image = render(&built.scene, settings, &options, &|_, _| {}, None).unwrap();
             // Through the progressive accumulator as well (its f32 mean).
             let mut acc = Accumulator::new(image.width, image.height);

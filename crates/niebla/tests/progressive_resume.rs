@@ -1,11 +1,12 @@
 //! A progressive render continued from any of its checkpoints (the f32
 //! mean image and its sample count) ends bit-identical to one that was
-//! never stopped, whatever the thread counts.
+//! never stopped, whatever the thread counts, with either sampler.
 
 use std::path::Path;
 
 use niebla::film::Image;
 use niebla::progressive::{render_progressive, resume_progressive, Accumulator, Budget, ProgressiveOptions};
+use niebla::sampling::SamplerKind;
 use niebla::scene::{build_scene, parse_scene_str, DEFAULT_SCENE};
 
 fn bits(image: &Image) -> Vec<[u32; 3]> {
@@ -14,6 +15,12 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
 
 #[test]
 fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
+    for sampler in SamplerKind::ALL {
+        resumed_render_is_bit_identical(sampler);
+    }
+}
+
+fn resumed_render_is_bit_identical(sampler: SamplerKind) {
     let desc = parse_scene_str(DEFAULT_SCENE, "<default>").unwrap();
     let mut built = build_scene(&desc, "<default>", Path::new(".")).unwrap();
     built.scene.camera.width = 29;
@@ -23,7 +30,7 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
     // Uninterrupted, keeping every checkpoint.
     let mut checkpoints = Vec::new();
     let options =
-        |threads| ProgressiveOptions { threads, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(16)) };
+        |threads| ProgressiveOptions { threads, sampler, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(16)) };
     let straight = render_progressive(scene, &options(Some(2)), |im, info| {
         checkpoints.push((im.clone(), info.spp));
         true
@@ -36,11 +43,11 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
     for (image, spp) in &checkpoints[..4] {
         let start = Accumulator::from_mean(image.clone(), *spp);
         let resumed = resume_progressive(scene, &options(Some(1)), start, |_, _| true).unwrap();
-        assert!(bits(&resumed) == bits(&straight), "resumed from {spp} spp differs");
+        assert!(bits(&resumed) == bits(&straight), "{sampler:?}: resumed from {spp} spp differs");
     }
     // Nothing left to do: the checkpoint itself.
     let start = Accumulator::from_mean(straight.clone(), 16);
-    let same_options = ProgressiveOptions::new(&settings, 5, Budget::Samples(8));
+    let same_options = ProgressiveOptions { sampler, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(8)) };
     let same = resume_progressive(scene, &same_options, start, |_, _| true).unwrap();
     assert_eq!(bits(&same), bits(&straight));
 }

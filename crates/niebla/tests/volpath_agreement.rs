@@ -38,7 +38,8 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
 fn batch_stats(s: &Scene, settings: IntegratorSettings, spp: u32, batches: u64) -> (Image, Vec<[f64; 3]>) {
     let images: Vec<Image> = (0..batches)
         .map(|b| {
-            let options = RenderOptions { spp, seed: 77 + b, first_sample: 0, threads: None };
+            let options =
+                RenderOptions { spp, seed: 77 + b, first_sample: 0, threads: None, sampler: Default::default() };
             render(s, &settings, &options, &|_, _| {}, None).unwrap()
         })
         .collect();
@@ -112,11 +113,17 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
     let settings = IntegratorSettings::VolPath { max_depth: 256 };
     // Relative MSE per channel at 16 spp (4 independent renders) against a 2048-spp reference.
     let rel_mse = |s: &Scene| -> [f64; 3] {
-        let options = RenderOptions { spp: 2048, seed: 1, first_sample: 0, threads: None };
+        let options = RenderOptions { spp: 2048, seed: 1, first_sample: 0, threads: None, sampler: Default::default() };
         let reference = render(s, &settings, &options, &|_, _| {}, None).unwrap();
         let mut acc = [0.0f64; 3];
         for seed in 0..4 {
-            let options = RenderOptions { spp: 16, seed: 100 + seed, first_sample: 0, threads: None };
+            let options = RenderOptions {
+                spp: 16,
+                seed: 100 + seed,
+                first_sample: 0,
+                threads: None,
+                sampler: Default::default(),
+            };
             let im = render(s, &settings, &options, &|_, _| {}, None).unwrap();
             for (p, r) in im.pixels.iter().zip(&reference.pixels) {
                 for c in 0..3 {
@@ -166,7 +173,8 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
         let (spp, batches) = (256, 12u64);
         let images: Vec<Image> = (0..batches)
             .map(|b| {
-                let options = RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None };
+                let options =
+                    RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None, sampler: Default::default() };
                 render_with(&s, integrator, &options, &|_, _| {}, None).unwrap()
             })
             .collect();
