@@ -12,7 +12,7 @@ mod warps;
 
 pub use distribution::{Distribution1D, Distribution2D};
 pub use rng::{hash_u64, PixelSampler, SamplerKind};
-pub use sobol::{owen_scrambled_sobol_1d, owen_scrambled_sobol_2d, sobol_2d};
+pub use sobol::{owen_scrambled_sobol_1d, owen_scrambled_sobol_pair, sobol_2d};
 pub use warps::*;
 
 /// Balance heuristic weight of a strategy with density `pdf_a` against one with `pdf_b`

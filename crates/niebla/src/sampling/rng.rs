@@ -1,7 +1,6 @@
 use glam::Vec2;
 
-use super::sobol::owen_scrambled_sobol_1d;
-use super::sobol::owen_scrambled_sobol_2d;
+use super::sobol::owen_scrambled_sobol_pair;
 
 /// 64-bit finalizer of SplitMix64 (Steele, Lea, Flood 2014): a bijective
 /// avalanche hash, used to derive independent streams from counters.
@@ -52,9 +51,13 @@ impl SamplerKind {
 enum Mode {
     Independent,
     /// Owen-scrambled Sobol point `index` (the low 32 bits of the sample
-    /// index; the high bits are part of the key).
+    /// index; the high bits are part of the key), given bit-reversed, and
+    /// the last pair of dimensions computed (`pair`, `u64::MAX` for none),
+    /// whose second value a 1D draw of the odd dimension takes.
     Sobol {
-        index: u32,
+        index_reversed: u32,
+        pair: u64,
+        values: [u32; 2],
     },
 }
 
@@ -127,7 +130,12 @@ impl PixelSampler {
                 let pixel_hash = hash_u64(hash_u64(seed) ^ pixel);
                 let key = hash_u64(pixel_hash ^ hash_u64(0x5EED_50B0 ^ (sample_index >> 32)));
                 let stratum = sample_index.wrapping_add(pixel_hash % 1_000_003);
-                PixelSampler { key, dimension: 0, stratum, mode: Mode::Sobol { index: sample_index as u32 } }
+                let mode = Mode::Sobol {
+                    index_reversed: (sample_index as u32).reverse_bits(),
+                    pair: u64::MAX,
+                    values: [0; 2],
+                };
+                PixelSampler { key, dimension: 0, stratum, mode }
             }
         }
     }
@@ -149,9 +157,15 @@ impl PixelSampler {
     /// 64-bit hash; Sobol: the scrambled fixed-point value).
     #[inline]
     fn next_u32(&mut self) -> u32 {
-        let bits = match self.mode {
+        let bits = match &mut self.mode {
             Mode::Independent => (hash_u64(self.key ^ hash_u64(self.dimension)) >> 32) as u32,
-            Mode::Sobol { index } => owen_scrambled_sobol_1d(self.key, index, self.dimension),
+            Mode::Sobol { index_reversed, pair, values } => {
+                if *pair != self.dimension >> 1 {
+                    *pair = self.dimension >> 1;
+                    *values = owen_scrambled_sobol_pair(self.key, *index_reversed, *pair);
+                }
+                values[(self.dimension & 1) as usize]
+            }
         };
         self.dimension += 1;
         bits
@@ -169,13 +183,16 @@ impl PixelSampler {
     #[inline]
     pub fn next_f64(&mut self) -> f64 {
         let bits = match self.mode {
-            Mode::Independent => hash_u64(self.key ^ hash_u64(self.dimension)) >> 11,
-            Mode::Sobol { index } => {
+            Mode::Independent => {
+                let bits = hash_u64(self.key ^ hash_u64(self.dimension)) >> 11;
+                self.dimension += 1;
+                bits
+            }
+            Mode::Sobol { .. } => {
                 let low = hash_u64(self.key ^ hash_u64(!self.dimension)) >> 43;
-                ((owen_scrambled_sobol_1d(self.key, index, self.dimension) as u64) << 21) | low
+                ((self.next_u32() as u64) << 21) | low
             }
         };
-        self.dimension += 1;
         bits as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
@@ -188,10 +205,10 @@ impl PixelSampler {
                 let a = self.next_1d();
                 Vec2::new(a, self.next_1d())
             }
-            Mode::Sobol { index } => {
+            Mode::Sobol { index_reversed, .. } => {
                 let pair = self.dimension.div_ceil(2);
                 self.dimension = 2 * pair + 2;
-                let [a, b] = owen_scrambled_sobol_2d(self.key, index, pair);
+                let [a, b] = owen_scrambled_sobol_pair(self.key, index_reversed, pair);
                 let scale = 1.0 / (1u64 << 24) as f32;
                 Vec2::new((a >> 8) as f32 * scale, (b >> 8) as f32 * scale)
             }

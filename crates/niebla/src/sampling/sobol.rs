@@ -68,7 +68,7 @@ const fn sobol_1_directions() -> [u32; 32] {
 
 /// Sobol dimension 1 by bytes of the index: `TABLE[j][b]` is the XOR of the
 /// direction numbers of the bits set in byte value `b` at byte `j`.
-const SOBOL_1_TABLE: [[u32; 256]; 4] = {
+static SOBOL_1_TABLE: [[u32; 256]; 4] = {
     let v = sobol_1_directions();
     let mut t = [[0u32; 256]; 4];
     let mut j = 0;
@@ -110,44 +110,82 @@ pub fn sobol_2d(index: u32) -> [u32; 2] {
     [index.reverse_bits(), y]
 }
 
-/// Hash of (pixel key, pair): the seed of the index shuffle (low 32 bits)
-/// and, hashed once more, the value scrambles of the pair's two components.
-#[inline]
-fn pair_hash(key: u64, pair: u64) -> u64 {
-    hash_u64(key ^ pair.wrapping_mul(0xD6E8_FEB8_6659_FD93))
-}
+/// Sobol dimension 1 bit-reversed, by bytes of the bit-reversed index:
+/// `REVERSED_TABLE[j][b]` is the XOR of `reverse_bits(v_i)` over the bits set
+/// in byte value `b` at byte `j` of `reverse_bits(index)` (bit `k` of that
+/// byte is bit `31 - 8 j - k` of the index). The value scramble works on the
+/// bit-reversed value, so this saves two bit reversals per pair.
+static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = {
+    let v = sobol_1_directions();
+    let mut t = [[0u32; 256]; 4];
+    let mut j = 0;
+    while j < 4 {
+        let mut b = 0;
+        while b < 256 {
+            let mut x = 0u32;
+            let mut bit = 0;
+            while bit < 8 {
+                if (b >> bit) & 1 == 1 {
+                    x ^= v[31 - 8 * j - bit].reverse_bits();
+                }
+                bit += 1;
+            }
+            t[j][b] = x;
+            b += 1;
+        }
+        j += 1;
+    }
+    t
+};
 
-/// The sample index shuffled for one pair of dimensions.
+/// Dimensions `2 pair` and `2 pair + 1` of Owen-scrambled Sobol point
+/// `index` of the sequence keyed by `key` (a hash of seed and pixel), as
+/// 32-bit fixed-point values (value / 2^32 in [0, 1)), given
+/// `index_reversed = index.reverse_bits()`:
+/// - `h = hash(key, pair)`; the index is shuffled by
+///   `nested_uniform_scramble(index, h mod 2^32)`;
+/// - the Sobol point (dimensions 0 and 1) of the shuffled index is taken;
+/// - its components are scrambled by `nested_uniform_scramble` with the low
+///   and high halves of `hash(h)`.
+///
+/// ```
+/// use niebla::sampling::sobol::{owen_scrambled_sobol_pair, nested_uniform_scramble, sobol_2d};
+/// use niebla::sampling::hash_u64;
+/// let (key, index, pair) = (12345u64, 77u32, 3u64);
+/// let h = hash_u64(key ^ pair.wrapping_mul(0xD6E8_FEB8_6659_FD93));
+/// let point = sobol_2d(nested_uniform_scramble(index, h as u32));
+/// let seeds = hash_u64(h);
+/// let expected = [
+///     nested_uniform_scramble(point[0], seeds as u32),
+///     nested_uniform_scramble(point[1], (seeds >> 32) as u32),
+/// ];
+/// assert_eq!(owen_scrambled_sobol_pair(key, index.reverse_bits(), pair), expected);
+/// ```
 #[inline]
-fn shuffled_index(index: u32, pair_hash: u64) -> u32 {
-    nested_uniform_scramble(index, pair_hash as u32)
+pub fn owen_scrambled_sobol_pair(key: u64, index_reversed: u32, pair: u64) -> [u32; 2] {
+    let h = hash_u64(key ^ pair.wrapping_mul(0xD6E8_FEB8_6659_FD93));
+    // The shuffled index, bit-reversed: its van der Corput value.
+    let x0 = laine_karras_permutation(index_reversed, h as u32);
+    let b = x0.to_le_bytes();
+    // Sobol dimension 1 of the shuffled index, bit-reversed.
+    let y_reversed = SOBOL_1_REVERSED_TABLE[0][b[0] as usize]
+        ^ SOBOL_1_REVERSED_TABLE[1][b[1] as usize]
+        ^ SOBOL_1_REVERSED_TABLE[2][b[2] as usize]
+        ^ SOBOL_1_REVERSED_TABLE[3][b[3] as usize];
+    let seeds = hash_u64(h);
+    [
+        laine_karras_permutation(x0.reverse_bits(), seeds as u32).reverse_bits(),
+        laine_karras_permutation(y_reversed, (seeds >> 32) as u32).reverse_bits(),
+    ]
 }
 
 /// Dimension `dimension` of Owen-scrambled Sobol point `index` of the
-/// sequence keyed by `key` (a hash of seed and pixel), as a 32-bit
-/// fixed-point value: component `dimension mod 2` of the padded pair
-/// `dimension / 2` (see the module documentation).
+/// sequence keyed by `key`: component `dimension mod 2` of
+/// [`owen_scrambled_sobol_pair`] for pair `dimension / 2` (see the module
+/// documentation).
 #[inline]
 pub fn owen_scrambled_sobol_1d(key: u64, index: u32, dimension: u64) -> u32 {
-    let h = pair_hash(key, dimension >> 1);
-    let point = sobol_2d(shuffled_index(index, h));
-    let scramble = hash_u64(h);
-    if dimension & 1 == 0 {
-        nested_uniform_scramble(point[0], scramble as u32)
-    } else {
-        nested_uniform_scramble(point[1], (scramble >> 32) as u32)
-    }
-}
-
-/// Dimensions `2 pair` and `2 pair + 1` of Owen-scrambled Sobol point
-/// `index` of the sequence keyed by `key`, as 32-bit fixed-point values;
-/// equal to two calls of [`owen_scrambled_sobol_1d`].
-#[inline]
-pub fn owen_scrambled_sobol_2d(key: u64, index: u32, pair: u64) -> [u32; 2] {
-    let h = pair_hash(key, pair);
-    let point = sobol_2d(shuffled_index(index, h));
-    let scramble = hash_u64(h);
-    [nested_uniform_scramble(point[0], scramble as u32), nested_uniform_scramble(point[1], (scramble >> 32) as u32)]
+    owen_scrambled_sobol_pair(key, index.reverse_bits(), dimension >> 1)[(dimension & 1) as usize]
 }
 
 #[cfg(test)]
@@ -194,12 +232,21 @@ mod tests {
     }
 
     #[test]
-    fn two_d_equals_one_d_twice() {
-        for index in [0u32, 5, 1000] {
-            for pair in 0..4u64 {
-                let [a, b] = owen_scrambled_sobol_2d(99, index, pair);
-                assert_eq!(a, owen_scrambled_sobol_1d(99, index, 2 * pair));
-                assert_eq!(b, owen_scrambled_sobol_1d(99, index, 2 * pair + 1));
+    fn pairs_are_scrambled_sobol_points_of_the_shuffled_index() {
+        // The table of bit-reversed values against the definition.
+        for key in [0u64, 99, u64::MAX] {
+            for index in [0u32, 1, 5, 1000, 0x8000_0001, u32::MAX] {
+                for pair in 0..4u64 {
+                    let h = hash_u64(key ^ pair.wrapping_mul(0xD6E8_FEB8_6659_FD93));
+                    let point = sobol_2d(nested_uniform_scramble(index, h as u32));
+                    let seeds = hash_u64(h);
+                    let expected = [
+                        nested_uniform_scramble(point[0], seeds as u32),
+                        nested_uniform_scramble(point[1], (seeds >> 32) as u32),
+                    ];
+                    assert_eq!(owen_scrambled_sobol_pair(key, index.reverse_bits(), pair), expected);
+                    assert_eq!(owen_scrambled_sobol_1d(key, index, 2 * pair + 1), expected[1]);
+                }
             }
         }
     }
