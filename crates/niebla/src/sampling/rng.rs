@@ -221,6 +221,20 @@ impl PixelSampler {
     pub fn dimension(&self) -> u64 {
         self.dimension
     }
+
+    /// Draw again from `dimension` on (an earlier [`PixelSampler::dimension`]),
+    /// for estimates that may share their numbers because each is unbiased
+    /// alone and they add up different things (the paths of `volpath`'s
+    /// channel groups, each giving only its own channels): each then gets the
+    /// stratified low dimensions of a Sobol sampler instead of those left
+    /// after the previous one. Independent samplers ignore it, so that their
+    /// numbers stay those of a plain sequence of draws.
+    #[inline]
+    pub fn rewind_for_another_estimate(&mut self, dimension: u64) {
+        if let Mode::Sobol { .. } = self.mode {
+            self.dimension = dimension;
+        }
+    }
 }
 
 #[cfg(test)]
