@@ -11,10 +11,11 @@
 //!
 //! **Padding.** Higher dimensions are not taken from higher Sobol
 //! dimensions: the 2D projections of Sobol dimensions 2 and 3 (polynomials
-//! `x^2 + x + 1`, `x^3 + x + 1`) have a t-value of 1 to 2 for `2^2 .. 2^10`
-//! points, so they are not nets. Instead dimension `d` is component `d mod 2`
+//! `x^2 + x + 1`, `x^3 + x + 1`) have a t-value of 1 or 2 for `2^k` points,
+//! `k = 2, 3, 5 .. 10` (0 only for 2, 16 points), so they are not (0, k,
+//! 2)-nets. Instead dimension `d` is component `d mod 2`
 //! of the Sobol pair (0, 1) within pair `d / 2`, each pair with its own
-//! shuffle of the sample index (Burley 2020, section 4; pbrt-v4's
+//! shuffle of the sample index (Burley 2020's padding; pbrt-v4's
 //! `PaddedSobolSampler`): the pairs `(0, 1), (2, 3), (4, 5), ...` are each
 //! stratified 2D sets, and different pairs are decorrelated.
 //!
