@@ -192,15 +192,16 @@ fn draws_do_not_depend_on_the_order_of_1d_and_2d_draws() {
         let mut a = PixelSampler::for_pixel(SamplerKind::Sobol, 11, x, y, s);
         let straight: Vec<f32> = (0..40).map(|_| a.next_1d()).collect();
         let mut b = PixelSampler::for_pixel(SamplerKind::Sobol, 11, x, y, s);
-        let mut mixed = vec![f32::NAN; 40];
+        let mut mixed = [f32::NAN; 40];
         while b.dimension() < 38 {
             let d = b.dimension() as usize;
-            if d % 3 == 0 {
-                let v = b.next_2d();
-                let e = b.dimension() as usize;
-                (mixed[e - 2], mixed[e - 1]) = (v.x, v.y);
-            } else {
-                mixed[d] = b.next_1d();
+            match d % 3 {
+                0 => {
+                    let v = b.next_2d();
+                    let e = b.dimension() as usize;
+                    (mixed[e - 2], mixed[e - 1]) = (v.x, v.y);
+                }
+                _ => mixed[d] = b.next_1d(),
             }
         }
         for (d, v) in mixed.iter().enumerate().filter(|(_, v)| !v.is_nan()) {
