@@ -51,7 +51,7 @@ pub(crate) fn timed(
     seed: u64,
     threads: Option<usize>,
 ) -> Result<(Image, f64), CliError> {
-    let options = RenderOptions { spp, seed, first_sample: 0, threads };
+    let options = RenderOptions { spp, seed, first_sample: 0, threads, sampler: Default::default() };
     let start = Instant::now();
     let image = render(scene, settings, &options, &|_, _| {}, None)?;
     Ok((image, start.elapsed().as_secs_f64()))

@@ -50,7 +50,7 @@ fn resized(scene: &Scene, width: u32, height: Option<u32>) -> Scene {
 }
 
 fn frame<I: Integrator>(scene: &Scene, integrator: &I, spp: u32, seed: u64, threads: Option<usize>) -> Image {
-    let options = RenderOptions { spp, seed, first_sample: 0, threads };
+    let options = RenderOptions { spp, seed, first_sample: 0, threads, sampler: Default::default() };
     render_with(scene, integrator, &options, &|_, _| {}, None).expect("render without cancel flag")
 }
 

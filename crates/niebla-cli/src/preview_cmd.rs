@@ -157,7 +157,8 @@ pub fn run(args: &PreviewArgs) -> Result<(), CliError> {
             }
         }
         let (_, scene, prepared, exposure) = loaded.as_ref().expect("a scene is loaded");
-        let options = RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads };
+        let options =
+            RenderOptions { spp: args.spp, seed: frame, first_sample: 0, threads, sampler: Default::default() };
         let image = prepared.render(scene, &options, &|_, _| {}, None)?;
         if let Some(path) = &args.output {
             write_image(&image, path, *exposure)?;

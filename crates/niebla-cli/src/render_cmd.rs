@@ -9,6 +9,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use niebla::film::{read_checkpoint_full, render_memory, write_checkpoint, write_image, Checkpoint, CheckpointInfo};
 use niebla::integrator::IntegratorSettings;
 use niebla::progressive::{resume_progressive_sums, Accumulator, Budget, PassInfo, ProgressiveOptions};
+use niebla::render::{recorded_key, split_recorded_key};
+use niebla::sampling::SamplerKind;
 use niebla::scene::IntegratorSpec;
 
 use crate::error::CliError;
@@ -52,6 +54,10 @@ pub struct RenderArgs {
     /// (equiangular + distance sampling).
     #[arg(long, value_enum)]
     pub sampling: Option<SamplingName>,
+    /// Numbers of the camera samples (overrides the scene's
+    /// `render.sampler`): independent or sobol (Owen-scrambled Sobol points).
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(niebla::sampling::SamplerKind::NAMES))]
+    pub sampler: Option<String>,
     /// `--threads`: worker threads.
     #[command(flatten)]
     pub threads: ThreadsFlag,
@@ -69,7 +75,7 @@ pub struct RenderArgs {
     pub max_memory: MaxMemoryFlag,
     /// Continue the progressive render whose EXR checkpoint (an output of an
     /// earlier `niebla render`, rewritten between passes) is given, up to
-    /// --spp samples in all: same scene, integrator and seed required, and
+    /// --spp samples in all: same scene, integrator, sampler and seed required, and
     /// the result is bit-identical to a render that was never stopped.
     #[arg(long, value_name = "CHECKPOINT.exr")]
     pub resume: Option<PathBuf>,
@@ -176,12 +182,13 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
 
     let scene = &built.scene;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+    let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
     let (start_acc, seed) = match &args.resume {
         None => (
             Accumulator::starting_at(scene.camera.width, scene.camera.height, args.first_sample),
             args.seed.or(built.settings.seed),
         ),
-        Some(path) => resume_state(path, scene, &hash, &integrator, args.seed.seed)?,
+        Some(path) => resume_state(path, scene, &hash, (&integrator, sampler), args.seed.seed)?,
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
@@ -210,7 +217,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     // After a pass, checkpoint the outputs (each written to a temporary file
     // and renamed), so a long render stopped at any time leaves a usable
     // image. EXR outputs are checkpoints: their header records the samples so
-    // far, the seed, the scene's hash and the integrator, for --resume.
+    // far, the seed, the scene's hash and the integrator and sampler, for --resume.
     // Checkpoints are at most CHECKPOINT_INTERVAL apart: the first passes take
     // milliseconds, and compressing and writing an image after each of them
     // took up to a third of a short render. The final image is always written.
@@ -223,7 +230,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
             spp: acc.spp,
             seed,
             scene_hash: hash.clone(),
-            integrator: integrator.key(),
+            integrator: recorded_key(&integrator, sampler),
             ranges: vec![(acc.first_sample, acc.next_sample())],
         };
         for out in &outputs {
@@ -251,8 +258,12 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         last_write = Instant::now();
         true
     };
-    let options =
-        ProgressiveOptions { threads, progress: &progress, ..ProgressiveOptions::new(&integrator, seed, budget) };
+    let options = ProgressiveOptions {
+        threads,
+        sampler,
+        progress: &progress,
+        ..ProgressiveOptions::new(&integrator, seed, budget)
+    };
     let acc = resume_progressive_sums(scene, &options, start_acc, on_pass)?;
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
@@ -284,12 +295,13 @@ const CHECKPOINT_INTERVAL: std::time::Duration = std::time::Duration::from_secs(
 
 /// The accumulator and seed to continue the checkpoint at `path` with,
 /// after checking that it was rendered from this scene text, with these
-/// integrator settings, at this image size (and with `seed` if one is given).
+/// integrator settings and sampler, at this image size (and with `seed` if one
+/// is given).
 fn resume_state(
     path: &Path,
     scene: &niebla::scene::Scene,
     hash: &str,
-    integrator: &IntegratorSettings,
+    (integrator, sampler): (&IntegratorSettings, SamplerKind),
     seed: Option<u64>,
 ) -> Result<(Accumulator, u64), CliError> {
     let Checkpoint { image, info, sums } = read_checkpoint_full(path).map_err(CliError::CheckpointUnreadable)?;
@@ -303,8 +315,13 @@ fn resume_state(
     // Checkpoints name the settings by their stable key; those written
     // before it by the settings' Rust debug form, which is still accepted.
     let settings = integrator.key();
-    if info.integrator != settings && info.integrator != format!("{integrator:?}") {
-        return Err(mismatch(format!("was rendered with {}, not {settings}", info.integrator)));
+    let (recorded, recorded_sampler) = split_recorded_key(&info.integrator);
+    if recorded != settings && recorded != format!("{integrator:?}") {
+        return Err(mismatch(format!("was rendered with {recorded}, not {settings}")));
+    }
+    if recorded_sampler != Some(sampler) {
+        let name = recorded_sampler.map_or(info.integrator.as_str(), |s| s.name());
+        return Err(mismatch(format!("was rendered with the {name} sampler, not {}", sampler.name())));
     }
     if let Some(s) = seed.filter(|&s| s != info.seed) {
         return Err(mismatch(format!("was rendered with seed {}, not --seed {s}", info.seed)));

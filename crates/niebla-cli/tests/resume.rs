@@ -104,6 +104,17 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
         &["render", "fog.json", "-o", "x.exr", "--spp", "64", "--resume", "killed.exr", "--integrator", "single"],
     );
     assert!(err.contains("was rendered with volpath(max_depth=1024), not single("), "{err}");
+    // ... and so is one of the other sampler.
+    let other = if read_checkpoint(&dir.join("killed.exr")).unwrap().1.integrator.ends_with("; sampler=sobol") {
+        ["independent", "the sobol sampler, not independent"]
+    } else {
+        ["sobol", "the independent sampler, not sobol"]
+    };
+    let err = run_err(
+        &dir,
+        &["render", "fog.json", "-o", "x.exr", "--spp", "64", "--resume", "killed.exr", "--sampler", other[0]],
+    );
+    assert!(err.contains(&format!("was rendered with {}", other[1])), "{err}");
     // Nothing but the outputs is left behind (no temporary files).
     let mut names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();

@@ -41,6 +41,8 @@ pub(crate) struct RenderRequest {
     pub threads: Option<usize>,
     /// Index of the first sample (samples `first_sample ..` are rendered).
     pub first_sample: u64,
+    /// The numbers of the camera samples (the scene's `render.sampler`).
+    pub sampler: niebla::sampling::SamplerKind,
 }
 
 /// A finished render.
@@ -93,6 +95,7 @@ pub(crate) fn render_blocking(
                 settings: &request.settings,
                 seed: request.seed,
                 threads: request.threads,
+                sampler: request.sampler,
                 budget: request.budget,
                 progress: &on_progress,
                 cancel: Some(cancel),

@@ -330,8 +330,8 @@ impl PyScene {
         if threads == Some(0) {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
-        let seed = seed.unwrap_or(self.built.settings.seed);
-        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0 };
+        let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
+        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0, sampler };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
         Ok((image_to_array(py, &done.image), done.spp, done.seconds))
     }
@@ -377,10 +377,12 @@ impl PyScene {
         if threads == Some(0) {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
-        let seed = seed.unwrap_or(self.built.settings.seed);
-        let request = RenderRequest { settings, seed, budget: Budget::Samples(spp), threads, first_sample };
+        let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
+        let request = RenderRequest { settings, seed, budget: Budget::Samples(spp), threads, first_sample, sampler };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
-        Ok((crate::sums::sums_to_words(py, &done.sums), done.spp, done.seconds, settings.key()))
+        // The key the command line records in its checkpoints (integrator and sampler).
+        let key = niebla::render::recorded_key(&settings, sampler);
+        Ok((crate::sums::sums_to_words(py, &done.sums), done.spp, done.seconds, key))
     }
 
     fn __repr__(&self) -> String {

@@ -20,6 +20,7 @@ use std::time::{Duration, Instant};
 use crate::film::{Image, SampleSums};
 use crate::integrator::IntegratorSettings;
 use crate::render::{RenderError, RenderOptions};
+use crate::sampling::SamplerKind;
 use crate::world::Scene;
 
 /// When a progressive render stops.
@@ -157,6 +158,8 @@ pub struct ProgressiveOptions<'a> {
     pub seed: u64,
     /// Worker threads (`None`: all cores). The image does not depend on it.
     pub threads: Option<usize>,
+    /// The numbers of the camera samples (independent or Sobol).
+    pub sampler: SamplerKind,
     /// When the render stops.
     pub budget: Budget,
     /// `progress(done, total)`: pixel samples done within the current pass.
@@ -167,10 +170,11 @@ pub struct ProgressiveOptions<'a> {
 }
 
 impl<'a> ProgressiveOptions<'a> {
-    /// `settings`, `seed` and `budget` on all cores, with no progress
-    /// callback and no cancellation.
+    /// `settings`, `seed` and `budget` on all cores with the default
+    /// sampler, no progress callback and no cancellation.
     pub fn new(settings: &'a IntegratorSettings, seed: u64, budget: Budget) -> ProgressiveOptions<'a> {
-        ProgressiveOptions { settings, seed, threads: None, budget, progress: &no_progress, cancel: None }
+        let sampler = SamplerKind::default();
+        ProgressiveOptions { settings, seed, threads: None, sampler, budget, progress: &no_progress, cancel: None }
     }
 }
 
@@ -180,6 +184,7 @@ impl std::fmt::Debug for ProgressiveOptions<'_> {
             .field("settings", self.settings)
             .field("seed", &self.seed)
             .field("threads", &self.threads)
+            .field("sampler", &self.sampler)
             .field("budget", &self.budget)
             .field("cancel", &self.cancel)
             .finish_non_exhaustive()
@@ -227,7 +232,7 @@ pub fn resume_progressive_sums(
     mut acc: Accumulator,
     mut on_pass: impl FnMut(&Accumulator, PassInfo) -> bool,
 ) -> Result<Accumulator, RenderError> {
-    let ProgressiveOptions { settings, seed, threads, budget, progress, cancel } = *options;
+    let ProgressiveOptions { settings, seed, threads, sampler, budget, progress, cancel } = *options;
     let start = Instant::now();
     let mut k = 0u32;
     let mut seconds_per_spp = 0.0f64;
@@ -250,7 +255,7 @@ pub fn resume_progressive_sums(
                 }
             }
         }
-        let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.next_sample(), threads };
+        let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.next_sample(), threads, sampler };
         let pass_start = Instant::now();
         let sums = prepared.render_sums(scene, &pass, progress, cancel)?;
         seconds_per_spp = pass_start.elapsed().as_secs_f64() / size as f64;

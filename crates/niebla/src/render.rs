@@ -14,7 +14,7 @@ use crate::color::Rgb;
 use crate::film::{mean_of_sum, quantize_sample, Image, SampleSums};
 pub use crate::integrator::PreparedIntegrator;
 use crate::integrator::{Integrator, IntegratorSettings};
-use crate::sampling::PixelSampler;
+use crate::sampling::{PixelSampler, SamplerKind};
 use crate::world::Scene;
 
 /// Tile edge length in pixels.
@@ -32,6 +32,36 @@ pub struct RenderOptions {
     pub first_sample: u64,
     /// Worker threads; `None` uses rayon's default (all cores).
     pub threads: Option<usize>,
+    /// The numbers of the camera samples (independent or Sobol).
+    pub sampler: SamplerKind,
+}
+
+/// The text a checkpoint records for a render's integrator settings and
+/// sampler: the settings' stable key, followed by `"; sampler=sobol"` for
+/// Sobol renders (independent renders record the bare key, as checkpoints
+/// written before samplers had kinds do).
+///
+/// ```
+/// use niebla::render::{recorded_key, split_recorded_key};
+/// use niebla::sampling::SamplerKind;
+/// let s = niebla::integrator::registry::defaults("volpath").unwrap();
+/// assert_eq!(recorded_key(&s, SamplerKind::Sobol), "volpath(max_depth=1024); sampler=sobol");
+/// assert_eq!(split_recorded_key("volpath(max_depth=1024)"), ("volpath(max_depth=1024)", Some(SamplerKind::Independent)));
+/// ```
+pub fn recorded_key(settings: &IntegratorSettings, sampler: SamplerKind) -> String {
+    match sampler {
+        SamplerKind::Independent => settings.key(),
+        _ => format!("{}; sampler={}", settings.key(), sampler.name()),
+    }
+}
+
+/// The integrator key and sampler of a [`recorded_key`] (`None`: a sampler
+/// name this build does not know).
+pub fn split_recorded_key(recorded: &str) -> (&str, Option<SamplerKind>) {
+    match recorded.rsplit_once("; sampler=") {
+        Some((key, name)) => (key, SamplerKind::parse(name)),
+        None => (recorded, Some(SamplerKind::Independent)),
+    }
 }
 
 /// Why a render did not produce an image.
@@ -177,7 +207,7 @@ pub fn render_pixel<I: Integrator>(scene: &Scene, integrator: &I, options: &Rend
 pub fn pixel_sum<I: Integrator>(scene: &Scene, integrator: &I, options: &RenderOptions, x: u32, y: u32) -> [i128; 3] {
     let mut sum = [0i128; 3];
     for s in options.first_sample..options.first_sample + options.spp as u64 {
-        let mut sampler = PixelSampler::new(options.seed, x, y, s);
+        let mut sampler = PixelSampler::for_pixel(options.sampler, options.seed, x, y, s);
         let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
         let l = integrator.radiance(scene, ray, scene.camera_medium, &mut sampler);
         debug_assert!(l.is_finite(), "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}");

@@ -104,7 +104,7 @@ fn block_stats(text: &str, settings: IntegratorSettings, spp: u32, batches: u64)
     let built = build_scene(&desc, "fog.json", std::path::Path::new(".")).unwrap();
     let mut per_batch: Vec<Vec<f64>> = Vec::new();
     for b in 0..batches {
-        let options = RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None };
+        let options = RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None, sampler: Default::default() };
         let image = render(&built.scene, &settings, &options, &|_, _| {}, None).unwrap();
         let mut blocks = vec![0.0f64; 48];
         for y in 0..16 {

@@ -18,7 +18,7 @@ use niebla::light::{AreaLight, AreaShape, EnvironmentMap, Light};
 use niebla::math::{Ray, Vec3};
 use niebla::medium::{HomogeneousMedium, Medium, MediumId};
 use niebla::phase::PhaseFunction;
-use niebla::sampling::PixelSampler;
+use niebla::sampling::{PixelSampler, SamplerKind};
 use niebla::scene::{build_scene, parse_scene_str, Scene, SceneObject};
 use niebla::tracking::TransmittanceMethod;
 
@@ -38,7 +38,7 @@ fn floor(reflectance: f32) -> SceneObject {
 fn mean_radiance<I: Integrator>(integrator: &I, s: &Scene, ray: Ray, medium: Option<MediumId>, n: u32) -> Stats {
     let mut stats = Stats::default();
     for i in 0..n {
-        let mut sampler = PixelSampler::new(9, 0, 0, i as u64);
+        let mut sampler = PixelSampler::for_pixel(SamplerKind::default(), 9, 0, 0, i as u64);
         stats.add(integrator.radiance(s, ray, medium, &mut sampler).g() as f64);
     }
     stats
@@ -183,7 +183,13 @@ fn scene_files_describe_area_lights_and_environment_maps() {
     let image = niebla::render::render(
         s,
         &niebla::integrator::IntegratorSettings::VolPath { max_depth: 4 },
-        &niebla::render::RenderOptions { spp: 4, seed: 0, first_sample: 0, threads: Some(1) },
+        &niebla::render::RenderOptions {
+            spp: 4,
+            seed: 0,
+            first_sample: 0,
+            threads: Some(1),
+            sampler: Default::default(),
+        },
         &|_, _| {},
         None,
     )

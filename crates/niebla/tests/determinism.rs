@@ -1,5 +1,5 @@
 //! The same scene, seed and spp give a bit-identical image with 1, 2 and 8
-//! threads, for every integrator (the random numbers of sample `s` of pixel
+//! threads, for every integrator and both samplers (the random numbers of sample `s` of pixel
 //! `(x, y)` depend only on (seed, x, y, s)); integrators documented as depending on the
 //! thread count (photon maps built in parallel) are bit-identical at a fixed
 //! thread count instead.
@@ -9,6 +9,7 @@ use std::path::Path;
 use niebla::film::Image;
 use niebla::integrator::IntegratorSettings;
 use niebla::render::{render, RenderOptions};
+use niebla::sampling::SamplerKind;
 use niebla::scene::{build_scene, integrator_settings, parse_scene_str, BuiltScene, DEFAULT_SCENE};
 
 /// Integrators whose images may change with the thread count (their docs say
@@ -68,9 +69,9 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
 fn image_is_bit_identical_for_any_thread_count() {
     let integrators = all_integrators();
     for (scene_name, built) in scenes() {
-        for (name, settings) in &integrators {
+        for ((name, settings), sampler) in integrators.iter().flat_map(|i| SamplerKind::ALL.map(|s| (i, s))) {
             let run = |threads: usize, seed: u64| {
-                let options = RenderOptions { spp: 3, seed, first_sample: 0, threads: Some(threads) };
+                let options = RenderOptions { spp: 3, seed, first_sample: 0, threads: Some(threads), sampler };
                 render(&built.scene, settings, &options, &|_, _| {}, None).unwrap()
             };
             let reference = run(1, 42);
@@ -78,13 +79,17 @@ fn image_is_bit_identical_for_any_thread_count() {
             for &threads in others {
                 assert!(
                     bits(&run(threads, 42)) == bits(&reference),
-                    "{scene_name} scene, {settings:?}: {threads} threads differ from 1 thread"
+                    "{scene_name} scene, {settings:?}, {sampler:?}: {threads} threads differ from 1 thread"
                 );
             }
             // A different seed changes the image (the seed is really used),
             // where the integrator is random at all in this scene.
             if reference.mean().max_channel() > 0.0 && !matches!(settings, IntegratorSettings::Analytic) {
-                assert_ne!(bits(&run(2, 43)), bits(&reference), "{scene_name} scene, {settings:?}: seed unused");
+                assert_ne!(
+                    bits(&run(2, 43)),
+                    bits(&reference),
+                    "{scene_name} scene, {settings:?}, {sampler:?}: seed unused"
+                );
             }
         }
     }

@@ -48,7 +48,7 @@ fn tolerance(settings: &IntegratorSettings, sigma_t: f32) -> f32 {
 }
 
 fn options() -> RenderOptions {
-    RenderOptions { spp: 4, seed: 3, first_sample: 0, threads: Some(1) }
+    RenderOptions { spp: 4, seed: 3, first_sample: 0, threads: Some(1), sampler: Default::default() }
 }
 
 #[test]

@@ -182,7 +182,8 @@ fn every_integrator_gives_finite_pixels_on_adversarial_scenes() {
         let built = build(&text, &name);
         for (integrator_name, settings) in &integrators {
             let started = std::time::Instant::now();
-            let options = RenderOptions { spp: 4, seed: 7, first_sample: 0, threads: None };
+            let options =
+                RenderOptions { spp: 4, seed: 7, first_sample: 0, threads: None, sampler: Default::default() };
             let sums = render_sums(&built.scene, settings, &options, &|_, _| {}, None).unwrap();
             let image = sums.mean(4);
             // Through the progressive accumulator as well (its sums' mean).

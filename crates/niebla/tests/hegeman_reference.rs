@@ -14,7 +14,7 @@ use niebla::scene::{build_scene, load_scene, parse_scene_str, Scene};
 use niebla::tracking::TransmittanceMethod;
 
 fn options(spp: u32, seed: u64) -> RenderOptions {
-    RenderOptions { spp, seed, first_sample: 0, threads: None }
+    RenderOptions { spp, seed, first_sample: 0, threads: None, sampler: Default::default() }
 }
 
 fn resized(mut scene: Scene, width: u32) -> Scene {

@@ -157,7 +157,7 @@ fn build(text: &str, dir: &Path) -> BuiltScene {
 }
 
 fn render_scene(built: &BuiltScene, spp: u32, seed: u64) -> Image {
-    let options = RenderOptions { spp, seed, first_sample: 0, threads: None };
+    let options = RenderOptions { spp, seed, first_sample: 0, threads: None, sampler: Default::default() };
     render(&built.scene, &built.settings.integrator, &options, &|_, _| {}, None).unwrap()
 }
 

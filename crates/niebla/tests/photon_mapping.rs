@@ -78,7 +78,7 @@ fn ppm(photons: u32, radius: f32, surface_radius: f32, query: VolumeQuery) -> In
 }
 
 fn render_n(scene: &Scene, settings: IntegratorSettings, spp: u32, first_sample: u64, seed: u64) -> Image {
-    let options = RenderOptions { spp, seed, first_sample, threads: None };
+    let options = RenderOptions { spp, seed, first_sample, threads: None, sampler: Default::default() };
     render(scene, &settings, &options, &|_, _| {}, None).unwrap()
 }
 
@@ -343,7 +343,13 @@ fn photon_integrators_are_bit_identical_for_any_thread_count() {
         let images: Vec<Image> = [1, 2, 3]
             .iter()
             .map(|&threads| {
-                let options = RenderOptions { spp: 3, seed: 42, first_sample: 0, threads: Some(threads) };
+                let options = RenderOptions {
+                    spp: 3,
+                    seed: 42,
+                    first_sample: 0,
+                    threads: Some(threads),
+                    sampler: Default::default(),
+                };
                 render(&scene, &settings, &options, &|_, _| {}, None).unwrap()
             })
             .collect();

@@ -1,7 +1,8 @@
 //! A progressive render continued from any of its checkpoints (the exact
 //! per-pixel sums and their sample range) ends bit-identical to one that
 //! was never stopped, whatever the thread counts, and to one render of all
-//! the samples; sample ranges rendered apart add up to it too.
+//! the samples; sample ranges rendered apart add up to it too; with either
+//! sampler.
 
 use std::path::Path;
 
@@ -10,6 +11,7 @@ use niebla::progressive::{
     render_progressive, resume_progressive, resume_progressive_sums, Accumulator, Budget, ProgressiveOptions,
 };
 use niebla::render::{render, render_sums, RenderOptions};
+use niebla::sampling::SamplerKind;
 use niebla::scene::{build_scene, parse_scene_str, DEFAULT_SCENE};
 
 fn bits(image: &Image) -> Vec<[u32; 3]> {
@@ -18,6 +20,12 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
 
 #[test]
 fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
+    for sampler in SamplerKind::ALL {
+        resumed_render_is_bit_identical(sampler);
+    }
+}
+
+fn resumed_render_is_bit_identical(sampler: SamplerKind) {
     let desc = parse_scene_str(DEFAULT_SCENE, "<default>").unwrap();
     let mut built = build_scene(&desc, "<default>", Path::new(".")).unwrap();
     built.scene.camera.width = 29;
@@ -27,7 +35,7 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
     // Uninterrupted, keeping every checkpoint.
     let mut checkpoints = Vec::new();
     let options =
-        |threads| ProgressiveOptions { threads, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(16)) };
+        |threads| ProgressiveOptions { threads, sampler, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(16)) };
     let start = Accumulator::new(scene.camera.width, scene.camera.height);
     let straight = resume_progressive_sums(scene, &options(Some(2)), start, |acc, _| {
         checkpoints.push(acc.clone());
@@ -41,10 +49,10 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
     assert_eq!(bits(&means), bits(&straight));
 
     // One render of the 16 samples, and two ranges rendered apart and added.
-    let whole = RenderOptions { spp: 16, seed: 5, first_sample: 0, threads: Some(1) };
+    let whole = RenderOptions { spp: 16, seed: 5, first_sample: 0, threads: Some(1), sampler };
     assert_eq!(bits(&render(scene, &settings, &whole, &|_, _| {}, None).unwrap()), bits(&straight));
     let part = |first_sample, spp| {
-        let options = RenderOptions { spp, seed: 5, first_sample, threads: Some(2) };
+        let options = RenderOptions { spp, seed: 5, first_sample, threads: Some(2), sampler };
         render_sums(scene, &settings, &options, &|_, _| {}, None).unwrap()
     };
     let mut sums = part(7, 9);
@@ -55,11 +63,11 @@ fn resumed_progressive_render_is_bit_identical_to_an_uninterrupted_one() {
     for acc in &checkpoints[..4] {
         let start = Accumulator::from_sums(acc.sums().clone(), 0, acc.spp);
         let resumed = resume_progressive(scene, &options(Some(1)), start, |_, _| true).unwrap();
-        assert!(bits(&resumed) == bits(&straight), "resumed from {} spp differs", acc.spp);
+        assert!(bits(&resumed) == bits(&straight), "{sampler:?}: resumed from {} spp differs", acc.spp);
     }
     // Nothing left to do: the checkpoint itself.
     let start = checkpoints[4].clone();
-    let same_options = ProgressiveOptions::new(&settings, 5, Budget::Samples(8));
+    let same_options = ProgressiveOptions { sampler, ..ProgressiveOptions::new(&settings, 5, Budget::Samples(8)) };
     let same = resume_progressive(scene, &same_options, start, |_, _| true).unwrap();
     assert_eq!(bits(&same), bits(&straight));
 }

@@ -465,6 +465,22 @@ const RENDER_AND_INTEGRATOR: &[ErrorCase] = &[
         also: &[],
     },
     ErrorCase {
+        name: "unknown sampler",
+        from: r#""seed": 7"#,
+        to: r#""seed": 7, "sampler": "halton""#,
+        path: "render.sampler",
+        message: "unknown value `halton`, expected `independent` or `sobol`",
+        also: &[],
+    },
+    ErrorCase {
+        name: "sampler not a string",
+        from: r#""seed": 7"#,
+        to: r#""seed": 7, "sampler": 2"#,
+        path: "render.sampler",
+        message: "expected",
+        also: &[],
+    },
+    ErrorCase {
         name: "infinite exposure",
         from: r#""exposure": 0.5"#,
         to: r#""exposure": -1e300"#,

@@ -39,7 +39,8 @@ fn block_stats(sampling: SingleSampling, spp: u32, batches: u64) -> Vec<(f64, f6
     };
     let mut per_batch: Vec<Vec<f64>> = Vec::new();
     for b in 0..batches {
-        let options = RenderOptions { spp, seed: 1000 + b, first_sample: 0, threads: None };
+        let options =
+            RenderOptions { spp, seed: 1000 + b, first_sample: 0, threads: None, sampler: Default::default() };
         let image = render(&built.scene, &settings, &options, &|_, _| {}, None).unwrap();
         let mut blocks = vec![0.0f64; 16 * 3];
         for y in 0..16 {

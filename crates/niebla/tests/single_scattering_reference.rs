@@ -13,7 +13,7 @@ use niebla::light::{Light, PointLight};
 use niebla::math::{Ray, Vec3};
 use niebla::medium::MediumId;
 use niebla::phase::PhaseFunction;
-use niebla::sampling::PixelSampler;
+use niebla::sampling::{PixelSampler, SamplerKind};
 use niebla::tracking::{MarchStep, TransmittanceMethod};
 
 /// Mean and standard error of the segment radiance over `n` independent samples.
@@ -38,7 +38,7 @@ fn estimate(row: &std::collections::HashMap<String, String>, sampling: SingleSam
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     let mut stats = Stats::default();
     for i in 0..n {
-        let mut sampler = PixelSampler::from_key(0x5eed_0000 + i as u64);
+        let mut sampler = PixelSampler::for_pixel(SamplerKind::default(), 0x5eed, 0, 0, i as u64);
         let seg = integrator.segment(&s, MediumId(0), &ray, length, &mut sampler);
         stats.add(seg.radiance.g() as f64);
     }

@@ -15,14 +15,14 @@ use niebla::light::{ConstantLight, Light};
 use niebla::math::{Ray, Vec3};
 use niebla::medium::{HomogeneousMedium, Medium, MediumId};
 use niebla::phase::PhaseFunction;
-use niebla::sampling::PixelSampler;
+use niebla::sampling::{PixelSampler, SamplerKind};
 use niebla::scene::{build_scene, parse_scene_str, SceneObject};
 use niebla::tracking::TransmittanceMethod;
 
 fn mean<I: Integrator>(integrator: &I, s: &niebla::scene::Scene, ray: Ray, n: u32) -> [Stats; 3] {
     let mut stats = [Stats::default(); 3];
     for i in 0..n {
-        let mut sampler = PixelSampler::new(5, 1, 2, i as u64);
+        let mut sampler = PixelSampler::for_pixel(SamplerKind::default(), 5, 1, 2, i as u64);
         let l = integrator.radiance(s, ray, None, &mut sampler);
         for c in 0..3 {
             stats[c].add(l[c] as f64);

@@ -24,7 +24,7 @@ fn render_plane(shape: &str, reflectance: &str, dir: &Path) -> Image {
     );
     let desc = parse_scene_str(&text, "texture.json").unwrap_or_else(|e| panic!("{e}"));
     let built = build_scene(&desc, "texture.json", dir).unwrap_or_else(|e| panic!("{e}"));
-    let options = RenderOptions { spp: 4, seed: 1, first_sample: 0, threads: None };
+    let options = RenderOptions { spp: 4, seed: 1, first_sample: 0, threads: None, sampler: Default::default() };
     render(&built.scene, &built.settings.integrator, &options, &|_, _| {}, None).unwrap()
 }
 

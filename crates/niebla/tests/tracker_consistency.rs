@@ -66,7 +66,13 @@ fn delta_ratio_and_residual_ratio_render_the_same_mean() {
                 render(
                     &s,
                     &settings,
-                    &RenderOptions { spp: 32, seed: 500 + b, first_sample: 0, threads: None },
+                    &RenderOptions {
+                        spp: 32,
+                        seed: 500 + b,
+                        first_sample: 0,
+                        threads: None,
+                        sampler: Default::default(),
+                    },
                     &|_, _| {},
                     None,
                 )

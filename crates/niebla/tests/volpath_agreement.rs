@@ -17,6 +17,7 @@ use niebla::math::Vec3;
 use niebla::medium::{HomogeneousMedium, Medium, MediumId};
 use niebla::phase::PhaseFunction;
 use niebla::render::{render, RenderOptions};
+use niebla::sampling::SamplerKind;
 use niebla::scene::{Scene, SceneObject};
 use niebla::tracking::TransmittanceMethod;
 
@@ -39,7 +40,8 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
 fn batch_stats(s: &Scene, settings: IntegratorSettings, spp: u32, batches: u64) -> (Image, Vec<[f64; 3]>) {
     let images: Vec<Image> = (0..batches)
         .map(|b| {
-            let options = RenderOptions { spp, seed: 77 + b, first_sample: 0, threads: None };
+            let options =
+                RenderOptions { spp, seed: 77 + b, first_sample: 0, threads: None, sampler: Default::default() };
             render(s, &settings, &options, &|_, _| {}, None).unwrap()
         })
         .collect();
@@ -101,6 +103,12 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
 /// `volpath` now traces one path per group of channels with coefficients
 /// within a factor 3 (here red alone, green with blue): about 1.0x, 1.3x and
 /// 1.5x (its cost in time per sample: ARCHITECTURE.md, volpath decisions).
+///
+/// These ratios are those of independent numbers, which the test uses. With
+/// the Sobol sampler every error is lower but the grey medium's falls more
+/// (green: chromatic 1.50e-2, grey 7.4e-3, against 2.04e-2 and 1.29e-2
+/// independent), so there the test asks that the chromatic medium's error be
+/// no higher than with independent numbers.
 #[test]
 fn chromatic_medium_converges_as_well_as_a_grey_one() {
     let env = Light::Constant(ConstantLight { radiance: Rgb::ONE });
@@ -112,12 +120,12 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
     let sigma_a = sigma_s * 0.1;
     let settings = IntegratorSettings::VolPath { max_depth: 256 };
     // Relative MSE per channel at 16 spp (4 independent renders) against a 2048-spp reference.
-    let rel_mse = |s: &Scene| -> [f64; 3] {
-        let options = RenderOptions { spp: 2048, seed: 1, first_sample: 0, threads: None };
+    let rel_mse_with = |s: &Scene, sampler: SamplerKind| -> [f64; 3] {
+        let options = RenderOptions { spp: 2048, seed: 1, first_sample: 0, threads: None, sampler };
         let reference = render(s, &settings, &options, &|_, _| {}, None).unwrap();
         let mut acc = [0.0f64; 3];
         for seed in 0..4 {
-            let options = RenderOptions { spp: 16, seed: 100 + seed, first_sample: 0, threads: None };
+            let options = RenderOptions { spp: 16, seed: 100 + seed, first_sample: 0, threads: None, sampler };
             let im = render(s, &settings, &options, &|_, _| {}, None).unwrap();
             for (p, r) in im.pixels.iter().zip(&reference.pixels) {
                 for c in 0..3 {
@@ -128,7 +136,10 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
         }
         acc
     };
+    let rel_mse = |s: &Scene| rel_mse_with(s, SamplerKind::Independent);
     let chromatic = rel_mse(&sphere_scene(sigma_s, sigma_a, vec![env.clone(), sun.clone()]));
+    let chromatic_sobol =
+        rel_mse_with(&sphere_scene(sigma_s, sigma_a, vec![env.clone(), sun.clone()]), SamplerKind::Sobol);
     for c in 0..3 {
         let grey =
             rel_mse(&sphere_scene(Rgb::splat(sigma_s[c]), Rgb::splat(sigma_a[c]), vec![env.clone(), sun.clone()]));
@@ -138,6 +149,13 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
             "channel {c}: chromatic rel MSE {:.3e} vs grey {:.3e}",
             chromatic[c],
             grey[c]
+        );
+        println!("channel {c}: chromatic rel MSE with Sobol numbers {:.3e}", chromatic_sobol[c]);
+        assert!(
+            chromatic_sobol[c] <= chromatic[c],
+            "channel {c}: chromatic rel MSE with Sobol numbers {:.3e}, independent {:.3e}",
+            chromatic_sobol[c],
+            chromatic[c]
         );
     }
 }
@@ -168,7 +186,8 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
         let (spp, batches) = (256, 12u64);
         let images: Vec<Image> = (0..batches)
             .map(|b| {
-                let options = RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None };
+                let options =
+                    RenderOptions { spp, seed: 500 + b, first_sample: 0, threads: None, sampler: Default::default() };
                 render_with(&s, integrator, &options, &|_, _| {}, None).unwrap()
             })
             .collect();

@@ -16,7 +16,7 @@ use niebla::light::{ConstantLight, Light};
 use niebla::math::{Ray, Vec3};
 use niebla::medium::{DensityGrid, GridEmission, GridMedium, HomogeneousMedium, Medium, MediumId};
 use niebla::phase::PhaseFunction;
-use niebla::sampling::PixelSampler;
+use niebla::sampling::{PixelSampler, SamplerKind};
 use niebla::scene::{Scene, SceneObject};
 use niebla_volume::{DenseGrid, MajorantGrid};
 
@@ -50,7 +50,7 @@ fn estimate(s: &Scene, ray: Ray, medium: Option<MediumId>, n: u32, max_depth: u3
     let integrator = VolPathIntegrator::new(max_depth);
     let mut stats = [Stats::default(); 3];
     for i in 0..n {
-        let mut sampler = PixelSampler::from_key(0x51ab_0000_0000 + i as u64);
+        let mut sampler = PixelSampler::for_pixel(SamplerKind::default(), 0x51ab, 0, 0, i as u64);
         let l = integrator.radiance(s, ray, medium, &mut sampler);
         for c in 0..3 {
             stats[c].add(l[c] as f64);
@@ -238,7 +238,7 @@ fn chromatic_one_bounce_volpath_matches_single_under_a_point_light() {
     };
     let mut reference = [Stats::default(); 3];
     for i in 0..1_000_000u64 {
-        let mut sampler = PixelSampler::from_key(0x7e57_0000_0000 + i);
+        let mut sampler = PixelSampler::for_pixel(SamplerKind::default(), 0x7e57, 0, 0, i);
         let l = single.radiance(&s, ray, Some(MediumId(0)), &mut sampler);
         for c in 0..3 {
             reference[c].add(l[c] as f64);

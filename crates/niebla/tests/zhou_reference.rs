@@ -24,7 +24,7 @@ use niebla::scene::{build_scene, load_scene, parse_scene_str, Scene};
 use niebla::tracking::TransmittanceMethod;
 
 fn options(spp: u32, seed: u64) -> RenderOptions {
-    RenderOptions { spp, seed, first_sample: 0, threads: None }
+    RenderOptions { spp, seed, first_sample: 0, threads: None, sampler: Default::default() }
 }
 
 fn scene_from(text: &str) -> Scene {

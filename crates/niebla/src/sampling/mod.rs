@@ -1,15 +1,18 @@
 //! Random numbers and warps.
 //!
 //! Randomness is counter based: sample `s` of pixel `(x, y)` draws its numbers
-//! from a hash of `(seed, x, y, s, dimension)`, so an image does not depend on
-//! thread count, tile order or machine.
+//! from a pure function of `(seed, x, y, s, dimension)` (independent hashes or
+//! Owen-scrambled Sobol points, [`SamplerKind`]), so an image does not depend
+//! on thread count, tile order or machine.
 
 mod distribution;
 mod rng;
+pub mod sobol;
 mod warps;
 
 pub use distribution::{Distribution1D, Distribution2D};
-pub use rng::{hash_u64, PixelSampler};
+pub use rng::{hash_u64, PixelSampler, SamplerKind};
+pub use sobol::{owen_scrambled_sobol_1d, owen_scrambled_sobol_pair, sobol_2d};
 pub use warps::*;
 
 /// Balance heuristic weight of a strategy with density `pdf_a` against one with `pdf_b`

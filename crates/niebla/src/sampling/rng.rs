@@ -1,5 +1,7 @@
 use glam::Vec2;
 
+use super::sobol::owen_scrambled_sobol_pair;
+
 /// 64-bit finalizer of SplitMix64 (Steele, Lea, Flood 2014): a bijective
 /// avalanche hash, used to derive independent streams from counters.
 #[inline]
@@ -10,14 +12,89 @@ pub fn hash_u64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// Which numbers [`PixelSampler::for_pixel`] gives a pixel's camera samples.
+///
+/// ```
+/// use niebla::sampling::SamplerKind;
+/// assert_eq!(SamplerKind::parse("sobol"), Some(SamplerKind::Sobol));
+/// assert_eq!(SamplerKind::Sobol.name(), "sobol");
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SamplerKind {
+    /// Independent uniform numbers: a hash of `(seed, x, y, s, dimension)`.
+    Independent,
+    /// Owen-scrambled Sobol points (Burley 2020), see [`crate::sampling::sobol`].
+    #[default]
+    Sobol,
+}
+
+impl SamplerKind {
+    /// Every kind, in the order of [`SamplerKind::NAMES`].
+    pub const ALL: [SamplerKind; 2] = [SamplerKind::Independent, SamplerKind::Sobol];
+    /// The names scene files and the command line use.
+    pub const NAMES: [&'static str; 2] = ["independent", "sobol"];
+
+    /// The kind called `name`, if any.
+    pub fn parse(name: &str) -> Option<SamplerKind> {
+        Self::NAMES.iter().position(|n| *n == name).map(|i| Self::ALL[i])
+    }
+
+    /// The kind's name in scene files.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// How a [`PixelSampler`] turns dimensions into numbers.
+#[derive(Clone, Copy, Debug)]
+enum Mode {
+    Independent,
+    /// Owen-scrambled Sobol point `index` (the low 32 bits of the sample
+    /// index; the high bits are part of the key), given bit-reversed, and
+    /// the last pair of dimensions computed (`pair`, `u64::MAX` for none),
+    /// whose second value a 1D draw of the odd dimension takes.
+    Sobol {
+        index_reversed: u32,
+        pair: u64,
+        values: [u32; 2],
+    },
+}
+
 /// Counter-based sampler: the numbers of one pixel sample are a pure function
 /// of `(seed, x, y, sample_index, dimension)`.
 ///
+/// Two kinds ([`SamplerKind`]): independent numbers, a hash of all five, or
+/// Owen-scrambled Sobol points (Burley 2020) in which sample `s` is point
+/// `s` of a sequence scrambled per `(seed, pixel)`, so that a pixel's first
+/// `2^k` samples are stratified in every pair of dimensions `(2j, 2j+1)`.
+///
+/// **Dimension layout** (the same for both kinds): dimensions are drawn in
+/// the order the integrator asks for them. [`PixelSampler::next_2d`] of a
+/// Sobol sampler first skips to an even dimension, so every 2D decision gets
+/// a stratified pair: the render loop draws the pixel position first
+/// (dimensions 0 and 1); then, per path segment and vertex, in this order:
+/// equiangular sampling toward lights (light choice, distance, light point),
+/// at each tentative collision the free-flight distance and the
+/// real/null/absorption choice (consecutive 1D draws, so often one pair),
+/// next-event estimation (light choice, then the light point pair per light),
+/// the phase or BSDF direction (lobe choice, then the direction pair; guided
+/// sampling draws choice, light, direction pair, radius), Russian roulette.
+/// The number of dimensions a path uses depends on its events, so the
+/// dimension of a given decision varies between samples; each dimension is
+/// uniform all the same, so estimates stay unbiased.
+/// [`PixelSampler::stratified_choice`] does not use a dimension.
+///
+/// Streams that are not per-pixel camera samples (photons, tests:
+/// [`PixelSampler::from_key`]) are always independent.
+///
 /// ```
-/// use niebla::sampling::PixelSampler;
+/// use niebla::sampling::{PixelSampler, SamplerKind};
 /// let mut a = PixelSampler::new(7, 3, 4, 10);
 /// let mut b = PixelSampler::new(7, 3, 4, 10);
 /// assert_eq!(a.next_1d(), b.next_1d());
+/// let mut c = PixelSampler::for_pixel(SamplerKind::Sobol, 7, 3, 4, 10);
+/// assert!((0.0..1.0).contains(&c.next_1d()));
 /// ```
 #[derive(Clone, Debug)]
 pub struct PixelSampler {
@@ -25,20 +102,47 @@ pub struct PixelSampler {
     dimension: u64,
     /// Sample index and pixel hash, for choices stratified across samples.
     stratum: u64,
+    mode: Mode,
 }
 
 impl PixelSampler {
-    /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with `seed`.
+    /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with
+    /// `seed`, with independent numbers.
     pub fn new(seed: u64, x: u32, y: u32, sample_index: u64) -> PixelSampler {
         let pixel = ((y as u64) << 32) | x as u64;
         let key = hash_u64(hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03));
         let stratum = sample_index.wrapping_add(hash_u64(hash_u64(seed) ^ pixel) % 1_000_003);
-        PixelSampler { key, dimension: 0, stratum }
+        PixelSampler { key, dimension: 0, stratum, mode: Mode::Independent }
+    }
+
+    /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with
+    /// `seed`, with the numbers of `kind`. Independent samplers are those of
+    /// [`PixelSampler::new`]; Sobol samplers key their scrambles by
+    /// `(seed, x, y)` and the sample index's bits above 32 (each block of
+    /// `2^32` samples is a fresh scramble) and take point `sample_index mod
+    /// 2^32`.
+    #[inline]
+    pub fn for_pixel(kind: SamplerKind, seed: u64, x: u32, y: u32, sample_index: u64) -> PixelSampler {
+        match kind {
+            SamplerKind::Independent => PixelSampler::new(seed, x, y, sample_index),
+            SamplerKind::Sobol => {
+                let pixel = ((y as u64) << 32) | x as u64;
+                let pixel_hash = hash_u64(hash_u64(seed) ^ pixel);
+                let key = hash_u64(pixel_hash ^ hash_u64(0x5EED_50B0 ^ (sample_index >> 32)));
+                let stratum = sample_index.wrapping_add(pixel_hash % 1_000_003);
+                let mode = Mode::Sobol {
+                    index_reversed: (sample_index as u32).reverse_bits(),
+                    pair: u64::MAX,
+                    values: [0; 2],
+                };
+                PixelSampler { key, dimension: 0, stratum, mode }
+            }
+        }
     }
 
     /// A stream keyed by an arbitrary 64-bit value (photon index, test seed, ...).
     pub fn from_key(key: u64) -> PixelSampler {
-        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key }
+        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key, mode: Mode::Independent }
     }
 
     /// Stratified choice of one of `n` options: consecutive sample indices of a
@@ -49,28 +153,87 @@ impl PixelSampler {
         self.stratum % n.max(1)
     }
 
+    /// The next dimension's 32 random bits (independent: the high half of a
+    /// 64-bit hash; Sobol: the scrambled fixed-point value).
+    #[inline]
+    fn next_u32(&mut self) -> u32 {
+        let bits = match &mut self.mode {
+            Mode::Independent => (hash_u64(self.key ^ hash_u64(self.dimension)) >> 32) as u32,
+            Mode::Sobol { index_reversed, pair, values } => {
+                if *pair != self.dimension >> 1 {
+                    *pair = self.dimension >> 1;
+                    *values = owen_scrambled_sobol_pair(self.key, *index_reversed, *pair);
+                }
+                values[(self.dimension & 1) as usize]
+            }
+        };
+        self.dimension += 1;
+        bits
+    }
+
     /// Next uniform number in [0, 1).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        let bits = hash_u64(self.key ^ hash_u64(self.dimension));
-        self.dimension += 1;
         // 24 high bits -> [0, 1) exactly representable in f32.
-        (bits >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 
-    /// Next uniform number in [0, 1) with 53 bits, for uses that need f64 precision.
+    /// Next uniform number in [0, 1) with 53 bits, for uses that need f64
+    /// precision (a Sobol value's 32 bits are completed by 21 hashed bits).
     #[inline]
     pub fn next_f64(&mut self) -> f64 {
-        let bits = hash_u64(self.key ^ hash_u64(self.dimension));
-        self.dimension += 1;
-        (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        let bits = match self.mode {
+            Mode::Independent => {
+                let bits = hash_u64(self.key ^ hash_u64(self.dimension)) >> 11;
+                self.dimension += 1;
+                bits
+            }
+            Mode::Sobol { .. } => {
+                let low = hash_u64(self.key ^ hash_u64(!self.dimension)) >> 43;
+                ((self.next_u32() as u64) << 21) | low
+            }
+        };
+        bits as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// Next pair of uniform numbers in [0, 1)^2.
+    /// Next pair of uniform numbers in [0, 1)^2. A Sobol sampler first skips
+    /// to an even dimension, so that the pair is one of its stratified pairs.
     #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
-        let a = self.next_1d();
-        Vec2::new(a, self.next_1d())
+        match self.mode {
+            Mode::Independent => {
+                let a = self.next_1d();
+                Vec2::new(a, self.next_1d())
+            }
+            Mode::Sobol { index_reversed, .. } => {
+                let pair = self.dimension.div_ceil(2);
+                self.dimension = 2 * pair + 2;
+                let [a, b] = owen_scrambled_sobol_pair(self.key, index_reversed, pair);
+                let scale = 1.0 / (1u64 << 24) as f32;
+                Vec2::new((a >> 8) as f32 * scale, (b >> 8) as f32 * scale)
+            }
+        }
+    }
+
+    /// The dimension the next draw uses (how many were drawn so far, plus
+    /// those a Sobol sampler's [`PixelSampler::next_2d`] skipped).
+    #[inline]
+    pub fn dimension(&self) -> u64 {
+        self.dimension
+    }
+
+    /// Draw again from `dimension` on (an earlier [`PixelSampler::dimension`]),
+    /// for estimates that may share their numbers because each is unbiased
+    /// alone and they add up different things (the paths of `volpath`'s
+    /// channel groups, each giving only its own channels): each then gets the
+    /// stratified low dimensions of a Sobol sampler instead of those left
+    /// after the previous one. Independent samplers ignore it, so that their
+    /// numbers stay those of a plain sequence of draws.
+    #[inline]
+    pub fn rewind_for_another_estimate(&mut self, dimension: u64) {
+        if let Mode::Sobol { .. } = self.mode {
+            self.dimension = dimension;
+        }
     }
 }
 

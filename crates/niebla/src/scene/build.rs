@@ -277,6 +277,7 @@ pub fn build_scene_with_options(
         integrator: integrator_settings(&desc.render.integrator),
         spp: desc.render.spp,
         seed: desc.render.seed,
+        sampler: desc.render.sampler,
         exposure: desc.render.exposure,
     };
     Ok(BuiltScene {

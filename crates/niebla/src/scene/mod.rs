@@ -47,6 +47,8 @@ pub struct RenderSettings {
     pub spp: u32,
     /// Sampler seed.
     pub seed: u64,
+    /// The numbers of the camera samples.
+    pub sampler: crate::sampling::SamplerKind,
     /// PNG exposure in stops (the PNG is the EXR times 2^exposure).
     pub exposure: f32,
 }

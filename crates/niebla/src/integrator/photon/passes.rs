@@ -174,7 +174,7 @@ pub fn render_ppm(
                 step: photon.step,
                 single: single_of(&photon),
             };
-            let pass_options = RenderOptions { spp: 1, seed: options.seed, first_sample: s, threads: None };
+            let pass_options = RenderOptions { spp: 1, first_sample: s, threads: None, ..*options };
             let base = done.load(Ordering::Relaxed);
             let pass_progress = |d: u64, _: u64| progress(base + d, total);
             let pass = render_sums_with(scene, &integrator, &pass_options, &pass_progress, cancel)?;

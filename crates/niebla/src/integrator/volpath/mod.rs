@@ -137,7 +137,11 @@ impl VolPathIntegrator {
         let guiding = (self.guide_fraction > 0.0 && lights.points > 0 && guide.is_active())
             .then_some(Guiding { guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
         let mut l = Rgb::ZERO;
+        // Each group's path gives only its channels, so the paths may share
+        // their numbers: each starts at the same dimension.
+        let first_dimension = sampler.dimension();
         for &group in &groups[..count] {
+            sampler.rewind_for_another_estimate(first_dimension);
             l += self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler);
         }
         l

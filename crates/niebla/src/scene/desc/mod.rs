@@ -22,6 +22,7 @@ use serde::Deserialize;
 
 use crate::color::Rgb;
 use crate::integrator::IntegratorSettings;
+use crate::sampling::SamplerKind;
 
 /// The scene file format version this build reads.
 pub const SCENE_VERSION: u32 = 1;
@@ -334,7 +335,7 @@ fn default_fov_y() -> f32 {
 // Render settings
 // ---------------------------------------------------------------------------
 
-/// How to render: integrator, samples, seed and exposure. Every field has a
+/// How to render: integrator, samples, seed, sampler and exposure. Every field has a
 /// default, and so does the whole object.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -349,6 +350,11 @@ pub struct RenderDesc {
     /// `(seed, x, y, s)`. Default 0.
     #[serde(default)]
     pub seed: u64,
+    /// The numbers of the camera samples: `"independent"` or `"sobol"`
+    /// (Owen-scrambled Sobol points, [`crate::sampling::sobol`]). Default
+    /// [`SamplerKind::default`].
+    #[serde(default)]
+    pub sampler: SamplerKind,
     /// Exposure in stops for PNG output: the image is scaled by `2^exposure`
     /// before the sRGB curve. Does not affect EXR. Default 0.
     #[serde(default)]
@@ -361,7 +367,8 @@ fn default_spp() -> u32 {
 
 impl Default for RenderDesc {
     fn default() -> RenderDesc {
-        RenderDesc { integrator: IntegratorSpec::default(), spp: default_spp(), seed: 0, exposure: 0.0 }
+        let sampler = SamplerKind::default();
+        RenderDesc { integrator: IntegratorSpec::default(), spp: default_spp(), seed: 0, sampler, exposure: 0.0 }
     }
 }
 
