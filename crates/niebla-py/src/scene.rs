@@ -337,15 +337,15 @@ impl PyScene {
     }
 
     /// The stable key of the integrator settings `integrator` (JSON text of
-    /// a `render.integrator` object; None: the scene's), as checkpoints
-    /// record it.
+    /// a `render.integrator` object; None: the scene's) with the scene's
+    /// sampler, as checkpoints record it.
     #[pyo3(signature = (integrator = None))]
     fn integrator_key(&self, py: Python<'_>, integrator: Option<&str>) -> PyResult<String> {
-        Ok(match integrator {
+        let settings = match integrator {
             Some(text) => self.integrator_from_json(py, text)?,
             None => self.built.settings.integrator,
-        }
-        .key())
+        };
+        Ok(niebla::render::recorded_key(&settings, self.built.settings.sampler))
     }
 
     /// Render samples `first_sample .. first_sample + spp` of every pixel;

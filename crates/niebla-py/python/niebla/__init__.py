@@ -309,7 +309,8 @@ class Scene:
         return SampleSums(words, [(int(first_sample), int(first_sample) + spp_done)], used_seed, key)
 
     def integrator_key(self, integrator: Optional[IntegratorSpec] = None) -> str:
-        """The stable key of an integrator's settings (None: the scene's), as
+        """The stable key of an integrator's settings (None: the scene's) with
+        the scene's sampler (``; sampler=sobol`` appended for Sobol), as
         checkpoints record it."""
         return self._native.integrator_key(self._integrator_json(integrator))
 
