@@ -138,3 +138,23 @@ fn bad_textures_are_errors() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// JPEG texels are decoded from sRGB: a uniform image encoded at quality
+/// 100 (a uniform color survives JPEG's DCT and quantization to within 2
+/// levels of 255) reflects `srgb_to_linear(c) L` within that tolerance.
+#[test]
+fn jpeg_texels_are_decoded_from_srgb() {
+    let dir = std::env::temp_dir().join(format!("niebla-textures-jpeg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("uniform.jpg");
+    let pixels = [200u8, 120, 40].repeat(16 * 16);
+    jpeg_encoder::Encoder::new_file(&path, 100).unwrap().encode(&pixels, 16, 16, jpeg_encoder::ColorType::Rgb).unwrap();
+    let image = render_plane(RECTANGLE, r#"{"type": "bitmap", "file": "uniform.jpg"}"#, &dir);
+    let p = image.pixels[16 * 32 + 16];
+    let srgb = |v: f32| if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) };
+    for (k, v) in [200.0f32, 120.0, 40.0].iter().enumerate() {
+        let (lo, hi) = (srgb((v - 2.0) / 255.0) * L, srgb((v + 2.0) / 255.0) * L);
+        assert!(p[k] >= lo && p[k] <= hi, "channel {k}: {} not in [{lo}, {hi}]", p[k]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
