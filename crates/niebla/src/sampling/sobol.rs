@@ -69,28 +69,7 @@ const fn sobol_1_directions() -> [u32; 32] {
 
 /// Sobol dimension 1 by bytes of the index: `TABLE[j][b]` is the XOR of the
 /// direction numbers of the bits set in byte value `b` at byte `j`.
-static SOBOL_1_TABLE: [[u32; 256]; 4] = {
-    let v = sobol_1_directions();
-    let mut t = [[0u32; 256]; 4];
-    let mut j = 0;
-    while j < 4 {
-        let mut b = 0;
-        while b < 256 {
-            let mut x = 0u32;
-            let mut bit = 0;
-            while bit < 8 {
-                if (b >> bit) & 1 == 1 {
-                    x ^= v[8 * j + bit];
-                }
-                bit += 1;
-            }
-            t[j][b] = x;
-            b += 1;
-        }
-        j += 1;
-    }
-    t
-};
+static SOBOL_1_TABLE: [[u32; 256]; 4] = byte_tables(false);
 
 /// Sobol point `index` in dimensions 0 and 1, as 32-bit fixed-point values
 /// (value / 2^32 in [0, 1)).
@@ -116,7 +95,13 @@ pub fn sobol_2d(index: u32) -> [u32; 2] {
 /// in byte value `b` at byte `j` of `reverse_bits(index)` (bit `k` of that
 /// byte is bit `31 - 8 j - k` of the index). The value scramble works on the
 /// bit-reversed value, so this saves two bit reversals per pair.
-static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = {
+static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = byte_tables(true);
+
+/// The byte tables of Sobol dimension 1: entry `[j][b]` XORs the direction
+/// numbers of the bits set in byte value `b` at byte `j` of the index
+/// (`reversed`: of the bit-reversed index, XORing bit-reversed direction
+/// numbers; bit `k` of that byte is bit `31 - 8 j - k` of the index).
+const fn byte_tables(reversed: bool) -> [[u32; 256]; 4] {
     let v = sobol_1_directions();
     let mut t = [[0u32; 256]; 4];
     let mut j = 0;
@@ -127,7 +112,7 @@ static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = {
             let mut bit = 0;
             while bit < 8 {
                 if (b >> bit) & 1 == 1 {
-                    x ^= v[31 - 8 * j - bit].reverse_bits();
+                    x ^= if reversed { v[31 - 8 * j - bit].reverse_bits() } else { v[8 * j + bit] };
                 }
                 bit += 1;
             }
@@ -137,7 +122,7 @@ static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = {
         j += 1;
     }
     t
-};
+}
 
 /// Dimensions `2 pair` and `2 pair + 1` of Owen-scrambled Sobol point
 /// `index` of the sequence keyed by `key` (a hash of seed and pixel), as
