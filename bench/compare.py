@@ -25,6 +25,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 VENV_PY = os.path.join(HERE, ".venv", "bin", "python")
+CYCLES_PY = os.path.join(HERE, ".venv-cycles", "bin", "python")
 
 
 def _ensure_venv():
@@ -51,10 +52,13 @@ import niebla2mitsuba  # noqa: E402
 from volumes import ensure_volumes  # noqa: E402
 
 SCENES = ["fog_spot", "fog_point", "smoke_plume", "dense_cloud", "milk_cube"]
+# Not in the default set: a homogeneous slab (optical thickness 2, albedo 0.9,
+# HG 0.5) under a sun at normal incidence, seen from 45 degrees above.
+EXTRA_SCENES = ["slab"]
 # Reference budget per scene, as a multiple of --ref-seconds: roughly in
 # proportion to how long the renderers take to reach the target there, so that
 # every reference's own error stays a small fraction of the target.
-REF_WEIGHT = {"fog_spot": 3.0, "fog_point": 1.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5}
+REF_WEIGHT = {"fog_spot": 3.0, "fog_point": 1.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5, "slab": 1.0}
 THREADS = 2
 
 
@@ -99,8 +103,12 @@ def time_to_reach(points, target):
 def read_exr(path: str) -> np.ndarray:
     import mitsuba as mi
 
-    bmp = mi.Bitmap(path).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, srgb_gamma=False)
-    return np.array(bmp, dtype=np.float32)
+    # niebla's EXR also holds the exact per-pixel sums (channels
+    # niebla.sum.*, read by `niebla merge`): take R, G, B by name.
+    bmp = mi.Bitmap(path)
+    names = [f.name for f in bmp.struct_()]
+    arr = np.array(bmp, dtype=np.float32).reshape(bmp.height(), bmp.width(), len(names))
+    return arr[..., [names.index(c) for c in ("R", "G", "B")]]
 
 
 class Niebla:
@@ -171,6 +179,52 @@ class Mitsuba:
         t = time.perf_counter() - t0
         arr = np.array(img, dtype=np.float32)[..., :3]
         return arr, t, t
+
+
+class Cycles:
+    """Blender Cycles 5.0 (PyPI `bpy`, CPU) in a worker process of its own
+    (bench/cycles_worker.py in bench/.venv-cycles), the scene built once by
+    bench/niebla2cycles.py. Times are those of the render call after a
+    warm-up render; `fixed_s` is the cost of a 1x1-pixel, 1-spp render (the
+    per-call scene synchronisation, mostly the volume octree of grid media),
+    so `net` times subtract it."""
+
+    name = "cycles"
+    third = "net_seconds"  # what the third value of render() is, in sweep rows
+
+    def __init__(self, scene_path: str, scene_dir: str, workdir: str):
+        self.workdir = workdir
+        self.proc = subprocess.Popen([CYCLES_PY, os.path.join(HERE, "cycles_worker.py"), scene_path, scene_dir,
+                                      str(THREADS)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=subprocess.DEVNULL, text=True)
+        first = json.loads(self.proc.stdout.readline() or '{"unsupported": "the worker died"}')
+        self.unsupported = first.get("unsupported")
+        if self.unsupported:
+            self.close()
+            return
+        self._call(1, 999999, "warmup")
+        self.fixed_s = min(self._call(1, 999998, "fixed", 1, 1) for _ in range(2))
+
+    def _call(self, spp, seed, tag, width=None, height=None):
+        req = {"spp": spp, "seed": seed, "out": os.path.join(self.workdir, f"cycles_{tag}.exr")}
+        if width:
+            req.update(width=width, height=height)
+        self.proc.stdin.write(json.dumps(req) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError("the Cycles worker died")
+        return json.loads(line)["seconds"]
+
+    def render(self, spp: int, seed: int, tag: str):
+        """Returns (image, seconds, seconds net of the fixed per-call cost)."""
+        t = self._call(spp, seed, tag)
+        return read_exr(os.path.join(self.workdir, f"cycles_{tag}.exr")), t, max(t - self.fixed_s, 1e-6)
+
+    def close(self):
+        if self.proc.poll() is None:
+            self.proc.stdin.close()
+            self.proc.wait()
 
 
 # ---------------------------------------------------------------------------
@@ -245,7 +299,7 @@ def agreement(n_ref, m_ref, n_noise, m_noise, block: int, n_halves, m_halves):
     absrel = np.abs(rel)
     return {
         "mean_rgb_niebla": mean_n.tolist(),
-        "mean_rgb_mitsuba": mean_m.tolist(),
+        "mean_rgb_peer": mean_m.tolist(),
         "mean_rel_diff_rgb": ((mean_m - mean_n) / mean_n).tolist(),
         "mean_rel_diff_stderr_rgb": (se / mean_n).tolist(),
         "mean_diff_z_rgb": ((mean_m - mean_n) / se).tolist(),
@@ -269,7 +323,7 @@ def write_png(path: str, img: np.ndarray, exposure: float = 0.0):
 
 
 def diff_png(path: str, lum_rel: np.ndarray, scale: float = 0.1):
-    """Signed relative difference map: red where Mitsuba is brighter, blue
+    """Signed relative difference map: red where the peer is brighter, blue
     where niebla is; full saturation at +-scale."""
     t = np.clip(lum_rel / scale, -1, 1)
     rgb = np.stack([np.clip(t, 0, 1), np.zeros_like(t), np.clip(-t, 0, 1)], axis=-1)
@@ -293,7 +347,7 @@ def sweep(renderer, reference_img, noise, target, cap_s, max_spp, seed, log, oth
         spent += t
         last_t = t
         raw = rel_mse(img, reference_img)
-        row = {"spp": spp, "seconds": t, "wall_seconds": wall, "rel_mse_raw": raw, "rel_mse": max(raw - noise, 1e-12)}
+        row = {"spp": spp, "seconds": t, getattr(renderer, "third", "wall_seconds"): wall, "rel_mse_raw": raw, "rel_mse": max(raw - noise, 1e-12)}
         if other_ref is not None:
             raw2 = rel_mse(img, other_ref)
             row.update(rel_mse_own_raw=raw2, rel_mse_own=max(raw2 - other_noise, 1e-12))
@@ -341,7 +395,9 @@ def main():
     ap.add_argument("--quick", action="store_true", help="96x96 and smaller budgets (~3 min)")
     ap.add_argument("--scale", type=float, default=None,
                     help="resolution relative to the scene files' 256x256 (default 0.5 = 128x128, quick 0.375 = 96x96)")
-    ap.add_argument("--scenes", nargs="+", default=SCENES, choices=SCENES)
+    ap.add_argument("--scenes", nargs="+", default=SCENES, choices=SCENES + EXTRA_SCENES)
+    ap.add_argument("--peers", nargs="+", default=["mitsuba"], choices=["mitsuba", "cycles"],
+                    help="renderers to compare niebla with (cycles: Blender Cycles 5.0 from PyPI bpy, in bench/.venv-cycles)")
     ap.add_argument("--niebla", default=os.path.join(ROOT, "target", "release", "niebla"),
                     help="niebla binary (default target/release/niebla; built if missing)")
     ap.add_argument("--niebla-label", default=None, help="free text recorded as the niebla build (e.g. its git revision)")
@@ -368,6 +424,8 @@ def main():
     mi.set_variant("llvm_ad_rgb")
     mi.set_log_level(mi.LogLevel.Warn)
     dr.set_thread_count(THREADS)
+    if "cycles" in args.peers and subprocess.run([CYCLES_PY, "-c", "import bpy"], capture_output=True).returncode:
+        subprocess.run(["bash", os.path.join(HERE, "setup.sh"), "--cycles"], check=True)
 
     if not os.path.exists(args.niebla):
         print("building niebla (cargo build --release -p niebla-cli)", flush=True)
@@ -377,8 +435,11 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     ensure_volumes()
     ver = versions(binary, args.niebla_label)
+    if "cycles" in args.peers:
+        ver["cycles"] = subprocess.run([CYCLES_PY, "-c", "import bpy; print(bpy.app.version_string)"],
+                                       capture_output=True, text=True).stdout.strip().splitlines()[-1]
     print("versions:", json.dumps(ver, indent=1), flush=True)
-    print(f"threads: niebla --threads {THREADS}, Dr.Jit thread count {dr.thread_count()}; "
+    print(f"threads: niebla --threads {THREADS}, Dr.Jit thread count {dr.thread_count()}, Cycles {THREADS} threads; "
           f"{'quick' if args.quick else 'full'} mode: resolution x{scale}, reference ~{ref_s:.0f} s "
           f"per renderer, sweep cap {sweep_s:.0f} s", flush=True)
 
@@ -396,73 +457,87 @@ def main():
         log(f"\n== {name} ({w}x{h}), load average {load0:.2f}")
 
         nb = Niebla(binary, path, sdir)
-        mdict = niebla2mitsuba.convert(desc, os.path.join(HERE, "scenes"), spp=1, integrator=args.mitsuba_integrator)
-        mitsuba_integrator = mdict["integrator"]["type"]
-        ms = Mitsuba(mdict)
-        log(f"    mitsuba {mitsuba_integrator} max_depth {mdict['integrator']['max_depth']}: "
-            f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
+        peers, peer_info = [], {}
+        for peer in args.peers:
+            if peer == "mitsuba":
+                mdict = niebla2mitsuba.convert(desc, os.path.join(HERE, "scenes"), spp=1,
+                                               integrator=args.mitsuba_integrator)
+                ms = Mitsuba(mdict)
+                peer_info["mitsuba"] = {"integrator": mdict["integrator"]["type"],
+                                        "max_depth": mdict["integrator"]["max_depth"], "warmup_s": ms.warmup_s}
+                log(f"    mitsuba {mdict['integrator']['type']} max_depth {mdict['integrator']['max_depth']}: "
+                    f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
+                peers.append(ms)
+            else:
+                cy = Cycles(path, os.path.join(HERE, "scenes"), sdir)
+                if cy.unsupported:
+                    log(f"    cycles: not compared ({cy.unsupported})")
+                    peer_info["cycles"] = {"unsupported": cy.unsupported}
+                    continue
+                peer_info["cycles"] = {"fixed_s": cy.fixed_s}
+                log(f"    cycles: fixed cost per render call (1x1 pixel, 1 spp) {cy.fixed_s:.2f} s")
+                peers.append(cy)
 
         # Throughput probes (4 spp) size the references to the time budget.
-        _, tn, _ = nb.render(4, 7, "probe")
-        _, tm, _ = ms.render(4, 7, "probe")
         budget = ref_s * REF_WEIGHT[name]
+        _, tn, _ = nb.render(4, 7, "probe")
         spp_n = int(max(8, min(1 << 16, budget / (tn / 4)))) // 2 * 2
-        spp_m = int(max(8, min(1 << 16, budget / (tm / 4)))) // 2 * 2
-
         n_ref, na, nbb, n_ref_t = reference(nb, spp_n, 1001, log)
-        m_ref, ma, mb, m_ref_t = reference(ms, spp_m, 2001, log)
-        n_noise, m_noise = ref_noise(na, nbb), ref_noise(ma, mb)
-        agree = agreement(n_ref, m_ref, n_noise, m_noise, max(4, w // 32), (na, nbb), (ma, mb))
-        lum_rel = agree.pop("_lum_rel_map")
+        n_noise = ref_noise(na, nbb)
         write_png(os.path.join(sdir, "reference_niebla.png"), n_ref)
-        write_png(os.path.join(sdir, "reference_mitsuba.png"), m_ref)
-        diff_png(os.path.join(sdir, "reference_rel_diff.png"), lum_rel)
-        log(f"    reference noise (rel MSE): niebla {n_noise:.2e} ({spp_n} spp), mitsuba {m_noise:.2e} ({spp_m} spp)")
+        log(f"    reference noise (rel MSE): niebla {n_noise:.2e} ({spp_n} spp)")
         if n_noise > 0.25 * args.target:
             log(f"    warning: the niebla reference's own error is {n_noise / args.target:.0%} of the target; "
                 "the correction below is large (raise --ref-seconds)")
-        log("    references: mean rel diff (mitsuba-niebla)/niebla R G B = "
-            + " ".join(f"{x:+.4f}" for x in agree["mean_rel_diff_rgb"])
-            + " (+-" + " ".join(f"{x:.4f}" for x in agree["mean_rel_diff_stderr_rgb"]) + " std. error, z "
-            + " ".join(f"{x:+.1f}" for x in agree["mean_diff_z_rgb"]) + ")"
-            + f"; rel MSE {agree['rel_mse']:.2e} (noise alone ~{agree['rel_mse_expected_from_noise']:.2e})")
-        log(f"    {agree['block']}x{agree['block']}-pixel blocks, |rel diff|: median {agree['block_abs_rel_diff_median']:.4f}, "
-            f"p90 {agree['block_abs_rel_diff_p90']:.4f}, p99 {agree['block_abs_rel_diff_p99']:.4f}, "
-            f"max {agree['block_abs_rel_diff_max']:.4f}; signed mean {agree['block_rel_diff_mean']:+.4f}")
-
-        # Sweeps: both renderers against the niebla reference (noise-corrected);
-        # Mitsuba also against its own reference.
         n_rows = sweep(nb, n_ref, n_noise, args.target, sweep_s, 1 << 14, 1, log)
-        m_rows = sweep(ms, n_ref, n_noise, args.target, sweep_s, 1 << 14, 1, log,
-                       other_ref=m_ref, other_noise=m_noise)
         tn_, how_n = time_to_reach([(r["seconds"], r["rel_mse"]) for r in n_rows], args.target)
-        tm_, how_m = time_to_reach([(r["seconds"], r["rel_mse"]) for r in m_rows], args.target)
-        tmo, how_mo = time_to_reach([(r["seconds"], r["rel_mse_own"]) for r in m_rows], args.target)
-        last_n, last_m = n_rows[-1], m_rows[-1]
+        last_n = n_rows[-1]
         res = {
-            "scene": name,
-            "width": w,
-            "height": h,
+            "scene": name, "width": w, "height": h,
             "max_depth_niebla": desc["render"]["integrator"]["max_depth"],
-            "mitsuba_integrator": mitsuba_integrator,
-            "mitsuba_max_depth": mdict["integrator"]["max_depth"],
             "niebla_time": tn_, "niebla_how": how_n,
-            "mitsuba_time": tm_, "mitsuba_how": how_m,
-            "mitsuba_time_own_ref": tmo, "mitsuba_how_own_ref": how_mo,
-            "ratio": (tm_ / tn_) if tn_ and tm_ else None,
-            "ratio_own_ref": (tmo / tn_) if tn_ and tmo else None,
             "niebla_msamples_s": w * h * last_n["spp"] / last_n["seconds"] / 1e6,
-            "mitsuba_msamples_s": w * h * last_m["spp"] / last_m["seconds"] / 1e6,
-            "reference": {"niebla_spp": spp_n, "niebla_seconds": n_ref_t, "niebla_noise": n_noise,
-                          "mitsuba_spp": spp_m, "mitsuba_seconds": m_ref_t, "mitsuba_noise": m_noise},
-            "agreement": agree,
+            "reference": {"niebla_spp": spp_n, "niebla_seconds": n_ref_t, "niebla_noise": n_noise},
             "niebla_sweep": n_rows,
-            "mitsuba_sweep": m_rows,
-            "mitsuba_warmup_s": ms.warmup_s,
-            "load_average": [load0, os.getloadavg()[0]],
+            "peers": peer_info,
         }
+        for pr in peers:
+            _, tp, _ = pr.render(4, 7, "probe")
+            spp_p = int(max(8, min(1 << 16, budget / (tp / 4)))) // 2 * 2
+            p_ref, pa, pb, p_ref_t = reference(pr, spp_p, 2001, log)
+            p_noise = ref_noise(pa, pb)
+            agree = agreement(n_ref, p_ref, n_noise, p_noise, max(4, w // 32), (na, nbb), (pa, pb))
+            lum_rel = agree.pop("_lum_rel_map")
+            write_png(os.path.join(sdir, f"reference_{pr.name}.png"), p_ref)
+            diff_png(os.path.join(sdir, f"reference_rel_diff_{pr.name}.png"), lum_rel)
+            log(f"    {pr.name} reference noise (rel MSE) {p_noise:.2e} ({spp_p} spp); mean rel diff ({pr.name}-niebla)/niebla R G B = "
+                + " ".join(f"{x:+.4f}" for x in agree["mean_rel_diff_rgb"])
+                + " (+-" + " ".join(f"{x:.4f}" for x in agree["mean_rel_diff_stderr_rgb"]) + " std. error, z "
+                + " ".join(f"{x:+.1f}" for x in agree["mean_diff_z_rgb"]) + ")"
+                + f"; rel MSE {agree['rel_mse']:.2e} (noise alone ~{agree['rel_mse_expected_from_noise']:.2e})")
+            log(f"    {agree['block']}x{agree['block']}-pixel blocks, |rel diff|: median {agree['block_abs_rel_diff_median']:.4f}, "
+                f"p90 {agree['block_abs_rel_diff_p90']:.4f}, p99 {agree['block_abs_rel_diff_p99']:.4f}, "
+                f"max {agree['block_abs_rel_diff_max']:.4f}; signed mean {agree['block_rel_diff_mean']:+.4f}")
+            rows = sweep(pr, n_ref, n_noise, args.target, sweep_s, 1 << 14, 1, log, other_ref=p_ref, other_noise=p_noise)
+            t_, how = time_to_reach([(r["seconds"], r["rel_mse"]) for r in rows], args.target)
+            to, how_o = time_to_reach([(r["seconds"], r["rel_mse_own"]) for r in rows], args.target)
+            tnet, how_net = time_to_reach([(r.get("net_seconds", r["seconds"]), r["rel_mse"]) for r in rows], args.target)
+            last = rows[-1]
+            res["peers"][pr.name].update({
+                "time": t_, "how": how, "time_own_ref": to, "how_own_ref": how_o,
+                "time_net": tnet if pr.name == "cycles" else None, "how_net": how_net,
+                "ratio": (t_ / tn_) if tn_ and t_ else None,
+                "ratio_own_ref": (to / tn_) if tn_ and to else None,
+                "ratio_net": (tnet / tn_) if pr.name == "cycles" and tn_ and tnet else None,
+                "msamples_s": w * h * last["spp"] / last["seconds"] / 1e6,
+                "reference": {"spp": spp_p, "seconds": p_ref_t, "noise": p_noise},
+                "agreement": agree, "sweep": rows,
+            })
+            if isinstance(pr, Cycles):
+                pr.close()
+        res["load_average"] = [load0, os.getloadavg()[0]]
         results.append(res)
-        del ms
+        del peers
 
     total = time.perf_counter() - t_start
     mark = {"interp": "", "first": "<=", "extrap": "~", "none": "?"}
@@ -470,25 +545,40 @@ def main():
     def fmt_t(t, how):
         return "n/a" if t is None else f"{mark[how]}{t:.3g} s"
 
-    print(f"\nTime to relative MSE {args.target:g} (both against the niebla reference, "
-          f"reference noise subtracted); {THREADS} threads each; total {total / 60:.1f} min\n")
-    hdr = (f"{'scene':12s} {'res':>7s} {'niebla':>10s} {'mitsuba':>10s} {'ratio M/n':>9s} "
-           f"{'mitsuba*':>10s} {'ratio*':>7s} {'niebla Ms/s':>11s} {'mitsuba Ms/s':>12s} {'mitsuba integr.':>15s} "
-           f"{'ref diff':>8s}")
+    def fmt_r(x):
+        return "n/a" if x is None else f"{x:.2f}"
+
+    print(f"\nTime to relative MSE {args.target:g} (all against the niebla reference, reference noise "
+          f"subtracted); {THREADS} threads each; total {total / 60:.1f} min\n")
+    hdr = f"{'scene':12s} {'res':>7s} {'niebla':>10s} {'niebla Ms/s':>11s}"
+    for p in args.peers:
+        hdr += f" | {p:>8s} {'ratio':>6s} {p + '*':>9s} {'ratio*':>6s}"
+        if p == "cycles":
+            hdr += f" {'net':>9s} {'ratio':>6s}"
+        hdr += f" {'Ms/s':>6s} {'ref diff':>8s}"
     print(hdr)
     print("-" * len(hdr))
     for r in results:
-        ratio = "n/a" if r["ratio"] is None else f"{r['ratio']:.2f}"
-        ratio2 = "n/a" if r["ratio_own_ref"] is None else f"{r['ratio_own_ref']:.2f}"
-        diff = np.mean(r["agreement"]["mean_rel_diff_rgb"])
-        print(f"{r['scene']:12s} {r['width']}x{r['height']:<3d} {fmt_t(r['niebla_time'], r['niebla_how']):>10s} "
-              f"{fmt_t(r['mitsuba_time'], r['mitsuba_how']):>10s} {ratio:>9s} "
-              f"{fmt_t(r['mitsuba_time_own_ref'], r['mitsuba_how_own_ref']):>10s} {ratio2:>7s} "
-              f"{r['niebla_msamples_s']:11.3f} {r['mitsuba_msamples_s']:12.3f} {r['mitsuba_integrator']:>15s} "
-              f"{diff:+8.4f}")
-    print("\nmitsuba*: Mitsuba against its own reference. '~': not reached within the sweep cap, extrapolated "
-          "as error ~ 1/time; '<=': already reached at 1 spp. ref diff: mean relative difference of the two "
-          "references' image means, (mitsuba - niebla) / niebla, averaged over R, G, B.")
+        line = f"{r['scene']:12s} {r['width']}x{r['height']:<3d} {fmt_t(r['niebla_time'], r['niebla_how']):>10s} {r['niebla_msamples_s']:11.3f}"
+        for p in args.peers:
+            q = r["peers"].get(p, {})
+            if "time" not in q:
+                line += f" | {'n/a':>8s} {'':6s} {'':9s} {'':6s}" + (f" {'':9s} {'':6s}" if p == "cycles" else "") + f" {'':6s} {'':8s}"
+                continue
+            line += (f" | {fmt_t(q['time'], q['how']):>8s} {fmt_r(q['ratio']):>6s} {fmt_t(q['time_own_ref'], q['how_own_ref']):>9s}"
+                     f" {fmt_r(q['ratio_own_ref']):>6s}")
+            if p == "cycles":
+                line += f" {fmt_t(q['time_net'], q['how_net']):>9s} {fmt_r(q['ratio_net']):>6s}"
+            line += f" {q['msamples_s']:6.3f} {np.mean(q['agreement']['mean_rel_diff_rgb']):+8.4f}"
+        print(line)
+    print("\nratio: peer time / niebla time. peer*: the peer against its own reference. cycles net: minus its fixed "
+          "per-call cost (scene synchronisation, volume octree). '~': not reached within the sweep cap, extrapolated "
+          "as error ~ 1/time; '<=': already reached at 1 spp. ref diff: mean relative difference of the references' "
+          "image means, (peer - niebla) / niebla, averaged over R, G, B.")
+    for r in results:
+        for p, q in r["peers"].items():
+            if "unsupported" in q:
+                print(f"{r['scene']}: {p} not compared: {q['unsupported']}")
     summary = {"versions": ver, "quick": args.quick, "target": args.target, "threads": THREADS,
                "total_seconds": total, "results": results}
     out_json = os.path.join(args.out, "results_quick.json" if args.quick else "results.json")

@@ -45,3 +45,18 @@ img = mi.render(scene, spp=1)
 lib = next((l.split()[-1] for l in open("/proc/self/maps") if "libLLVM" in l), "?")
 print(f"mitsuba {mi.__version__}, drjit {dr.__version__}, variant llvm_ad_rgb works (LLVM: {lib})")
 EOF
+
+# Blender Cycles as a second peer (`compare.py --peers mitsuba cycles`):
+# bench/.venv-cycles with PyPI bpy 5.0.1 (Blender as a Python module, wheels
+# for Python 3.11) and numpy; only with --cycles, since the wheel is large.
+if [ "${1:-}" = "--cycles" ]; then
+    cvenv="$here/.venv-cycles"
+    if [ ! -x "$cvenv/bin/python" ]; then
+        echo "creating $cvenv"
+        "$python" -m venv "$cvenv"
+    fi
+    if ! "$cvenv/bin/python" -c "import bpy" 2>/dev/null; then
+        "$cvenv/bin/pip" install --quiet "bpy==5.0.1" numpy
+    fi
+    "$cvenv/bin/python" -c "import bpy; print('bpy', bpy.app.version_string, 'works')" 2>/dev/null | tail -n 1
+fi

@@ -1,0 +1,59 @@
+"""A Blender Cycles renderer driven over stdin/stdout by bench/compare.py
+(run with bench/.venv-cycles/bin/python, where `bpy` 5.0.1 is installed).
+
+    cycles_worker.py SCENE.json SCENE_DIR THREADS
+
+builds the scene once (bench/niebla2cycles.py), prints one JSON line
+{"ready": true, "build_s": ...} (or {"unsupported": "why"}), then for each
+request line {"spp": N, "seed": S, "out": "x.exr", "width": W, "height": H}
+renders and answers {"seconds": T}: the wall time of the render call alone
+(scene building, Blender start and the EXR write excluded; the per-call volume
+octree build that Cycles does is included, and measured separately by
+requesting a 1x1-pixel, 1-spp render). width/height override the film size
+(to measure that fixed cost).
+"""
+
+import contextlib
+import json
+import os
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+
+def main():
+    scene_path, scene_dir, threads = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    import bpy
+    import niebla2cycles
+
+    with open(scene_path) as f:
+        desc = json.load(f)
+    t0 = time.perf_counter()
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            scene = niebla2cycles.build(desc, scene_dir, threads)
+    except niebla2cycles.Unsupported as e:
+        print(json.dumps({"unsupported": str(e)}), flush=True)
+        return
+    print(json.dumps({"ready": True, "build_s": time.perf_counter() - t0}), flush=True)
+    w0, h0 = scene.render.resolution_x, scene.render.resolution_y
+    for line in sys.stdin:
+        req = json.loads(line)
+        scene.cycles.samples = int(req["spp"])
+        scene.cycles.seed = int(req["seed"])
+        scene.render.resolution_x = int(req.get("width", w0))
+        scene.render.resolution_y = int(req.get("height", h0))
+        scene.render.filepath = req["out"]
+        with contextlib.redirect_stdout(sys.stderr):
+            t0 = time.perf_counter()
+            bpy.ops.render.render(write_still=False)
+            t = time.perf_counter() - t0
+            img = bpy.data.images["Render Result"]
+            img.save_render(req["out"])
+        print(json.dumps({"seconds": t}), flush=True)
+
+
+if __name__ == "__main__":
+    main()

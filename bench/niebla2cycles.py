@@ -1,0 +1,410 @@
+"""Builds a Blender Cycles scene (through `bpy`, Blender as a Python module)
+from a niebla scene description, with conventions matched so that both
+renderers compute the same image (only what the bench scenes use; anything
+else raises `Unsupported`). Runs inside bench/.venv-cycles (bpy 5.0.1).
+
+Matched conventions (checked in the Cycles 5.0 sources and by comparing image
+means with niebla; see bench/README.md):
+
+- camera: a perspective camera at niebla's position, looking at its target,
+  `sensor_fit` VERTICAL with `angle_y` = niebla's `fov_y`; Blender cameras look
+  down their local -Z with +Y up, so the camera matrix has columns right, up,
+  -forward. Box pixel filter of one pixel.
+- unbiased and comparable: no denoising, no adaptive sampling, no clamping,
+  no path guiding, `blur_glossy` 0, unbiased (null-scattering) volumes,
+  every caustic path allowed. Cycles' sampler (Owen-scrambled Sobol) is kept.
+- depth: niebla's `max_depth` N counts scattering vertices, each with
+  next-event estimation. Cycles' bounce count starts at 0 for the first
+  vertex (0 bounces = direct light only), so Cycles gets N - 1 in every
+  bounce class.
+- media: Cycles' Volume Coefficients node takes sigma_a and sigma_s per unit
+  length (and the HG anisotropy), exactly niebla's coefficients. A medium
+  inside a box is a mesh whose material links only a Volume (an index-matched
+  boundary, niebla's `null` BSDF). A grid medium is a Volume object reading a
+  VDB written from the same voxels (cell-centred, voxel size = the cell size
+  of niebla's bounds, float precision, no clipping), its `density` attribute
+  multiplying the coefficients.
+- lights: a directional light of irradiance E is a Sun of strength E and
+  angle 0; a point light of intensity I (W/sr) a Point of radius 0, soft
+  falloff off, power 4 pi I; a constant environment of radiance L the World
+  background color L at strength 1; a spot light only with a hard edge
+  (`beam_width` = `cutoff_angle`): a Spot of `spot_size` 2 cutoff, blend 0,
+  power 4 pi I (Cycles' blend is a smoothstep in the cosine, which cannot
+  express Mitsuba's linear-in-angle falloff that niebla follows).
+- surfaces: `diffuse` is a Diffuse BSDF (roughness 0: Lambertian); spheres
+  are smooth-shaded UV spheres of 512 x 256 segments (the polyhedron's
+  volume is within 1e-4 of the sphere's).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from niebla2mitsuba import niebla_transform  # noqa: E402
+
+
+class Unsupported(Exception):
+    """A feature of the niebla scene with no matched Cycles counterpart here."""
+
+
+def _rgb(v):
+    if isinstance(v, (int, float)):
+        return [float(v)] * 3
+    if len(v) != 3:
+        raise Unsupported(f"color {v!r}")
+    return [float(x) for x in v]
+
+
+def _normalize(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def _look_at_matrix(position, target, up):
+    """Blender object matrix of a camera (or light pointing down -Z) at
+    `position` looking at `target`."""
+    f = _normalize(np.asarray(target, float) - np.asarray(position, float))
+    r = _normalize(np.cross(f, up))
+    u = np.cross(r, f)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = r, u, -f, position
+    return m
+
+
+def _aim_matrix(position, direction):
+    """A light at `position` whose local -Z points along `direction`."""
+    d = _normalize(direction)
+    up = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    return _look_at_matrix(np.asarray(position, float), np.asarray(position, float) + d, up)
+
+
+def _coefficients(m):
+    """(sigma_a, sigma_s) per channel, with `scale` applied."""
+    scale = float(m.get("scale", 1.0))
+    if "sigma_t" in m:
+        st, al = _rgb(m["sigma_t"]), _rgb(m.get("albedo", 1.0))
+        ss = [t * a for t, a in zip(st, al)]
+        sa = [t - s for t, s in zip(st, ss)]
+    else:
+        sa, ss = _rgb(m["sigma_a"]), _rgb(m["sigma_s"])
+    return [x * scale for x in sa], [x * scale for x in ss]
+
+
+def _anisotropy(m):
+    p = m.get("phase") or {"type": "isotropic"}
+    if p["type"] == "isotropic":
+        return 0.0
+    if p["type"] == "hg":
+        return float(p["g"])
+    raise Unsupported(f"phase function {p['type']!r}")
+
+
+def write_vdb(npy_path: str, bounds: dict, vdb_path: str) -> None:
+    """Writes the `.npy` density ([z][y][x], cell-centred over `bounds`) as a
+    float VDB grid named `density` whose voxel (i, j, k) sits at the cell
+    centre niebla uses; done by Debian's python3-openvdb (the system python)."""
+    if os.path.exists(vdb_path) and os.path.getmtime(vdb_path) >= os.path.getmtime(npy_path):
+        return
+    script = r"""
+import sys, numpy as np
+try:
+    import openvdb as vdb
+except ImportError:
+    import pyopenvdb as vdb
+npy, out, bmin, bmax = sys.argv[1], sys.argv[2], [float(x) for x in sys.argv[3:6]], [float(x) for x in sys.argv[6:9]]
+a = np.load(npy).astype(np.float32)          # [z][y][x]
+nz, ny, nx = a.shape
+cell = [(bmax[0]-bmin[0])/nx, (bmax[1]-bmin[1])/ny, (bmax[2]-bmin[2])/nz]
+assert max(cell) - min(cell) < 1e-6 * max(cell), ("non-cubic cells", cell)
+g = vdb.FloatGrid()
+g.name = "density"
+g.copyFromArray(np.ascontiguousarray(a.transpose(2, 1, 0)))   # [x][y][z]: index (i, j, k)
+m = [[cell[0], 0, 0, 0], [0, cell[1], 0, 0], [0, 0, cell[2], 0],
+     [bmin[0] + 0.5*cell[0], bmin[1] + 0.5*cell[1], bmin[2] + 0.5*cell[2], 1]]
+g.transform = vdb.createLinearTransform(m)
+g.gridClass = vdb.GridClass.FOG_VOLUME
+vdb.write(out + ".tmp", grids=[g])
+"""
+    args = ["/usr/bin/python3", "-c", script, npy_path, vdb_path]
+    args += [str(x) for x in bounds["min"]] + [str(x) for x in bounds["max"]]
+    subprocess.run(args, check=True)
+    os.replace(vdb_path + ".tmp", vdb_path)
+
+
+def build(desc: dict, scene_dir: str, threads: int = 2):
+    """Replaces Blender's current scene by the niebla scene `desc` (data paths
+    relative to `scene_dir`). Returns the bpy scene."""
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    c = scene.cycles
+    c.device = "CPU"
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.use_preview_denoising = False
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.use_guiding = False
+    c.blur_glossy = 0.0
+    c.caustics_reflective = True
+    c.caustics_refractive = True
+    c.volume_biased = False
+    c.pixel_filter_type = "BOX"
+    c.filter_width = 1.0
+    c.use_animated_seed = False
+    integ = desc["render"]["integrator"]
+    if integ.get("type") != "volpath":
+        raise Unsupported(f"integrator {integ.get('type')!r}")
+    bounces = int(integ.get("max_depth", 64)) - 1
+    if not 0 <= bounces <= 1024:
+        raise Unsupported(f"max_depth {bounces + 1}")
+    for attr in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces", "volume_bounces"):
+        setattr(c, attr, bounces)
+    c.transparent_max_bounces = 1024
+    scene.render.threads_mode = "FIXED"
+    scene.render.threads = threads
+    scene.render.use_persistent_data = True
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.image_settings.exr_codec = "NONE"
+    scene.render.image_settings.color_mode = "RGB"
+
+    cam_d = desc["camera"]
+    if cam_d.get("type", "perspective") != "perspective":
+        raise Unsupported(f"camera {cam_d.get('type')!r}")
+    scene.render.resolution_x = int(cam_d["width"])
+    scene.render.resolution_y = int(cam_d["height"])
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = scene.render.pixel_aspect_y = 1.0
+    cam = bpy.data.cameras.new("camera")
+    cam.sensor_fit = "VERTICAL"
+    cam.angle_y = math.radians(float(cam_d["fov_y"]))
+    cam.clip_start = 1e-4
+    cam.clip_end = 1e6
+    cam_obj = bpy.data.objects.new("camera", cam)
+    cam_obj.matrix_world = _look_at_matrix(cam_d["position"], cam_d["target"], cam_d.get("up", [0, 1, 0])).T.tolist()
+    scene.collection.objects.link(cam_obj)
+    scene.camera = cam_obj
+
+    media = desc.get("media", {})
+    grid_objects = {}
+    for shape in desc.get("shapes", []):
+        _shape(bpy, scene, shape, media, scene_dir, grid_objects)
+
+    world = bpy.data.worlds.new("world")
+    scene.world = world
+    world.use_nodes = True
+    bg = world.node_tree.nodes["Background"]
+    bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    bg.inputs["Strength"].default_value = 1.0
+    for light in desc.get("lights", []):
+        _light(bpy, scene, light, bg)
+    return scene
+
+
+def _material_volume(bpy, name, m, density_from_grid: bool):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    vc = nt.nodes.new("ShaderNodeVolumeCoefficients")
+    vc.phase = "HENYEY_GREENSTEIN"
+    inputs = {i.name: i for i in vc.inputs}
+    inputs["Weight"].default_value = 1.0
+    inputs["Anisotropy"].default_value = _anisotropy(m)
+    sa, ss = _coefficients(m)
+    if m.get("emission"):
+        raise Unsupported("emissive media")
+    if density_from_grid:
+        info = nt.nodes.new("ShaderNodeVolumeInfo")
+        for socket, coeff in (("Absorption Coefficients", sa), ("Scatter Coefficients", ss)):
+            sc = nt.nodes.new("ShaderNodeVectorMath")
+            sc.operation = "SCALE"
+            sc.inputs[0].default_value = coeff
+            nt.links.new(info.outputs["Density"], sc.inputs["Scale"])
+            nt.links.new(sc.outputs["Vector"], inputs[socket])
+    else:
+        inputs["Absorption Coefficients"].default_value = sa
+        inputs["Scatter Coefficients"].default_value = ss
+    inputs["Emission Coefficients"].default_value = (0.0, 0.0, 0.0)
+    nt.links.new(vc.outputs["Volume"], out.inputs["Volume"])
+    return mat
+
+
+def _material_surface(bpy, name, bsdf):
+    kind = (bsdf or {"type": "null"}).get("type", "null")
+    if kind == "null":
+        return None
+    if kind != "diffuse":
+        raise Unsupported(f"bsdf {kind!r}")
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    refl = bsdf.get("reflectance", 0.5)
+    if isinstance(refl, dict):
+        raise Unsupported("textured reflectance")
+    d.inputs["Color"].default_value = (*_rgb(refl), 1.0)
+    d.inputs["Roughness"].default_value = 0.0
+    nt.links.new(d.outputs["BSDF"], out.inputs["Surface"])
+    return mat
+
+
+def _mesh_object(bpy, scene, name, verts, faces, smooth=False):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([tuple(map(float, v)) for v in verts], [], [tuple(f) for f in faces])
+    mesh.update()
+    if smooth:
+        mesh.shade_smooth()
+    obj = bpy.data.objects.new(name, mesh)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def _box_mesh(bmin, bmax):
+    x0, y0, z0 = bmin
+    x1, y1, z1 = bmax
+    v = [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0), (x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)]
+    f = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (2, 3, 7, 6), (1, 2, 6, 5), (0, 4, 7, 3)]
+    return v, f
+
+
+def _sphere_mesh(center, radius, seg=512, rings=256):
+    v = [(center[0], center[1] + radius, center[2])]
+    for i in range(1, rings):
+        th = math.pi * i / rings
+        for j in range(seg):
+            ph = 2 * math.pi * j / seg
+            v.append((center[0] + radius * math.sin(th) * math.cos(ph), center[1] + radius * math.cos(th),
+                      center[2] + radius * math.sin(th) * math.sin(ph)))
+    v.append((center[0], center[1] - radius, center[2]))
+    f = []
+    for j in range(seg):
+        f.append((0, 1 + (j + 1) % seg, 1 + j))
+    for i in range(rings - 2):
+        a, b = 1 + i * seg, 1 + (i + 1) * seg
+        for j in range(seg):
+            j2 = (j + 1) % seg
+            f.append((a + j, a + j2, b + j2, b + j))
+    last = len(v) - 1
+    base = 1 + (rings - 2) * seg
+    for j in range(seg):
+        f.append((last, base + j, base + (j + 1) % seg))
+    return v, f
+
+
+def _shape(bpy, scene, shape, media, scene_dir, grid_objects):
+    kind = shape["type"]
+    name = f"shape{len(scene.collection.objects)}"
+    if shape.get("exterior"):
+        raise Unsupported("exterior media on shapes (the bench scenes give interiors only)")
+    interior = shape.get("interior")
+    surf = _material_surface(bpy, name + "_surface", shape.get("bsdf"))
+    if kind == "box":
+        verts, faces = _box_mesh(shape["min"], shape["max"])
+        smooth = False
+    elif kind == "sphere":
+        verts, faces = _sphere_mesh(shape["center"], float(shape["radius"]))
+        smooth = True
+    elif kind == "rectangle":
+        m = niebla_transform(shape.get("to_world"))
+        corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+        verts = [tuple((m @ np.array([x, y, 0.0, 1.0]))[:3]) for x, y in corners]
+        faces = [(0, 1, 2, 3)]
+        smooth = False
+    else:
+        raise Unsupported(f"shape {kind!r}")
+    if kind in ("box", "sphere") and shape.get("to_world"):
+        raise Unsupported(f"a transformed {kind}")
+
+    if interior is not None:
+        m = media[interior]
+        mkind = m.get("type", "grid" if "density" in m else "homogeneous")
+        if mkind == "homogeneous":
+            if surf is not None:
+                raise Unsupported("a medium inside a non-null surface")
+            obj = _mesh_object(bpy, scene, name, verts, faces, smooth)
+            obj.data.materials.append(_material_volume(bpy, name + "_volume", m, False))
+            return
+        d = m["density"]
+        if d.get("type") != "npy":
+            raise Unsupported(f"density {d.get('type')!r}")
+        if kind != "box" or [list(map(float, shape["min"])), list(map(float, shape["max"]))] != [
+                list(map(float, d["bounds"]["min"])), list(map(float, d["bounds"]["max"]))]:
+            raise Unsupported("a grid medium whose container is not its bounding box")
+        npy = d["file"] if os.path.isabs(d["file"]) else os.path.join(scene_dir, d["file"])
+        vdb_path = os.path.splitext(npy)[0] + ".vdb"
+        write_vdb(npy, d["bounds"], vdb_path)
+        vol = bpy.data.volumes.new(name)
+        vol.filepath = vdb_path
+        vol.render.precision = "FULL"
+        vol.render.clipping = 0.0
+        vol.render.space = "OBJECT"
+        obj = bpy.data.objects.new(name, vol)
+        scene.collection.objects.link(obj)
+        obj.data.materials.append(_material_volume(bpy, name + "_volume", m, True))
+        return
+    if surf is None:
+        return  # a null surface without media changes nothing
+    obj = _mesh_object(bpy, scene, name, verts, faces, smooth)
+    obj.data.materials.append(surf)
+
+
+def _light(bpy, scene, light, bg):
+    kind = light["type"]
+    name = f"light{len(scene.collection.objects)}"
+    if kind == "constant":
+        bg.inputs["Color"].default_value = (*_rgb(light["radiance"]), 1.0)
+        return
+    if kind == "directional":
+        e = _rgb(light["irradiance"])
+        lt = bpy.data.lights.new(name, type="SUN")
+        lt.angle = 0.0
+        mx = max(e)
+        lt.energy = mx
+        lt.color = [x / mx for x in e]
+        obj = bpy.data.objects.new(name, lt)
+        obj.matrix_world = _aim_matrix([0.0, 0.0, 0.0], light["direction"]).T.tolist()
+    elif kind in ("point", "spot"):
+        i = _rgb(light["intensity"])
+        mx = max(i)
+        lt = bpy.data.lights.new(name, type="POINT" if kind == "point" else "SPOT")
+        lt.shadow_soft_size = 0.0
+        lt.use_soft_falloff = False
+        lt.energy = 4.0 * math.pi * mx
+        lt.color = [x / mx for x in i]
+        pos = np.asarray(light["position"], float)
+        if kind == "spot":
+            cutoff = float(light.get("cutoff_angle", 20.0))
+            beam = float(light.get("beam_width", cutoff * 0.75))
+            if abs(beam - cutoff) > 1e-6:
+                raise Unsupported("a spot light with a soft edge (Cycles' blend is a smoothstep in the cosine, "
+                                  "niebla's and Mitsuba's falloff is linear in the angle)")
+            lt.spot_size = math.radians(2.0 * cutoff)
+            lt.spot_blend = 0.0
+            direction = (np.asarray(light["target"], float) - pos) if "target" in light else light["direction"]
+        else:
+            direction = [0.0, -1.0, 0.0]
+        obj = bpy.data.objects.new(name, lt)
+        obj.matrix_world = _aim_matrix(pos, direction).T.tolist()
+    else:
+        raise Unsupported(f"light {kind!r}")
+    scene.collection.objects.link(obj)
