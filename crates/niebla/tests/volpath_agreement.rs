@@ -2,7 +2,7 @@
 //! - thin-medium limit: at optical thickness 0.01, `volpath` equals `single`
 //!   within noise (multiple scattering is then below 1e-2 of single);
 //! - chromatic media: tenfold different extinctions per channel converge
-//!   with a per-channel relative MSE no worse than twice that of a grey medium.
+//!   with a per-channel relative MSE no worse than 3.5x that of a grey medium.
 
 mod common;
 
@@ -94,8 +94,8 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
 
 /// Each channel of a medium whose extinctions differ tenfold (0.44, 2.2, 4.4)
 /// against a grey medium with that channel's coefficients in every channel:
-/// the chromatic channel's relative MSE must stay within twice the grey one
-/// at equal spp.
+/// the chromatic channel's relative MSE must stay within 3.5x the grey one
+/// at equal spp (see below).
 ///
 /// One hero-channel path for all three channels measured about 6x here for
 /// the thin red channel (its estimate, nearly constant when sampled for red,
@@ -109,6 +109,15 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
 /// (green: chromatic 1.50e-2, grey 7.4e-3, against 2.04e-2 and 1.29e-2
 /// independent), so there the test asks that the chromatic medium's error be
 /// no higher than with independent numbers.
+///
+/// Russian roulette from depth 4 with survival `m^(1/4)` (volpath/path.rs)
+/// lowered every error here, the grey media's most, since their noise had
+/// been mostly the roulette's: independent numbers, 16 spp, red 1.77e-4
+/// both (red is traced alone), green 9.2e-3 chromatic against 3.06e-3 grey
+/// (before: 2.04e-2 and 1.29e-2), blue 1.21e-2 against 9.13e-3. What is
+/// left in green is the hero-channel weights' spread (half its paths are
+/// sampled for blue), so the bound is now 3.5x, and the chromatic errors
+/// must stay below the old grey ones' scale (green 1.29e-2).
 #[test]
 fn chromatic_medium_converges_as_well_as_a_grey_one() {
     let env = Light::Constant(ConstantLight { radiance: Rgb::ONE });
@@ -145,11 +154,12 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
             rel_mse(&sphere_scene(Rgb::splat(sigma_s[c]), Rgb::splat(sigma_a[c]), vec![env.clone(), sun.clone()]));
         println!("channel {c}: chromatic rel MSE {:.3e}, grey {:.3e}", chromatic[c], grey[c]);
         assert!(
-            chromatic[c] <= 2.0 * grey[c],
+            chromatic[c] <= 3.5 * grey[c],
             "channel {c}: chromatic rel MSE {:.3e} vs grey {:.3e}",
             chromatic[c],
             grey[c]
         );
+        assert!(chromatic[c] <= 1.3e-2, "channel {c}: chromatic rel MSE {:.3e}", chromatic[c]);
         println!("channel {c}: chromatic rel MSE with Sobol numbers {:.3e}", chromatic_sobol[c]);
         assert!(
             chromatic_sobol[c] <= chromatic[c],

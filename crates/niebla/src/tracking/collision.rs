@@ -59,6 +59,27 @@ impl MajorantCollision {
         }
     }
 
+    /// Whether the collision is real (absorption or scattering, probability
+    /// `sigma_t / sigma_maj` of the hero channel) rather than null.
+    #[inline]
+    pub fn is_real(&self, hero: usize, u: f32) -> bool {
+        u * self.sigma_maj[hero] < self.point.sigma_a[hero] + self.point.sigma_s[hero]
+    }
+
+    /// Weights of a real collision chosen by [`Self::is_real`] and turned
+    /// into scattering with the albedo as weight (no absorption event): the
+    /// throughput factor `T_maj sigma_s / (T_maj sigma_t)[hero]` and the
+    /// unidirectional path pdf factor `T_maj sigma_t / (T_maj sigma_t)[hero]`.
+    #[inline]
+    pub fn real_scatter_weights(&self, hero: usize) -> Option<NullWeights> {
+        let sigma_t = self.point.sigma_a + self.point.sigma_s;
+        let pdf = self.t_maj[hero] * sigma_t[hero];
+        if !(pdf > 0.0) {
+            return None;
+        }
+        Some(NullWeights { throughput: self.t_maj * self.point.sigma_s / pdf, majorant: self.t_maj * sigma_t / pdf })
+    }
+
     /// Throughput factor of a real scattering chosen by [`Self::event`]:
     /// `T_maj sigma_s / (T_maj sigma_s)[hero]` (the hero channel's is 1).
     #[inline]
