@@ -286,3 +286,62 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod sampling_tests {
+    use super::*;
+
+    /// Visible-normal sampling against its density `D_wi(m)`: 2 * 10^6
+    /// normals seen from 50 degrees, binned 10 x 20 over the hemisphere of
+    /// `m`; each bin's count is within 4.5 standard deviations (Poisson) of
+    /// the density integrated over the bin (32 x 32 midpoint rule). For
+    /// Beckmann the density uses the rational `G1` (0.35% error), below the
+    /// counts' resolution here.
+    #[test]
+    fn visible_normals_follow_their_density() {
+        for (kind, au, av) in
+            [(MicrofacetKind::Ggx, 0.6, 0.6), (MicrofacetKind::Beckmann, 0.6, 0.6), (MicrofacetKind::Ggx, 0.2, 0.7)]
+        {
+            let d = Microfacet::new(kind, au, av);
+            let t = 50f32.to_radians();
+            let wi = Vec3::new(t.sin() * 0.8, t.sin() * 0.6, t.cos());
+            let (nt, np) = (10usize, 20usize);
+            let (dt, dp) = (std::f64::consts::FRAC_PI_2 / nt as f64, std::f64::consts::TAU / np as f64);
+            let mut hist = vec![0.0f64; nt * np];
+            let n = 2_000_000usize;
+            let mut state = 12345u64;
+            let mut rnd = || {
+                state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+                ((state >> 40) as f32) / (1u64 << 24) as f32
+            };
+            for _ in 0..n {
+                let (m, _) = d.sample(wi, Vec2::new(rnd(), rnd()));
+                let th = (m.z as f64).clamp(-1.0, 1.0).acos();
+                let ph = (m.y as f64).atan2(m.x as f64).rem_euclid(std::f64::consts::TAU);
+                hist[((th / dt) as usize).min(nt - 1) * np + ((ph / dp) as usize).min(np - 1)] += 1.0;
+            }
+            for i in 0..nt {
+                for j in 0..np {
+                    let sub = 32;
+                    let mut s = 0.0;
+                    for a in 0..sub {
+                        let th = (i as f64 + (a as f64 + 0.5) / sub as f64) * dt;
+                        for b in 0..sub {
+                            let ph = (j as f64 + (b as f64 + 0.5) / sub as f64) * dp;
+                            let m =
+                                Vec3::new((th.sin() * ph.cos()) as f32, (th.sin() * ph.sin()) as f32, th.cos() as f32);
+                            s += d.pdf(wi, m) as f64 * th.sin();
+                        }
+                    }
+                    let e = s * dt * dp / (sub * sub) as f64 * n as f64;
+                    let z = (hist[i * np + j] - e) / e.max(1.0).sqrt();
+                    assert!(
+                        z.abs() < 4.5,
+                        "{kind:?} {au} {av}: bin ({i}, {j}) has {} samples, expected {e:.1}",
+                        hist[i * np + j]
+                    );
+                }
+            }
+        }
+    }
+}

@@ -104,7 +104,13 @@ impl RoughDielectric {
     /// Sample a visible microfacet normal, then reflect (probability `F`)
     /// or refract (`1 - F`) about it; `u_lobe` chooses, `u` samples the normal.
     #[inline]
-    pub(super) fn sample_local(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<RoughDielectricSample> {
+    pub(super) fn sample_local(
+        &self,
+        wo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        mode: TransportMode,
+    ) -> Option<RoughDielectricSample> {
         if wo.z == 0.0 {
             return None;
         }

@@ -39,7 +39,9 @@ impl Reflector {
         match self {
             Reflector::Diffuse { .. } => Reflector::Diffuse { reflectance: color },
             Reflector::Conductor { .. } => self,
-            Reflector::RoughConductor(b) => Reflector::RoughConductor(RoughConductor { specular_reflectance: color, ..b }),
+            Reflector::RoughConductor(b) => {
+                Reflector::RoughConductor(RoughConductor { specular_reflectance: color, ..b })
+            }
             Reflector::Plastic(b) => Reflector::Plastic(Plastic { diffuse_reflectance: color, ..b }),
         }
     }

@@ -122,12 +122,7 @@ fn microfacet(d: &MicrofacetDesc) -> Microfacet {
 /// is exactly one of Mitsuba's (`"Au"`) takes Mitsuba's RGB values (the
 /// choice of `roughconductor`, a new type); else the smooth `conductor`'s
 /// lookup, unchanged for existing scenes ([`crate::bsdf::conductor_preset`]).
-fn conductor_index(
-    c: &ConductorDesc,
-    path: &str,
-    source: &str,
-    mitsuba_names: bool,
-) -> Result<(Rgb, Rgb), SceneError> {
+fn conductor_index(c: &ConductorDesc, path: &str, source: &str, mitsuba_names: bool) -> Result<(Rgb, Rgb), SceneError> {
     Ok(match c {
         ConductorDesc::Material(name) => {
             let mitsuba = crate::bsdf::MITSUBA_CONDUCTORS.iter().find(|p| mitsuba_names && p.name == *name);
@@ -147,11 +142,16 @@ fn rough_conductor(
     ctx: &mut TextureContext,
 ) -> Result<(RoughConductor, Option<Arc<Texture>>), SceneError> {
     let (eta, k) = conductor_index(&d.conductor, path, ctx.source, true)?;
-    let (specular_reflectance, texture) = color_or_texture(&d.specular_reflectance, &format!("{path}.specular_reflectance"), ctx)?;
+    let (specular_reflectance, texture) =
+        color_or_texture(&d.specular_reflectance, &format!("{path}.specular_reflectance"), ctx)?;
     Ok((RoughConductor { microfacet: microfacet(&d.microfacet), eta, k, specular_reflectance }, texture))
 }
 
-fn plastic(d: &PlasticDesc, path: &str, ctx: &mut TextureContext) -> Result<(Plastic, Option<Arc<Texture>>), SceneError> {
+fn plastic(
+    d: &PlasticDesc,
+    path: &str,
+    ctx: &mut TextureContext,
+) -> Result<(Plastic, Option<Arc<Texture>>), SceneError> {
     let (diffuse, texture) = color_or_texture(&d.diffuse_reflectance, &format!("{path}.diffuse_reflectance"), ctx)?;
     let specular = d.specular_reflectance.to_rgb();
     let diffuse_mean = match &texture {

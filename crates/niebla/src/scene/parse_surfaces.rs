@@ -63,10 +63,9 @@ struct RawMicrofacet {
 fn alpha_number(field: &str, value: &Value) -> Result<f32, Located> {
     match value {
         Value::Number(n) => Ok(n.as_f64().unwrap_or(f64::NAN) as f32),
-        Value::Object(_) => Err(Located::new(
-            field,
-            "a textured roughness is not supported yet; expected a number in (0, 1]",
-        )),
+        Value::Object(_) => {
+            Err(Located::new(field, "a textured roughness is not supported yet; expected a number in (0, 1]"))
+        }
         other => Err(Located::new(field, format!("expected a number in (0, 1] or a texture, got {}", describe(other)))),
     }
 }
@@ -85,10 +84,18 @@ fn microfacet(raw: &RawMicrofacet) -> Result<MicrofacetDesc, Located> {
     let alpha = match (&raw.alpha, &raw.alpha_u, &raw.alpha_v) {
         (None, None, None) => AlphaDesc::Isotropic(0.1),
         (Some(a), None, None) => AlphaDesc::Isotropic(alpha_number("alpha", a)?),
-        (None, Some(u), Some(v)) => AlphaDesc::Anisotropic { u: alpha_number("alpha_u", u)?, v: alpha_number("alpha_v", v)? },
-        (Some(_), _, _) => return Err(Located::new("alpha", "give either `alpha` or `alpha_u` with `alpha_v`, not both")),
-        (None, None, Some(_)) => return Err(Located::new("alpha_u", "missing `alpha_u`: give it together with `alpha_v`")),
-        (None, Some(_), None) => return Err(Located::new("alpha_v", "missing `alpha_v`: give it together with `alpha_u`")),
+        (None, Some(u), Some(v)) => {
+            AlphaDesc::Anisotropic { u: alpha_number("alpha_u", u)?, v: alpha_number("alpha_v", v)? }
+        }
+        (Some(_), _, _) => {
+            return Err(Located::new("alpha", "give either `alpha` or `alpha_u` with `alpha_v`, not both"))
+        }
+        (None, None, Some(_)) => {
+            return Err(Located::new("alpha_u", "missing `alpha_u`: give it together with `alpha_v`"))
+        }
+        (None, Some(_), None) => {
+            return Err(Located::new("alpha_v", "missing `alpha_v`: give it together with `alpha_u`"))
+        }
     };
     Ok(MicrofacetDesc { distribution, alpha })
 }

@@ -564,7 +564,9 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
             };
             for (path, side) in sides {
                 match side {
-                    BsdfDesc::Diffuse { reflectance } => validate_reflectance(&format!("{path}.reflectance"), reflectance)?,
+                    BsdfDesc::Diffuse { reflectance } => {
+                        validate_reflectance(&format!("{path}.reflectance"), reflectance)?
+                    }
                     BsdfDesc::Conductor(ConductorDesc::Material(_)) => {}
                     BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
                         color(&format!("{path}.eta"), eta, positive)?;
