@@ -379,7 +379,7 @@ fn albedo_is_at_most_one_and_sampling_weights_match_eval() {
                     if wi.z * wo.z < 0.0 {
                         if let Bsdf::RoughDielectric(d) = bsdf {
                             let etap = if wo.z > 0.0 { d.eta } else { 1.0 / d.eta };
-                            f = f * (etap * etap);
+                            f *= etap * etap;
                         }
                     }
                     for c in 0..3 {
@@ -569,11 +569,11 @@ fn naive_radiance(
         let hit = scene.intersect(&ray, t_min, f32::INFINITY);
         if inside {
             let t = -(1.0 - sampler.next_1d()).ln() / sigma_t;
-            if hit.map_or(true, |h| t < h.local.t) {
-                beta = beta * (sigma_s / sigma_t);
+            if hit.is_none_or(|h| t < h.local.t) {
+                beta *= sigma_s / sigma_t;
                 let p = ray.at(t);
                 let Some(ps) = phase.sample(-ray.d, sampler.next_2d()) else { return Rgb::ZERO };
-                beta = beta * (ps.value / ps.pdf);
+                beta *= ps.value / ps.pdf;
                 ray = Ray::new(p, ps.wi);
                 t_min = 0.0;
                 continue;
@@ -584,7 +584,7 @@ fn naive_radiance(
         let ns = hit.surface.shading_normal(wo);
         let bsdf = scene.surface_bsdf(&hit);
         let Some(bs) = bsdf.sample(ns, wo, sampler.next_1d(), sampler.next_2d()) else { return Rgb::ZERO };
-        beta = beta * bs.weight(ns);
+        beta *= bs.weight(ns);
         if bs.is_transmission {
             inside = !inside;
         }

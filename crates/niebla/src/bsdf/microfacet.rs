@@ -204,6 +204,7 @@ fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
 /// Inverse error function on (-1, 1): Giles, "Approximating the erfinv
 /// function", GPU Computing Gems, 2011 (single precision polynomial, relative
 /// error about 1e-7), refined by one Newton step on `erf`.
+#[allow(clippy::excessive_precision)] // Giles' published coefficients, as published.
 pub fn erfinv(x: f32) -> f32 {
     let x = x.clamp(-1.0 + 1e-7, 1.0 - 1e-7);
     let mut w = -((1.0 - x) * (1.0 + x)).ln();

@@ -5,6 +5,10 @@
 //! `mi.traverse` by `scripts/mitsuba_bsdf_values.py --conductors`. With
 //! these a Mitsuba scene's `material` renders as in Mitsuba's RGB mode.
 
+// The values are printed with 8 significant digits by the generating script
+// and kept as printed.
+#![allow(clippy::excessive_precision)]
+
 use super::ConductorPreset;
 use crate::color::Rgb;
 
