@@ -870,9 +870,9 @@ const SHAPES: &[ErrorCase] = &[
     ErrorCase {
         name: "unknown bsdf type",
         from: r#""type": "diffuse""#,
-        to: r#""type": "plastic""#,
+        to: r#""type": "hair""#,
         path: "shapes[2].bsdf.type",
-        message: r#"unknown bsdf type "plastic""#,
+        message: r#"unknown bsdf type "hair""#,
         also: &[],
     },
     ErrorCase {

@@ -3,6 +3,7 @@
 //! presets and the artist-friendly parameterizations.
 
 use super::fresnel::{fresnel_complex, reflect};
+use super::mitsuba_conductors::MITSUBA_CONDUCTORS;
 use super::BsdfSample;
 use crate::color::Rgb;
 use crate::math::Vec3;
@@ -52,8 +53,9 @@ pub const CONDUCTOR_PRESETS: [ConductorPreset; 4] = [
 ];
 
 /// The preset called `name`: its lowercase name, its chemical symbol (any
-/// case), or `"aluminum"`. `None` for unknown names; the accepted names are
-/// those of [`CONDUCTOR_PRESETS`].
+/// case), or `"aluminum"` (the four of [`CONDUCTOR_PRESETS`], unchanged);
+/// else one of Mitsuba 3's material names ([`MITSUBA_CONDUCTORS`], exact
+/// case first, e.g. `"Cr"`, `"TiN_palik"`). `None` for unknown names.
 ///
 /// ```
 /// use niebla::bsdf::conductor_preset;
@@ -62,7 +64,12 @@ pub const CONDUCTOR_PRESETS: [ConductorPreset; 4] = [
 /// ```
 pub fn conductor_preset(name: &str) -> Option<ConductorPreset> {
     let name = if name.eq_ignore_ascii_case("aluminum") { "aluminium" } else { name };
-    CONDUCTOR_PRESETS.iter().copied().find(|p| p.name.eq_ignore_ascii_case(name) || p.symbol.eq_ignore_ascii_case(name))
+    CONDUCTOR_PRESETS
+        .iter()
+        .copied()
+        .find(|p| p.name.eq_ignore_ascii_case(name) || p.symbol.eq_ignore_ascii_case(name))
+        .or_else(|| MITSUBA_CONDUCTORS.iter().copied().find(|p| p.name == name))
+        .or_else(|| MITSUBA_CONDUCTORS.iter().copied().find(|p| p.name.eq_ignore_ascii_case(name)))
 }
 
 /// Largest reflectance the mappings accept; 1 itself needs an infinite `k`.

@@ -51,14 +51,28 @@ mod conductor;
 mod dielectric;
 mod diffuse;
 pub mod fresnel;
+pub mod microfacet;
+mod mitsuba_conductors;
+mod plastic;
+mod rough_conductor;
+mod rough_dielectric;
+mod thin_dielectric;
+mod two_sided;
 
 pub use conductor::{
     conductor_from_artist, conductor_from_reflectance, conductor_preset, ConductorPreset, CONDUCTOR_PRESETS,
 };
 pub use fresnel::{fresnel_complex, fresnel_dielectric, reflect, refract};
+pub use microfacet::{Microfacet, MicrofacetKind};
+pub use mitsuba_conductors::MITSUBA_CONDUCTORS;
+pub use plastic::{fresnel_diffuse_reflectance, Plastic};
+pub use rough_conductor::RoughConductor;
+pub use rough_dielectric::RoughDielectric;
+pub use thin_dielectric::ThinDielectric;
+pub use two_sided::{Reflector, TwoSided};
 
 use crate::color::Rgb;
-use crate::math::{Vec2, Vec3};
+use crate::math::{Frame, Vec2, Vec3};
 
 /// Surface scattering model of a shape.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,6 +100,19 @@ pub enum Bsdf {
         /// Extinction coefficient per channel, >= 0 (large `k`: a perfect mirror).
         k: Rgb,
     },
+    /// Rough conductor (Mitsuba's `roughconductor`), one-sided: black seen
+    /// from behind `n`.
+    RoughConductor(RoughConductor),
+    /// Rough dielectric interface (Mitsuba's `roughdielectric`): microfacet
+    /// reflection and refraction, a medium boundary. The normal points outside.
+    RoughDielectric(RoughDielectric),
+    /// Thin glass sheet (Mitsuba's `thindielectric`): delta reflection and
+    /// straight pass-through; rays that pass change medium.
+    ThinDielectric(ThinDielectric),
+    /// Smooth coated diffuse surface (Mitsuba's `plastic`), one-sided.
+    Plastic(Plastic),
+    /// Mitsuba's `twosided`: a reflecting model on each side of `n`.
+    TwoSided(TwoSided),
 }
 
 /// Which quantity a path carries, for the non-symmetric refraction factor
@@ -184,7 +211,23 @@ impl Bsdf {
     pub fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Rgb {
         match *self {
             Bsdf::Diffuse { reflectance } => diffuse::diffuse_eval(reflectance, n, wo, wi),
-            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } => Rgb::ZERO,
+            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => Rgb::ZERO,
+            Bsdf::RoughConductor(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.eval_local(wo, wi)
+            }
+            Bsdf::RoughDielectric(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.eval_local(wo, wi)
+            }
+            Bsdf::Plastic(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.eval_local(wo, wi)
+            }
+            Bsdf::TwoSided(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.eval_local(wo, wi)
+            }
         }
     }
 
@@ -194,7 +237,23 @@ impl Bsdf {
     pub fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
         match *self {
             Bsdf::Diffuse { .. } => diffuse::diffuse_pdf(n, wo, wi),
-            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } => 0.0,
+            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::RoughConductor(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.pdf_local(wo, wi)
+            }
+            Bsdf::RoughDielectric(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.pdf_local(wo, wi)
+            }
+            Bsdf::Plastic(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.pdf_local(wo, wi)
+            }
+            Bsdf::TwoSided(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.pdf_local(wo, wi)
+            }
         }
     }
 
@@ -230,6 +289,65 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } => diffuse::sample_diffuse(reflectance, n, wo, u),
             Bsdf::Dielectric { eta } => dielectric::sample_dielectric(eta, n, wo, u_lobe, mode),
             Bsdf::Conductor { eta, k } => conductor::sample_conductor(eta, k, n, wo),
+            Bsdf::RoughConductor(b) => {
+                let frame = Frame::from_z(n);
+                let (wi, f, pdf) = b.sample_local(frame.to_local(wo), u)?;
+                Some(BsdfSample {
+                    wi: frame.to_world(wi),
+                    f,
+                    pdf,
+                    is_specular: false,
+                    is_transmission: false,
+                    eta: 1.0,
+                })
+            }
+            Bsdf::RoughDielectric(b) => {
+                let frame = Frame::from_z(n);
+                let s = b.sample_local(frame.to_local(wo), u_lobe, u, mode)?;
+                Some(BsdfSample {
+                    wi: frame.to_world(s.wi),
+                    f: s.f,
+                    pdf: s.pdf,
+                    is_specular: false,
+                    is_transmission: s.transmitted,
+                    eta: s.etap,
+                })
+            }
+            Bsdf::ThinDielectric(b) => {
+                let frame = Frame::from_z(n);
+                let (wi, weight, pdf, transmitted) = b.sample_local(frame.to_local(wo), u_lobe)?;
+                let wi = if transmitted { -wo } else { frame.to_world(wi) };
+                let cos_i = n.dot(wi).abs();
+                if cos_i == 0.0 || !(pdf > 0.0) {
+                    return None;
+                }
+                let f = weight * (pdf / cos_i);
+                Some(BsdfSample { wi, f, pdf, is_specular: true, is_transmission: transmitted, eta: 1.0 })
+            }
+            Bsdf::Plastic(b) => {
+                let frame = Frame::from_z(n);
+                let s = b.sample_local(frame.to_local(wo), u_lobe, u)?;
+                Some(BsdfSample {
+                    wi: frame.to_world(s.wi),
+                    f: s.f,
+                    pdf: s.pdf,
+                    is_specular: s.specular,
+                    is_transmission: false,
+                    eta: 1.0,
+                })
+            }
+            Bsdf::TwoSided(b) => {
+                let frame = Frame::from_z(n);
+                let s = b.sample_local(frame.to_local(wo), u_lobe, u)?;
+                Some(BsdfSample {
+                    wi: frame.to_world(s.wi),
+                    f: s.f,
+                    pdf: s.pdf,
+                    is_specular: s.specular,
+                    is_transmission: false,
+                    eta: 1.0,
+                })
+            }
         }
     }
 
@@ -237,7 +355,44 @@ impl Bsdf {
     /// are zero and light sampling cannot contribute.
     #[inline]
     pub fn is_specular(&self) -> bool {
-        !matches!(self, Bsdf::Diffuse { .. })
+        match self {
+            Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => true,
+            Bsdf::Diffuse { .. } | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) | Bsdf::Plastic(_) => false,
+            Bsdf::TwoSided(b) => b.front.is_specular() && b.back.is_specular(),
+        }
+    }
+
+    /// True for models with a non-delta transmission lobe (`roughdielectric`):
+    /// their `eval` and `pdf` are non-zero for `wi` on the other side of the
+    /// surface from `wo`.
+    #[inline]
+    pub fn has_rough_transmission(&self) -> bool {
+        matches!(self, Bsdf::RoughDielectric(_))
+    }
+
+    /// The model with its textured color set to `color` (clamped to
+    /// [0, 1]): a diffuse `reflectance`, a plastic's `diffuse_reflectance`,
+    /// a rough conductor's `specular_reflectance`, or those of the sides of
+    /// a `twosided` that [`TwoSided::textured`] marks. Other models are
+    /// returned unchanged.
+    #[inline]
+    pub fn with_texture(self, color: Rgb) -> Bsdf {
+        let color = color.map(|c| c.clamp(0.0, 1.0));
+        match self {
+            Bsdf::Diffuse { .. } => Bsdf::Diffuse { reflectance: color },
+            Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor { specular_reflectance: color, ..b }),
+            Bsdf::Plastic(b) => Bsdf::Plastic(Plastic { diffuse_reflectance: color, ..b }),
+            Bsdf::TwoSided(mut b) => {
+                if b.textured & 1 != 0 {
+                    b.front = b.front.with_texture(color);
+                }
+                if b.textured & 2 != 0 {
+                    b.back = b.back.with_texture(color);
+                }
+                Bsdf::TwoSided(b)
+            }
+            other => other,
+        }
     }
 
     /// True for index-matched boundaries that rays cross.
@@ -245,4 +400,19 @@ impl Bsdf {
     pub fn is_null(&self) -> bool {
         matches!(self, Bsdf::Null)
     }
+}
+
+/// `wo` and `wi` in the local frame of `n` ([`Frame::from_z`]: `+z = n`).
+#[inline]
+fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
+    let frame = Frame::from_z(n);
+    (frame.to_local(wo), frame.to_local(wi))
+}
+
+/// A sample in a local frame, shared by the reflecting models.
+pub(crate) struct LocalSample {
+    pub wi: Vec3,
+    pub f: Rgb,
+    pub pdf: f32,
+    pub specular: bool,
 }

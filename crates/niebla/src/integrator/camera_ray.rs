@@ -105,15 +105,18 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
         }
 
         // Specular surface (glass, metal): follow the sampled reflection or
-        // refraction, as a Whitted-style ray tracer would.
-        if object.bsdf.is_specular() {
+        // refraction, as a Whitted-style ray tracer would. A rough
+        // dielectric is followed the same way (one sampled direction,
+        // weighted f |cos| / pdf), so that media behind frosted glass are seen.
+        if object.bsdf.is_specular() || object.bsdf.has_rough_transmission() {
             specular_bounces += 1;
             if specular_bounces > MAX_SPECULAR_BOUNCES {
                 break;
             }
             let u_lobe = sampler.next_1d();
             let ns = hit.surface.shading_normal(-path.ray.d);
-            let Some(bs) = object.bsdf.sample(ns, -path.ray.d, u_lobe, sampler.next_2d()) else {
+            let bsdf = scene.surface_bsdf(&hit);
+            let Some(bs) = bsdf.sample(ns, -path.ray.d, u_lobe, sampler.next_2d()) else {
                 break;
             };
             if !hit.surface.sides_agree(ns, bs.wi) {

@@ -38,7 +38,7 @@ pub fn direct_surface_radiance(
         if cos <= 0.0 || ls.wi.dot(ng) <= 0.0 || ls.pdf == 0.0 {
             continue;
         }
-        let f = bsdf.eval(n, wo, ls.wi);
+        let f = bsdf.eval(ns, wo, ls.wi);
         if f.is_black() || ls.li.is_black() {
             continue;
         }

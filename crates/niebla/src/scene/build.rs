@@ -138,6 +138,17 @@ pub fn build_scene_with_options(
                 Bsdf::Conductor { eta: eta.to_rgb(), k: k.to_rgb() }
             }
             BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => Bsdf::conductor_from_reflectance(r.to_rgb()),
+            other => {
+                let mut ctx = super::build_surfaces::TextureContext {
+                    loader: &mut textures,
+                    source,
+                    base_dir,
+                    budget: &mut budget,
+                };
+                let (bsdf, t) = super::build_surfaces::build_surface(other, &format!("{path}.bsdf"), &mut ctx)?;
+                texture = t;
+                bsdf
+            }
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);

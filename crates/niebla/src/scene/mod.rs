@@ -14,10 +14,12 @@
 mod build;
 mod build_medium;
 mod build_mesh;
+mod build_surfaces;
 mod build_texture;
 pub mod desc;
 mod error;
 mod parse;
+mod parse_surfaces;
 mod validate;
 
 pub use crate::world::{

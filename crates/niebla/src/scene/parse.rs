@@ -711,7 +711,8 @@ fn parse_bsdf(mut object: Object) -> Result<BsdfDesc, Located> {
                 (_, None) => Err(Located::new("k", "missing `k`: give it together with `eta`")),
             }
         }
-        _ => Err(unknown_type("bsdf", &tag, BsdfDesc::TYPES)),
+        other => super::parse_surfaces::parse_surface(other, object)
+            .unwrap_or_else(|| Err(unknown_type("bsdf", &tag, BsdfDesc::TYPES))),
     }
 }
 

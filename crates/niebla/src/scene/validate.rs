@@ -495,6 +495,98 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             color(&format!("{base}.bsdf.k"), k, non_negative)
         }
         BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => color(&format!("{base}.bsdf.reflectance"), r, below_one),
+        other => validate_surface(&format!("{base}.bsdf"), other),
+    }
+}
+
+/// Checks a microfacet or layered surface at JSON path `base` (`...bsdf`).
+fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
+    let alpha = |m: &MicrofacetDesc| -> Check {
+        let check = |field: &str, a: f32| -> Check {
+            if a.is_finite() && a > 0.0 && a <= 1.0 {
+                Ok(())
+            } else {
+                fail(format!("{base}.{field}"), format!("expected a number in (0, 1] or a texture, got {a}"))
+            }
+        };
+        match m.alpha {
+            AlphaDesc::Isotropic(a) => check("alpha", a),
+            AlphaDesc::Anisotropic { u, v } => {
+                check("alpha_u", u)?;
+                check("alpha_v", v)
+            }
+        }
+    };
+    let iors = |int_ior: f32, ext_ior: f32| -> Check {
+        positive(&format!("{base}.int_ior"), int_ior)?;
+        positive(&format!("{base}.ext_ior"), ext_ior)
+    };
+    match bsdf {
+        BsdfDesc::RoughConductor(d) => {
+            alpha(&d.microfacet)?;
+            match &d.conductor {
+                ConductorDesc::Material(_) => {}
+                ConductorDesc::Index { eta, k } => {
+                    color(&format!("{base}.eta"), eta, non_negative)?;
+                    color(&format!("{base}.k"), k, non_negative)?;
+                }
+                ConductorDesc::Reflectance(r) => color(&format!("{base}.reflectance"), r, below_one)?,
+            }
+            validate_reflectance(&format!("{base}.specular_reflectance"), &d.specular_reflectance)
+        }
+        BsdfDesc::RoughDielectric(d) => {
+            alpha(&d.microfacet)?;
+            iors(d.int_ior, d.ext_ior)?;
+            if d.int_ior == d.ext_ior {
+                return fail(
+                    format!("{base}.int_ior"),
+                    format!("must differ from ext_ior ({}): an index-matched rough interface is `null`", d.ext_ior),
+                );
+            }
+            color(&format!("{base}.specular_reflectance"), &d.specular_reflectance, in_unit_interval)?;
+            color(&format!("{base}.specular_transmittance"), &d.specular_transmittance, in_unit_interval)
+        }
+        BsdfDesc::ThinDielectric(d) => {
+            iors(d.int_ior, d.ext_ior)?;
+            color(&format!("{base}.specular_reflectance"), &d.specular_reflectance, in_unit_interval)?;
+            color(&format!("{base}.specular_transmittance"), &d.specular_transmittance, in_unit_interval)
+        }
+        BsdfDesc::Plastic(d) => {
+            iors(d.int_ior, d.ext_ior)?;
+            validate_reflectance(&format!("{base}.diffuse_reflectance"), &d.diffuse_reflectance)?;
+            color(&format!("{base}.specular_reflectance"), &d.specular_reflectance, in_unit_interval)
+        }
+        BsdfDesc::TwoSided(d) => {
+            let sides: Vec<(String, &BsdfDesc)> = if d.front == d.back {
+                vec![(format!("{base}.bsdf"), &*d.front)]
+            } else {
+                vec![(format!("{base}.bsdf[0]"), &*d.front), (format!("{base}.bsdf[1]"), &*d.back)]
+            };
+            for (path, side) in sides {
+                match side {
+                    BsdfDesc::Diffuse { reflectance } => {
+                        validate_reflectance(&format!("{path}.reflectance"), reflectance)?
+                    }
+                    BsdfDesc::Conductor(ConductorDesc::Material(_)) => {}
+                    BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
+                        color(&format!("{path}.eta"), eta, positive)?;
+                        color(&format!("{path}.k"), k, non_negative)?;
+                    }
+                    BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => {
+                        color(&format!("{path}.reflectance"), r, below_one)?
+                    }
+                    BsdfDesc::RoughConductor(_) | BsdfDesc::Plastic(_) => validate_surface(&path, side)?,
+                    _ => {
+                        return fail(
+                            format!("{path}.type"),
+                            "twosided takes a reflecting bsdf: diffuse, conductor, roughconductor or plastic",
+                        )
+                    }
+                }
+            }
+            Ok(())
+        }
+        BsdfDesc::Null | BsdfDesc::Diffuse { .. } | BsdfDesc::Dielectric { .. } | BsdfDesc::Conductor(_) => Ok(()),
     }
 }
 

@@ -55,6 +55,20 @@ impl Texture {
         }
     }
 
+    /// Mean of the three channels over the texture (over the image's pixels,
+    /// or of the two checkerboard colors), as Mitsuba's `Texture::mean`.
+    pub fn mean(&self) -> f32 {
+        match self {
+            Texture::Bitmap { image, .. } => {
+                let sum: f64 = image.pixels.iter().map(|p| (p.r() + p.g() + p.b()) as f64 / 3.0).sum();
+                (sum / image.pixels.len().max(1) as f64) as f32
+            }
+            Texture::Checkerboard { color0, color1, .. } => {
+                (color0.r() + color0.g() + color0.b() + color1.r() + color1.g() + color1.b()) / 6.0
+            }
+        }
+    }
+
     /// Bytes held by the texture's data.
     pub fn memory_bytes(&self) -> usize {
         match self {

@@ -35,8 +35,10 @@ pub struct SceneObject {
     pub bounds_medium: bool,
     /// Index in [`Scene::lights`] of the area light this shape emits as.
     pub emitter: Option<u32>,
-    /// A texture giving a diffuse surface's reflectance at each uv point
-    /// (replacing `bsdf`'s constant one; see [`Scene::surface_bsdf`]).
+    /// A texture giving the surface's color at each uv point (a diffuse
+    /// reflectance, a plastic's diffuse reflectance, a rough conductor's
+    /// specular reflectance), replacing `bsdf`'s constant one; see
+    /// [`Scene::surface_bsdf`].
     pub texture: Option<std::sync::Arc<crate::texture::Texture>>,
 }
 
@@ -109,17 +111,17 @@ impl Scene {
         Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
     }
 
-    /// The surface model at `hit`: the object's BSDF, with a textured
-    /// diffuse reflectance looked up at the hit's uv.
+    /// The surface model at `hit`: the object's BSDF, with its textured
+    /// color (see [`Bsdf::with_texture`]) looked up at the hit's uv.
     #[inline]
     pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
         let object = self.object(hit);
-        match (&object.texture, object.bsdf) {
-            (Some(texture), Bsdf::Diffuse { .. }) => {
+        match &object.texture {
+            Some(texture) => {
                 let uv = object.shape.uv(&hit.surface, &hit.local);
-                Bsdf::Diffuse { reflectance: texture.eval(uv).map(|c| c.clamp(0.0, 1.0)) }
+                object.bsdf.with_texture(texture.eval(uv))
             }
-            (_, bsdf) => bsdf,
+            None => object.bsdf,
         }
     }
 

@@ -103,7 +103,7 @@ impl CameraRayVisitor for PhotonVisitor<'_, '_> {
         let method = self.integrator.single.transmittance;
         let bsdf = scene.surface_bsdf(hit);
         direct_surface_radiance(scene, &hit.surface, wo, &bsdf, medium, method, sampler)
-            + self.integrator.surface_estimate(p, n, wo, &bsdf, &mut self.heap)
+            + self.integrator.surface_estimate(p, ns, n, wo, &bsdf, &mut self.heap)
     }
 }
 
@@ -182,10 +182,19 @@ impl PhotonIntegrator<'_> {
         sum / (4.0 / 3.0 * PI * r2 * r2.sqrt())
     }
 
-    /// Reflected radiance at surface point `x` (normal `n` facing `wo`)
-    /// from the surface map: `sum f(wo, wi_k) Phi_k / (pi r^2)` over photons
-    /// on the same side of a surface of about the same orientation.
-    pub fn surface_estimate(&self, x: Vec3, n: Vec3, wo: Vec3, bsdf: &Bsdf, heap: &mut BinaryHeap<Neighbor>) -> Rgb {
+    /// Reflected radiance at surface point `x` (outward shading normal `ns`,
+    /// the BSDF's; `n` the normal facing `wo`) from the surface map:
+    /// `sum f(wo, wi_k) Phi_k / (pi r^2)` over photons on the same side of a
+    /// surface of about the same orientation.
+    pub fn surface_estimate(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        bsdf: &Bsdf,
+        heap: &mut BinaryHeap<Neighbor>,
+    ) -> Rgb {
         let tree = &self.maps.surface;
         if tree.is_empty() {
             return Rgb::ZERO;
@@ -196,7 +205,7 @@ impl PhotonIntegrator<'_> {
             Kernel::Radius(r) => {
                 tree.for_each_within(x, r * r, |photon, _| {
                     if same_surface(photon) {
-                        sum += photon.power * bsdf.eval(n, wo, photon.wi);
+                        sum += photon.power * bsdf.eval(ns, wo, photon.wi);
                     }
                 });
                 r * r
@@ -205,7 +214,7 @@ impl PhotonIntegrator<'_> {
                 let r2 = tree.nearest(x, k, max_radius * max_radius, same_surface, heap);
                 for nb in heap.iter() {
                     let photon = &tree.photons()[nb.index as usize];
-                    sum += photon.power * bsdf.eval(n, wo, photon.wi);
+                    sum += photon.power * bsdf.eval(ns, wo, photon.wi);
                 }
                 r2
             }

@@ -324,7 +324,7 @@ impl Tracer<'_> {
 
             // Diffuse surface: store on arrival.
             let wo = -path.ray.d;
-            if !object.bsdf.is_specular() {
+            if !object.bsdf.is_specular() && !object.bsdf.has_rough_transmission() {
                 add(&mut out.stats.surface_event_power, power);
                 if !direct || store_direct {
                     let n = if hit.surface.n.dot(wo) < 0.0 { -hit.surface.n } else { hit.surface.n };

@@ -23,9 +23,12 @@ use super::guiding::Guiding;
 #[derive(Clone, Copy)]
 pub(super) enum Scatter<'a> {
     Phase(&'a PhaseFunction),
-    /// Opaque surface with its shading normal and its geometric normal,
-    /// both facing `wo`; directions below the geometric one get nothing.
-    Surface(&'a Bsdf, Vec3, Vec3),
+    /// Opaque surface with its outward shading normal (the BSDF's `n`), and
+    /// its shading and geometric normals turned to face `wo`; directions
+    /// below either facing normal get nothing (light sampling covers `wo`'s
+    /// side only, also for rough dielectrics, whose transmission the path
+    /// reaches by BSDF sampling alone).
+    Surface(&'a Bsdf, Vec3, Vec3, Vec3),
 }
 
 impl Scatter<'_> {
@@ -37,12 +40,12 @@ impl Scatter<'_> {
                 let p = phase.eval(wo, wi);
                 (Rgb::splat(p), phase.pdf(wo, wi))
             }
-            Scatter::Surface(bsdf, n, ng) => {
+            Scatter::Surface(bsdf, ns, n, ng) => {
                 let cos = wi.dot(n);
                 if cos <= 0.0 || wi.dot(ng) <= 0.0 {
                     return (Rgb::ZERO, 0.0);
                 }
-                (bsdf.eval(n, wo, wi) * cos, bsdf.pdf(n, wo, wi))
+                (bsdf.eval(ns, wo, wi) * cos, bsdf.pdf(ns, wo, wi))
             }
         }
     }
@@ -186,7 +189,7 @@ fn sample_ld_light(
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
     let normal = match scatter {
-        Scatter::Surface(_, _, ng) => Some(ng),
+        Scatter::Surface(_, _, _, ng) => Some(ng),
         Scatter::Phase(_) => None,
     };
     let Some(ls) = light.sample_li(p, normal, u_dir) else {

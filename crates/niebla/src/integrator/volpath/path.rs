@@ -224,12 +224,13 @@ impl VolPathIntegrator {
             // Guiding toward lights inside a medium, for non-specular surfaces
             // whose side of `wo` lies in a medium.
             let bsdf = scene.surface_bsdf(&hit);
-            let surface_guiding = guiding.filter(|_| medium.is_some() && !bsdf.is_specular());
+            let surface_guiding =
+                guiding.filter(|_| medium.is_some() && !bsdf.is_specular() && !bsdf.has_rough_transmission());
             if !bsdf.is_specular() {
                 let vertex = NeeVertex {
                     p,
                     wo,
-                    scatter: Scatter::Surface(&bsdf, n, ng),
+                    scatter: Scatter::Surface(&bsdf, ns, n, ng),
                     medium,
                     beta,
                     r_p: r_u,
@@ -246,7 +247,10 @@ impl VolPathIntegrator {
             }
             beta *= bs.weight(ns);
             r_l = r_u / bs.pdf;
-            specular_bounce = bs.is_specular;
+            // Light sampling never proposes a direction through the surface,
+            // so a rough transmission hitting a light takes the full weight
+            // (as after a delta lobe).
+            specular_bounce = bs.is_specular || bs.is_transmission;
             if bs.is_transmission {
                 eta_scale *= bs.eta * bs.eta;
             }

@@ -403,7 +403,9 @@ impl Default for IntegratorSpec {
 mod lights;
 mod medium;
 mod shapes;
+mod surfaces;
 
 pub use lights::*;
 pub use medium::*;
 pub use shapes::*;
+pub use surfaces::*;

@@ -197,6 +197,16 @@ pub enum BsdfDesc {
     /// `eta` and `k` (complex index per channel), or by a normal-incidence
     /// `reflectance`.
     Conductor(ConductorDesc),
+    /// `"roughconductor"`: rough metal (see [`RoughConductorDesc`]).
+    RoughConductor(RoughConductorDesc),
+    /// `"roughdielectric"`: rough glass (see [`RoughDielectricDesc`]).
+    RoughDielectric(RoughDielectricDesc),
+    /// `"thindielectric"`: thin glass sheet (see [`ThinDielectricDesc`]).
+    ThinDielectric(ThinDielectricDesc),
+    /// `"plastic"`: coated diffuse (see [`PlasticDesc`]).
+    Plastic(PlasticDesc),
+    /// `"twosided"`: reflecting models on both sides (see [`TwoSidedDesc`]).
+    TwoSided(TwoSidedDesc),
 }
 
 /// How a conductor's complex index of refraction is given.
@@ -217,7 +227,17 @@ pub enum ConductorDesc {
 
 impl BsdfDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["null", "diffuse", "dielectric", "conductor"];
+    pub const TYPES: &'static [&'static str] = &[
+        "null",
+        "diffuse",
+        "dielectric",
+        "conductor",
+        "roughconductor",
+        "roughdielectric",
+        "thindielectric",
+        "plastic",
+        "twosided",
+    ];
 }
 
 /// An object-to-world transform.

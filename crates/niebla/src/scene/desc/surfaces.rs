@@ -1,0 +1,103 @@
+//! Descriptions of the microfacet and layered surfaces (Mitsuba 3's
+//! `roughconductor`, `roughdielectric`, `thindielectric`, `plastic`,
+//! `twosided`), with Mitsuba's parameter names and defaults.
+
+use super::{BsdfDesc, ColorDesc, ConductorDesc, ReflectanceDesc};
+pub use crate::bsdf::MicrofacetKind;
+
+/// Roughness of a microfacet surface: `alpha`, or `alpha_u` and `alpha_v`
+/// (along the surface's local x and y axes), each in (0, 1] in practice;
+/// Mitsuba's default is `alpha = 0.1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaDesc {
+    /// The same roughness in every direction.
+    Isotropic(f32),
+    /// Roughness along the tangent (`u`) and the bitangent (`v`).
+    Anisotropic {
+        /// `alpha_u`.
+        u: f32,
+        /// `alpha_v`.
+        v: f32,
+    },
+}
+
+/// A microfacet distribution: `distribution` (`"beckmann"`, the default,
+/// or `"ggx"`) and the roughness.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MicrofacetDesc {
+    /// Beckmann or GGX.
+    pub distribution: MicrofacetKind,
+    /// Roughness.
+    pub alpha: AlphaDesc,
+}
+
+/// `"roughconductor"`: a rough metal.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughConductorDesc {
+    /// Distribution and roughness.
+    pub microfacet: MicrofacetDesc,
+    /// The complex index, given as for `conductor`; Mitsuba's default
+    /// (nothing given) is a perfect mirror, `eta = 0`, `k = 1`.
+    pub conductor: ConductorDesc,
+    /// Multiplier of the reflection, a color or texture (default 1).
+    pub specular_reflectance: ReflectanceDesc,
+}
+
+/// `"roughdielectric"`: rough glass; a medium boundary.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughDielectricDesc {
+    /// Distribution and roughness.
+    pub microfacet: MicrofacetDesc,
+    /// Index inside (default 1.5046, Mitsuba's BK7).
+    pub int_ior: f32,
+    /// Index outside (default 1.000277, air); must differ from `int_ior`.
+    pub ext_ior: f32,
+    /// Multiplier of the reflection (default 1).
+    pub specular_reflectance: ColorDesc,
+    /// Multiplier of the transmission (default 1).
+    pub specular_transmittance: ColorDesc,
+}
+
+/// `"thindielectric"`: a thin glass sheet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThinDielectricDesc {
+    /// Index of the sheet (default 1.5046, BK7).
+    pub int_ior: f32,
+    /// Index around it (default 1.000277, air).
+    pub ext_ior: f32,
+    /// Multiplier of the reflection (default 1).
+    pub specular_reflectance: ColorDesc,
+    /// Multiplier of the transmission (default 1).
+    pub specular_transmittance: ColorDesc,
+}
+
+/// `"plastic"`: a diffuse base under a smooth dielectric coating.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlasticDesc {
+    /// Base color, a color or texture in [0, 1] (default 0.5).
+    pub diffuse_reflectance: ReflectanceDesc,
+    /// Multiplier of the coating's reflection (default 1).
+    pub specular_reflectance: ColorDesc,
+    /// Index of the coating (default 1.49, Mitsuba's polypropylene).
+    pub int_ior: f32,
+    /// Index outside (default 1.000277, air).
+    pub ext_ior: f32,
+    /// Mitsuba's `nonlinear` (default false): internal reflections tint the base.
+    pub nonlinear: bool,
+}
+
+/// `"twosided"`: reflecting models on both sides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TwoSidedDesc {
+    /// Model on the front (the side the normal points to).
+    pub front: Box<BsdfDesc>,
+    /// Model on the back (the front one again for Mitsuba's one-child form).
+    pub back: Box<BsdfDesc>,
+}
+
+/// Mitsuba's default `int_ior` of dielectrics (BK7 glass).
+pub const BK7_IOR: f32 = 1.5046;
+/// Mitsuba's default `ext_ior` (air).
+pub const AIR_IOR: f32 = 1.000277;
+/// Mitsuba's default `int_ior` of plastics (polypropylene).
+pub const POLYPROPYLENE_IOR: f32 = 1.49;
