@@ -95,7 +95,14 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         _ => return Err(p.error("not supported")),
     }
 
-    // Surface, media and emitter.
+    // Media, surface and emitter.
+    let mut media = Map::new();
+    for side in ["interior", "exterior"] {
+        if let Some(mnode) = p.plugin_named(side) {
+            let name = c.medium(mnode)?;
+            media.insert(side.into(), json!(name));
+        }
+    }
     let mut bsdfs = p.plugins("bsdf");
     let mut emitters = p.plugins("emitter");
     for r in p.unnamed_refs() {
@@ -116,13 +123,6 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         // Mitsuba's default surface.
         None => json!({"type": "diffuse", "reflectance": 0.5}),
     };
-    let mut media = Map::new();
-    for side in ["interior", "exterior"] {
-        if let Some(mnode) = p.plugin_named(side) {
-            let name = c.medium(mnode)?;
-            media.insert(side.into(), json!(name));
-        }
-    }
     p.finish()?;
     if emitters.len() > 1 {
         return Err(emitters[1].loc.error("a shape has at most one emitter"));

@@ -86,6 +86,7 @@ impl Node {
 
 /// The top-level content of a scene: its elements (defaults, paths and
 /// includes resolved) and the folders searched for files.
+#[derive(Debug)]
 pub(super) struct SceneXml {
     /// The children of `<scene>` and of every included scene, in order.
     pub elements: Vec<Node>,
