@@ -169,3 +169,26 @@ fn harmless_elements_become_notes() {
     assert!(s.notes.iter().any(|n| n.contains("pixel_format")), "{:?}", s.notes);
     assert!(s.notes.iter().any(|n| n.contains("Gaussian")), "{:?}", s.notes);
 }
+
+/// Every prefix of a real scene (every 5th byte) and every number in it
+/// replaced by awkward values: errors, never panics.
+#[test]
+fn truncated_and_mangled_scenes_are_errors_not_panics() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mitsuba");
+    let text = std::fs::read_to_string(dir.join("chromatic_mis.xml")).unwrap();
+    for cut in (0..text.len()).step_by(5).filter(|&c| text.is_char_boundary(c)) {
+        let _ = import_mitsuba_str(&text[..cut], "t.xml", &dir, &[]);
+    }
+    for bad in ["nan", "-1", "0", "1e40", "-0", "inf", "", "1 2", "$spp"] {
+        let mut start = 0;
+        while let Some(i) = text[start..].find("value=\"") {
+            let a = start + i + 7;
+            let b = a + text[a..].find('"').unwrap();
+            let mangled = format!("{}{bad}{}", &text[..a], &text[b..]);
+            if let Ok(s) = import_mitsuba_str(&mangled, "t.xml", &dir, &[]) {
+                let _ = crate::scene::parse_scene_str(&s.scene.to_string(), "t");
+            }
+            start = b;
+        }
+    }
+}
