@@ -49,7 +49,8 @@ pub fn run(args: &ConvertArgs) -> Result<(), CliError> {
     text.push('\n');
     // The result must be a scene niebla reads; checked before anything is written.
     parse_scene_str(&text, &format!("{} (converted)", args.scene.display())).map_err(scene_error)?;
-    write_atomically(&args.output, text.as_bytes()).map_err(|error| CliError::Io { path: args.output.clone(), error })?;
+    write_atomically(&args.output, text.as_bytes())
+        .map_err(|error| CliError::Io { path: args.output.clone(), error })?;
     for note in &import.notes {
         eprintln!("note: {note}");
     }

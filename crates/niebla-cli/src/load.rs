@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use niebla::film::{render_memory, scene_hash};
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
-use niebla::scene::{build_scene_with_options, parse_scene_str, read_scene_source, BuildOptions, BuiltScene, DEFAULT_SCENE};
+use niebla::scene::{
+    build_scene_with_options, parse_scene_str, read_scene_source, BuildOptions, BuiltScene, DEFAULT_SCENE,
+};
 
 use crate::error::CliError;
 
@@ -19,10 +21,7 @@ pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), CliError> {
 
 /// Like [`load`], with `-D` parameters for a Mitsuba XML scene; also returns
 /// the XML importer's notes.
-pub fn load_defined(
-    scene: Option<&Path>,
-    defines: &[(String, String)],
-) -> Result<(BuiltScene, Vec<String>), CliError> {
+pub fn load_defined(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(BuiltScene, Vec<String>), CliError> {
     load_limited_defined(scene, default_memory_limit(), defines).map(|l| (l.built, l.notes))
 }
 

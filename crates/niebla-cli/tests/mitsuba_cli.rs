@@ -46,8 +46,11 @@ fn info_lists_what_was_accepted_without_effect() {
 #[test]
 fn xml_errors_name_file_and_line_and_leave_no_output() {
     let bad = temp("bad.xml");
-    std::fs::write(&bad, "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <bsdf type=\"hair\"/>\n  </shape>\n</scene>\n")
-        .unwrap();
+    std::fs::write(
+        &bad,
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <bsdf type=\"hair\"/>\n  </shape>\n</scene>\n",
+    )
+    .unwrap();
     let out = temp("bad.json");
     let (ok, _, err) = niebla(&["convert", bad.to_str().unwrap(), "-o", out.to_str().unwrap()]);
     assert!(!ok);

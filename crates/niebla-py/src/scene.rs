@@ -23,8 +23,8 @@ use std::time::Duration;
 use niebla::integrator::{registry, IntegratorSettings};
 use niebla::progressive::Budget;
 use niebla::scene::{
-    build_scene, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc,
-    MediumDesc, SceneDesc, SceneError as RustSceneError,
+    build_scene, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc, MediumDesc, SceneDesc,
+    SceneError as RustSceneError,
 };
 use numpy::{PyArray3, PyArray4, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;

@@ -83,10 +83,8 @@ impl<'a> Converter<'a> {
         }
         node.check_attrs(&["id", "name"])?;
         let id = node.required("id")?;
-        let target = self
-            .ids
-            .get(id)
-            .ok_or_else(|| node.loc.error(format!("<ref id=\"{id}\">: no element has id \"{id}\"")))?;
+        let target =
+            self.ids.get(id).ok_or_else(|| node.loc.error(format!("<ref id=\"{id}\">: no element has id \"{id}\"")))?;
         if target.tag != tag {
             return Err(node.loc.error(format!(
                 "<ref id=\"{id}\">: expected a <{tag}>, but \"{id}\" is {} at {}",
@@ -160,7 +158,9 @@ impl<'a> Converter<'a> {
                 "integrator" => {
                     if let Some(prev) = integrator.replace(n) {
                         let prev: &Node = prev;
-                        return Err(n.loc.error(format!("<integrator>: a second one (the first is at {})", prev.loc.at())));
+                        return Err(n
+                            .loc
+                            .error(format!("<integrator>: a second one (the first is at {})", prev.loc.at())));
                     }
                 }
                 "shape" => super::shapes::convert_shape(&mut self, n)?,
@@ -187,7 +187,8 @@ impl<'a> Converter<'a> {
         scene.insert("camera".into(), camera);
         scene.insert("render".into(), Value::Object(render));
         if let Some((medium, loc)) = camera_medium {
-            let bounded = self.shapes.iter().any(|s| s.get("interior").and_then(Value::as_str) == Some(medium.as_str()));
+            let bounded =
+                self.shapes.iter().any(|s| s.get("interior").and_then(Value::as_str) == Some(medium.as_str()));
             if bounded {
                 self.notes.push(format!(
                     "{loc}: <sensor> medium \"{medium}\": niebla finds the camera's medium itself (the innermost \

@@ -154,7 +154,9 @@ fn grid_density(c: &mut Converter, node: &Node) -> Result<(Value, Option<Mat4>),
     }
     match p.string("filter_type")?.unwrap_or("trilinear") {
         "trilinear" => {}
-        other => return Err(p.error(format!("filter_type \"{other}\" is not supported (niebla interpolates trilinearly)"))),
+        other => {
+            return Err(p.error(format!("filter_type \"{other}\" is not supported (niebla interpolates trilinearly)")))
+        }
     }
     match p.string("wrap_mode")?.unwrap_or("clamp") {
         "clamp" => {}

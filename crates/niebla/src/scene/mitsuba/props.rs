@@ -15,17 +15,26 @@ pub(super) fn numbers(text: &str) -> Result<Vec<f64>, String> {
     text.split(|c: char| c == ',' || c.is_whitespace())
         .filter(|s| !s.is_empty())
         .map(|s| {
-            s.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| format!("\"{s}\" is not a finite number"))
+            s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("\"{s}\" is not a finite number"))
         })
         .collect()
 }
 
 /// Tags of the elements that are plugins (objects), not values.
-pub(super) const PLUGIN_TAGS: &[&str] =
-    &["bsdf", "emitter", "shape", "medium", "phase", "volume", "texture", "sensor", "film", "rfilter", "sampler", "integrator"];
+pub(super) const PLUGIN_TAGS: &[&str] = &[
+    "bsdf",
+    "emitter",
+    "shape",
+    "medium",
+    "phase",
+    "volume",
+    "texture",
+    "sensor",
+    "film",
+    "rfilter",
+    "sampler",
+    "integrator",
+];
 
 /// A color read from a property: RGB (a gray value repeated).
 pub(super) type Rgb3 = [f64; 3];
@@ -62,7 +71,10 @@ impl<'a> Props<'a> {
     /// The child value element named `name`, marked as read.
     fn named(&self, name: &str) -> Option<&'a Node> {
         let node: &'a Node = self.node;
-        let i = node.children.iter().position(|c| !PLUGIN_TAGS.contains(&c.tag.as_str()) && c.tag != "ref" && c.attr("name") == Some(name))?;
+        let i = node
+            .children
+            .iter()
+            .position(|c| !PLUGIN_TAGS.contains(&c.tag.as_str()) && c.tag != "ref" && c.attr("name") == Some(name))?;
         self.used[i].set(true);
         Some(&node.children[i])
     }
@@ -201,7 +213,9 @@ impl<'a> Props<'a> {
     pub fn plugin_named(&self, name: &str) -> Option<&'a Node> {
         let node: &'a Node = self.node;
         let i = node.children.iter().enumerate().position(|(i, c)| {
-            !self.used[i].get() && (PLUGIN_TAGS.contains(&c.tag.as_str()) || c.tag == "ref") && c.attr("name") == Some(name)
+            !self.used[i].get()
+                && (PLUGIN_TAGS.contains(&c.tag.as_str()) || c.tag == "ref")
+                && c.attr("name") == Some(name)
         })?;
         self.used[i].set(true);
         Some(&node.children[i])

@@ -27,7 +27,9 @@ pub(super) fn convert_sensor<'a>(
         .iter()
         .all(|c| c.abs() < 1e-5);
     if !orthogonal || (nl / nd - 1.0).abs() > 1e-5 || (nu / nd - 1.0).abs() > 1e-5 {
-        return Err(p.error("to_world must be a rotation and translation (a look_at), without shear or non-uniform scale"));
+        return Err(
+            p.error("to_world must be a rotation and translation (a look_at), without shear or non-uniform scale")
+        );
     }
     if det3(&m) < 0.0 {
         return Err(p.error(
@@ -123,7 +125,10 @@ fn film(c: &mut Converter, node: &Node) -> Result<(u32, u32), SceneError> {
     }
     let size = |name: &str, default: i64| -> Result<u32, SceneError> {
         let v = p.integer(name)?.unwrap_or(default);
-        u32::try_from(v).ok().filter(|v| (1..=16384).contains(v)).ok_or_else(|| p.error(format!("`{name}` must be 1 to 16384, got {v}")))
+        u32::try_from(v)
+            .ok()
+            .filter(|v| (1..=16384).contains(v))
+            .ok_or_else(|| p.error(format!("`{name}` must be 1 to 16384, got {v}")))
     };
     let (w, h) = (size("width", 768)?, size("height", 576)?);
     for name in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
@@ -150,7 +155,15 @@ fn film(c: &mut Converter, node: &Node) -> Result<(u32, u32), SceneError> {
         )),
     }
     p.harmless(
-        &["pixel_format", "component_format", "file_format", "banner", "sample_border", "compensate", "high_quality_edges"],
+        &[
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "banner",
+            "sample_border",
+            "compensate",
+            "high_quality_edges",
+        ],
         "output option ignored (niebla writes RGB EXR/PNG)",
         &mut c.notes,
     );
@@ -200,7 +213,10 @@ pub(super) fn convert_integrator(c: &mut Converter, node: Option<&Node>) -> Resu
             if inner.len() != 1 {
                 return Err(p.error(format!("expected one nested <integrator>, found {}", inner.len())));
             }
-            c.notes.push(format!("{}: <integrator type=\"moment\">: niebla renders its inner integrator only", node.loc.at()));
+            c.notes.push(format!(
+                "{}: <integrator type=\"moment\">: niebla renders its inner integrator only",
+                node.loc.at()
+            ));
             p.finish()?;
             convert_integrator(c, Some(inner[0]))
         }
@@ -209,12 +225,10 @@ pub(super) fn convert_integrator(c: &mut Converter, node: Option<&Node>) -> Resu
             let out = match depth {
                 -1 => json!({"type": "volpath"}),
                 d if d >= 2 => json!({"type": "volpath", "max_depth": d - 1}),
-                d => {
-                    return Err(p.error(format!(
-                        "`max_depth` {d}: niebla's volpath needs at least one scattering event (Mitsuba max_depth >= 2, \
+                d => return Err(p.error(format!(
+                    "`max_depth` {d}: niebla's volpath needs at least one scattering event (Mitsuba max_depth >= 2, \
                          or -1)"
-                    )))
-                }
+                ))),
             };
             if p.boolean("hide_emitters")?.unwrap_or(false) {
                 return Err(p.error("`hide_emitters` true is not supported"));

@@ -6,7 +6,9 @@ use serde_json::{json, Map, Value};
 
 use super::convert::{color_json, Converter};
 use super::props::Props;
-use super::transform::{dot, is_axis_aligned, is_identity, mul, norm, point, rotation, to_json, vector, Mat4, IDENTITY};
+use super::transform::{
+    dot, is_axis_aligned, is_identity, mul, norm, point, rotation, to_json, vector, Mat4, IDENTITY,
+};
 use super::xml::Node;
 use crate::scene::SceneError;
 
@@ -24,8 +26,20 @@ fn bit(i: u32, b: u32) -> f64 {
 }
 
 /// Its 12 triangles, counter-clockwise seen from outside.
-const CUBE_TRIANGLES: [[u32; 3]; 12] =
-    [[0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5], [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3], [0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6]];
+const CUBE_TRIANGLES: [[u32; 3]; 12] = [
+    [0, 4, 6],
+    [0, 6, 2],
+    [1, 3, 7],
+    [1, 7, 5],
+    [0, 1, 5],
+    [0, 5, 4],
+    [2, 6, 7],
+    [2, 7, 3],
+    [0, 2, 3],
+    [0, 3, 1],
+    [4, 5, 7],
+    [4, 7, 6],
+];
 
 /// Converts one `<shape>` and appends it to the scene's shapes (or lights).
 pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<(), SceneError> {
@@ -42,7 +56,9 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
                 return Err(p.error("`flip_normals` on a sphere is not supported"));
             }
             let s = uniform_scale(&m).ok_or_else(|| {
-                p.error("to_world of a sphere must be a uniform scale, rotation and translation (niebla has no ellipsoids)")
+                p.error(
+                    "to_world of a sphere must be a uniform scale, rotation and translation (niebla has no ellipsoids)",
+                )
             })?;
             if !(radius > 0.0) {
                 return Err(p.error(format!("`radius` must be > 0, got {radius}")));
@@ -136,7 +152,9 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         let radiance = ep.color("radiance")?.unwrap_or([1.0; 3]);
         ep.finish()?;
         if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "sphere")) {
-            return Err(p.error("an area emitter on this shape is not supported (niebla's area lights are rectangles and spheres)"));
+            return Err(p.error(
+                "an area emitter on this shape is not supported (niebla's area lights are rectangles and spheres)",
+            ));
         }
         let black = bsdf == json!({"type": "diffuse", "reflectance": 0.0});
         if !black {

@@ -141,7 +141,12 @@ fn lights_keep_their_numbers() {
 
 #[test]
 fn errors_name_file_line_and_element() {
-    assert!(err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>").starts_with("t.xml:9: <bsdf type=\"hair\">: not supported"), "{}", err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>"));
+    assert!(
+        err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>")
+            .starts_with("t.xml:9: <bsdf type=\"hair\">: not supported"),
+        "{}",
+        err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>")
+    );
     let e = err("<shape type=\"sphere\"><ref name=\"interior\" id=\"nope\"/></shape>");
     assert!(e.starts_with("t.xml:8: <ref id=\"nope\">: no element has id \"nope\""), "{e}");
     let e = err("<shape type=\"cube\"><transform name=\"to_world\">\n<skew value=\"1\"/></transform></shape>");
@@ -150,8 +155,12 @@ fn errors_name_file_line_and_element() {
     assert!(e.starts_with("t.xml:8: <scale>: a scale factor is zero"), "{e}");
     let e = err("<shape type=\"ply\"><string name=\"filename\" value=\"missing.ply\"/></shape>");
     assert!(e.starts_with("t.xml:8: <shape type=\"ply\">: file \"missing.ply\" not found"), "{e}");
-    let e = err("<shape type=\"sphere\"><float name=\"radius\" value=\"1\"/><float name=\"radiuss\" value=\"1\"/></shape>");
-    assert!(e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"), "{e}");
+    let e =
+        err("<shape type=\"sphere\"><float name=\"radius\" value=\"1\"/><float name=\"radiuss\" value=\"1\"/></shape>");
+    assert!(
+        e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"),
+        "{e}"
+    );
     let e = err("<shape type=\"disk\"/>");
     assert!(e.starts_with("t.xml:8: <shape type=\"disk\">: not supported"), "{e}");
     let e = err("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>");

@@ -10,7 +10,8 @@ use crate::scene::SceneError;
 pub(super) type Mat4 = [[f64; 4]; 4];
 
 /// The identity.
-pub(super) const IDENTITY: Mat4 = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+pub(super) const IDENTITY: Mat4 =
+    [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
 
 /// `a * b`.
 pub(super) fn mul(a: &Mat4, b: &Mat4) -> Mat4 {
@@ -177,7 +178,9 @@ fn read_op(op: &Node) -> Result<Mat4, SceneError> {
                 k => return Err(op.loc.error(format!("<matrix>: {k} numbers, expected 16 (4x4) or 9 (3x3)"))),
             }
             if m[3] != [0.0, 0.0, 0.0, 1.0] {
-                return Err(op.loc.error("<matrix>: the last row must be 0 0 0 1 (a projective matrix is not a placement)"));
+                return Err(op
+                    .loc
+                    .error("<matrix>: the last row must be 0 0 0 1 (a projective matrix is not a placement)"));
             }
             if det3(&m) == 0.0 {
                 return Err(op.loc.error("<matrix>: singular (its 3x3 part has determinant 0)"));

@@ -135,7 +135,8 @@ pub(super) fn read_scene_str(
 }
 
 fn read_text(path: &Path, shown: &str) -> Result<String, SceneError> {
-    let meta = std::fs::metadata(path).map_err(|e| SceneError::new(shown, "", format!("cannot read scene file: {e}")))?;
+    let meta =
+        std::fs::metadata(path).map_err(|e| SceneError::new(shown, "", format!("cannot read scene file: {e}")))?;
     if meta.len() > MAX_XML_BYTES {
         return Err(SceneError::new(
             shown,
@@ -213,7 +214,10 @@ impl Reader {
                     }
                     let name = node.required("filename")?;
                     let found = self.find(name).ok_or_else(|| {
-                        here.error(format!("<include filename=\"{name}\">: file not found (searched {})", self.searched()))
+                        here.error(format!(
+                            "<include filename=\"{name}\">: file not found (searched {})",
+                            self.searched()
+                        ))
                     })?;
                     let shown = found.display().to_string();
                     let text = read_text(&found, &shown).map_err(|e| here.error(format!("<include>: {e}")))?;
