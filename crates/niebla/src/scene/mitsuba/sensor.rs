@@ -225,10 +225,7 @@ pub(super) fn convert_integrator(c: &mut Converter, node: Option<&Node>) -> Resu
             let out = match depth {
                 -1 => json!({"type": "volpath"}),
                 d if d >= 2 => json!({"type": "volpath", "max_depth": d - 1}),
-                d => return Err(p.error(format!(
-                    "`max_depth` {d}: niebla's volpath needs at least one scattering event (Mitsuba max_depth >= 2, \
-                         or -1)"
-                ))),
+                d => return Err(p.error(format!("`max_depth` {d}: niebla's volpath needs max_depth >= 2 (or -1)"))),
             };
             if p.boolean("hide_emitters")?.unwrap_or(false) {
                 return Err(p.error("`hide_emitters` true is not supported"));
