@@ -30,14 +30,6 @@ pub enum CliError {
     /// The scene file named on the command line does not exist.
     #[error("{}: scene file not found", .0.display())]
     SceneNotFound(PathBuf),
-    /// The scene file exists but could not be read.
-    #[error("{scene}: cannot read scene file: {error}")]
-    SceneUnreadable {
-        /// The scene file.
-        scene: String,
-        /// Underlying error.
-        error: std::io::Error,
-    },
     /// The scene is invalid, or building it went over the memory limit
     /// (then the message says how to raise the limit).
     #[error("{error}{}", if *.over_memory_limit { " (raise it with --max-memory)" } else { "" })]

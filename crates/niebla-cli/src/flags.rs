@@ -110,3 +110,13 @@ pub fn check_output_folder(path: &Path) -> Result<(), CliError> {
         _ => Ok(()),
     }
 }
+
+/// `-D NAME=VALUE` (repeatable): values of a Mitsuba XML scene's
+/// `<default>` parameters.
+#[derive(Args, Clone, Debug, Default)]
+pub struct DefineFlag {
+    /// Set a Mitsuba XML scene's parameter (`<default name="NAME">`, used as
+    /// `$NAME`), e.g. `-D spp=64`; repeatable. XML scenes only.
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = niebla::scene::mitsuba::parse_define)]
+    pub define: Vec<(String, String)>,
+}

@@ -6,8 +6,8 @@ use std::path::Path;
 use crate::error::CliError;
 
 /// `niebla info`.
-pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
-    let (built, _) = crate::load::load(scene)?;
+pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), CliError> {
+    let (built, notes) = crate::load::load_defined(scene, defines)?;
     let s = &built.scene;
     let c = &s.camera;
     println!("scene: {}", scene.map_or("<default scene>".into(), |p| p.display().to_string()));
@@ -106,5 +106,11 @@ pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
     }
     println!("ambient medium: {}", name_of(s.ambient_medium));
     println!("camera medium: {}", name_of(s.camera_medium));
+    if !notes.is_empty() {
+        println!("accepted without effect ({}):", notes.len());
+        for n in &notes {
+            println!("  {n}");
+        }
+    }
     Ok(())
 }

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use niebla::film::{render_memory, scene_hash};
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
-use niebla::scene::{build_scene_with_options, parse_scene_str, BuildOptions, BuiltScene, DEFAULT_SCENE};
+use niebla::scene::{
+    build_scene_with_options, parse_scene_str, read_scene_source, BuildOptions, BuiltScene, DEFAULT_SCENE,
+};
 
 use crate::error::CliError;
 
@@ -17,14 +19,23 @@ pub fn load(scene: Option<&Path>) -> Result<(BuiltScene, String), CliError> {
     load_limited(scene, default_memory_limit()).map(|l| (l.built, l.stem))
 }
 
+/// Like [`load`], with `-D` parameters for a Mitsuba XML scene; also returns
+/// the XML importer's notes.
+pub fn load_defined(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(BuiltScene, Vec<String>), CliError> {
+    load_limited_defined(scene, default_memory_limit(), defines).map(|l| (l.built, l.notes))
+}
+
 /// A scene loaded for rendering.
 pub struct LoadedScene {
     /// The built scene and its render settings.
     pub built: BuiltScene,
     /// Output file stem: the scene file's, or `niebla`.
     pub stem: String,
-    /// [`scene_hash`] of the scene text (recorded in checkpoints).
+    /// [`scene_hash`] of the scene text (recorded in checkpoints; for a
+    /// Mitsuba XML scene, of its conversion to niebla JSON).
     pub hash: String,
+    /// Accepted-but-ignored elements of a Mitsuba XML scene.
+    pub notes: Vec<String>,
 }
 
 /// Load the scene (or the built-in default), printing its warnings to
@@ -32,21 +43,41 @@ pub struct LoadedScene {
 /// anything large an image whose render buffers, or grids and files, would
 /// take more than `max_memory` bytes together.
 pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene, CliError> {
-    let (text, source, base, stem) = match scene {
+    load_limited_defined(scene, max_memory, &[])
+}
+
+/// [`load_limited`] with `-D` parameters of a Mitsuba XML scene (an error
+/// for other scenes when not empty).
+pub fn load_limited_defined(
+    scene: Option<&Path>,
+    max_memory: u64,
+    defines: &[(String, String)],
+) -> Result<LoadedScene, CliError> {
+    let scene_error = |error| CliError::Scene { error, over_memory_limit: false };
+    let (desc, text, source, base, stem, notes) = match scene {
         Some(path) => {
             if !path.exists() {
                 return Err(CliError::SceneNotFound(path.to_path_buf()));
             }
             let source = path.display().to_string();
-            let text = std::fs::read_to_string(path)
-                .map_err(|error| CliError::SceneUnreadable { scene: source.clone(), error })?;
+            let read = read_scene_source(path, defines).map_err(scene_error)?;
             let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
             let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into());
-            (text, source, base, stem)
+            (read.desc, read.text, source, base, stem, read.notes)
         }
-        None => (DEFAULT_SCENE.to_string(), "<default scene>".to_string(), PathBuf::from("."), "niebla".to_string()),
+        None => {
+            if let Some((name, _)) = defines.first() {
+                return Err(CliError::InvalidOption {
+                    option: "-D",
+                    problem: format!("{name}=...: parameters apply to Mitsuba XML scenes only"),
+                });
+            }
+            let text = DEFAULT_SCENE.to_string();
+            let source = "<default scene>".to_string();
+            let desc = parse_scene_str(&text, &source).map_err(scene_error)?;
+            (desc, text, source, PathBuf::from("."), "niebla".to_string(), Vec::new())
+        }
     };
-    let desc = parse_scene_str(&text, &source).map_err(|error| CliError::Scene { error, over_memory_limit: false })?;
     let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
     let image_bytes = render_memory(camera.width, camera.height);
     if image_bytes > max_memory {
@@ -68,7 +99,7 @@ pub fn load_limited(scene: Option<&Path>, max_memory: u64) -> Result<LoadedScene
     for warning in &built.warnings {
         eprintln!("warning: {warning}");
     }
-    Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()) })
+    Ok(LoadedScene { built, stem, hash: scene_hash(text.as_bytes()), notes })
 }
 
 /// Refuse `settings` when its precomputation (photon maps, lattices) would

@@ -6,6 +6,7 @@ mod bench_interactive;
 mod bench_photons;
 mod bench_trackers;
 mod compare;
+mod convert_cmd;
 mod error;
 mod flags;
 mod info_cmd;
@@ -39,9 +40,13 @@ enum Command {
     Merge(merge_cmd::MergeArgs),
     /// Print what a scene holds: camera, media, shapes, lights, render settings.
     Info {
-        /// Scene file (JSON, version 1). Without it, describes the built-in default scene.
+        /// Scene file (JSON, version 1, or Mitsuba 3 XML). Without it, describes the built-in default scene.
         scene: Option<PathBuf>,
+        #[command(flatten)]
+        define: flags::DefineFlag,
     },
+    /// Convert a Mitsuba 3 XML scene into the niebla scene (JSON) that renders the same.
+    Convert(convert_cmd::ConvertArgs),
     /// Render frames repeatedly with an interactive method, report frames/s,
     /// and re-render when the scene file changes.
     Preview(preview_cmd::PreviewArgs),
@@ -73,7 +78,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render_cmd::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Merge(args) => merge_cmd::run(&args),
-        Command::Info { scene } => info_cmd::run(scene.as_deref()),
+        Command::Info { scene, define } => info_cmd::run(scene.as_deref(), &define.define),
+        Command::Convert(args) => convert_cmd::run(&args),
         Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
         Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),
         Command::Preview(args) => preview_cmd::run(&args),

@@ -15,14 +15,15 @@ use niebla::scene::IntegratorSpec;
 
 use crate::error::CliError;
 use crate::flags::{
-    check_output_folder, positive_seconds, ExposureFlag, MaxMemoryFlag, QuietFlag, SeedFlag, ThreadsFlag,
+    check_output_folder, positive_seconds, DefineFlag, ExposureFlag, MaxMemoryFlag, QuietFlag, SeedFlag, ThreadsFlag,
 };
 
 /// Options of `niebla render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Scene file (JSON, version 1). Without it, renders the built-in default
-    /// scene: a hazy room with a spot light.
+    /// Scene file (JSON, version 1, or Mitsuba 3 XML with extension .xml).
+    /// Without it, renders the built-in default scene: a hazy room with a
+    /// spot light.
     pub scene: Option<PathBuf>,
     /// Output image: .exr (linear float32 radiance) or .png (exposure, sRGB,
     /// 8-bit). Only the named file is written. Default: both <scene>.exr and
@@ -67,6 +68,9 @@ pub struct RenderArgs {
     /// `--exposure`: exposure of the images, in stops.
     #[command(flatten)]
     pub exposure: ExposureFlag,
+    /// `-D NAME=VALUE`: parameters of a Mitsuba XML scene.
+    #[command(flatten)]
+    pub define: DefineFlag,
     /// `--quiet`: no progress bars.
     #[command(flatten)]
     pub quiet: QuietFlag,
@@ -146,7 +150,11 @@ pub fn override_integrator(
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let max_memory = args.max_memory.limit();
-    let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
+    let crate::load::LoadedScene { built, stem, hash, notes } =
+        crate::load::load_limited_defined(args.scene.as_deref(), max_memory, &args.define.define)?;
+    for note in &notes {
+        eprintln!("note: {note}");
+    }
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
     let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));

@@ -23,8 +23,8 @@ use std::time::Duration;
 use niebla::integrator::{registry, IntegratorSettings};
 use niebla::progressive::Budget;
 use niebla::scene::{
-    build_scene, load_scene_file, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc,
-    MediumDesc, SceneDesc, SceneError as RustSceneError,
+    build_scene, parse_scene_str, BoundsDesc, BuiltScene, DensitySourceDesc, InlineGridDesc, MediumDesc, SceneDesc,
+    SceneError as RustSceneError,
 };
 use numpy::{PyArray3, PyArray4, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -164,20 +164,27 @@ impl PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// Load a scene file (JSON, version 1). Relative paths in it resolve
-    /// against the file's folder. Raises SceneError with the file, the JSON
-    /// path and the message the `niebla` command gives.
+    /// Load a scene file: niebla JSON (version 1), or a Mitsuba 3 XML scene
+    /// (extension `.xml`, converted as `niebla convert` does, with `defines`
+    /// for its `<default>` parameters; what it accepts without effect is
+    /// raised as `UserWarning`s). Relative paths in it resolve against the
+    /// file's folder. Raises SceneError with the file, the JSON path (or XML
+    /// line) and the message the `niebla` command gives.
     #[staticmethod]
-    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<PyScene> {
+    #[pyo3(signature = (path, defines = BTreeMap::new()))]
+    fn from_file(py: Python<'_>, path: PathBuf, defines: BTreeMap<String, String>) -> PyResult<PyScene> {
         let source = path.display().to_string();
-        let desc = load_scene_file(&path).map_err(|e| scene_error(py, &e))?;
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| scene_error(py, &RustSceneError::new(&source, "", format!("cannot read scene file: {e}"))))?;
-        let value: Value = serde_json::from_str(&text)
+        let defines: Vec<(String, String)> = defines.into_iter().collect();
+        let read = niebla::scene::read_scene_source(&path, &defines).map_err(|e| scene_error(py, &e))?;
+        for note in &read.notes {
+            let text = std::ffi::CString::new(note.replace('\0', " ")).expect("NUL bytes were replaced");
+            PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &text, 1)?;
+        }
+        let value: Value = serde_json::from_str(&read.text)
             .map_err(|e| scene_error(py, &RustSceneError::new(&source, "", format!("invalid JSON: {e}"))))?;
         let base_dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        let built = PyScene::build(py, &desc, &source, &base_dir)?;
-        Ok(PyScene { value, source, base_dir, arrays: BTreeMap::new(), desc, built })
+        let built = PyScene::build(py, &read.desc, &source, &base_dir)?;
+        Ok(PyScene { value, source, base_dir, arrays: BTreeMap::new(), desc: read.desc, built })
     }
 
     /// A scene from JSON text with the schema of a scene file. `source` names

@@ -18,8 +18,10 @@ mod build_surfaces;
 mod build_texture;
 pub mod desc;
 mod error;
+pub mod mitsuba;
 mod parse;
 mod parse_surfaces;
+mod source;
 mod validate;
 
 pub use crate::world::{
@@ -33,6 +35,7 @@ pub use build::{
 pub use desc::*;
 pub use error::SceneError;
 pub use parse::{load_scene_file, parse_scene_str};
+pub use source::{read_scene_source, SceneSource};
 
 use crate::integrator::IntegratorSettings;
 
@@ -55,10 +58,10 @@ pub struct RenderSettings {
     pub exposure: f32,
 }
 
-/// Load, validate and build a scene file in one call; relative paths resolve
-/// against the file's folder.
+/// Load, validate and build a scene file (niebla JSON, or Mitsuba 3 XML for
+/// `.xml`) in one call; relative paths resolve against the file's folder.
 pub fn load_scene(path: &std::path::Path) -> Result<BuiltScene, SceneError> {
-    let desc = load_scene_file(path)?;
+    let desc = read_scene_source(path, &[])?.desc;
     let base = path.parent().unwrap_or(std::path::Path::new("."));
     build_scene(&desc, &path.display().to_string(), base)
 }

@@ -1,0 +1,198 @@
+//! `<bsdf>` into niebla surfaces: `diffuse`, `dielectric`, `conductor` and
+//! `null` map to niebla's own; `roughconductor`, `roughdielectric`,
+//! `thindielectric`, `plastic`, `roughplastic` and `twosided` are written
+//! with Mitsuba's names and defaults (named indices of refraction replaced by
+//! their numbers).
+
+use serde_json::{json, Map, Value};
+
+use super::convert::{color_json, Converter};
+use super::props::Props;
+use super::xml::Node;
+use crate::scene::SceneError;
+
+/// Mitsuba 3's named indices of refraction (`ior.h`: Hecht, Optics, 4th
+/// edition; 0 to 20 degrees Celsius, about 589 nm).
+pub(super) const NAMED_IORS: [(&str, f64); 23] = [
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// An index of refraction: a `<float>` or a named material (`<string>`).
+fn ior(p: &Props, name: &str, default: &str) -> Result<f64, SceneError> {
+    if let Some(node) = p.node.children.iter().find(|c| c.attr("name") == Some(name)) {
+        if node.tag == "string" {
+            let s = p.string(name)?.unwrap_or(default);
+            return lookup(p, name, s);
+        }
+        return Ok(p.float(name)?.unwrap_or(0.0));
+    }
+    lookup(p, name, default)
+}
+
+fn lookup(p: &Props, name: &str, material: &str) -> Result<f64, SceneError> {
+    let lower = material.to_ascii_lowercase();
+    NAMED_IORS.iter().find(|(n, _)| *n == lower).map(|(_, v)| *v).ok_or_else(|| {
+        let names: Vec<&str> = NAMED_IORS.iter().map(|(n, _)| *n).collect();
+        p.error(format!("`{name}`: unknown material \"{material}\"; expected a number or one of: {}", names.join(", ")))
+    })
+}
+
+/// `specular_reflectance` and the like: accepted only as 1 for niebla's own BSDFs.
+fn unit_only(p: &Props, name: &str) -> Result<(), SceneError> {
+    match p.color(name)? {
+        None => Ok(()),
+        Some(c) if c == [1.0; 3] => Ok(()),
+        Some(c) => Err(p.error(format!("`{name}` {c:?}: only 1 is supported for this bsdf"))),
+    }
+}
+
+/// Microfacet keys: `distribution` (default beckmann) and `alpha` or `alpha_u` + `alpha_v`.
+fn microfacet(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneError> {
+    let d = p.string("distribution")?.unwrap_or("beckmann");
+    if d != "beckmann" && d != "ggx" {
+        return Err(p.error(format!("`distribution` \"{d}\": expected beckmann or ggx")));
+    }
+    out.insert("distribution".into(), json!(d));
+    let (a, au, av) = (p.float("alpha")?, p.float("alpha_u")?, p.float("alpha_v")?);
+    match (a, au, av) {
+        (a, None, None) => {
+            out.insert("alpha".into(), json!(a.unwrap_or(0.1)));
+        }
+        (None, Some(u), Some(v)) => {
+            out.insert("alpha_u".into(), json!(u));
+            out.insert("alpha_v".into(), json!(v));
+        }
+        _ => return Err(p.error("give `alpha`, or both `alpha_u` and `alpha_v`")),
+    }
+    Ok(())
+}
+
+/// Copies color `name` into `out` when given.
+fn copy_color(p: &Props, name: &str, out: &mut Map<String, Value>) -> Result<(), SceneError> {
+    if let Some(c) = p.color(name)? {
+        out.insert(name.into(), color_json(c));
+    }
+    Ok(())
+}
+
+/// Conductor keys: `material`, or `eta` and `k`.
+fn conductor_index(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneError> {
+    let material = p.string("material")?;
+    let (eta, k) = (p.color("eta")?, p.color("k")?);
+    match (material, eta, k) {
+        (Some(m), None, None) => {
+            out.insert("material".into(), json!(m));
+        }
+        (None, Some(e), Some(k)) => {
+            out.insert("eta".into(), color_json(e));
+            out.insert("k".into(), color_json(k));
+        }
+        (None, None, None) => {
+            return Err(p.error(
+                "no `material` and no `eta`/`k`: Mitsuba's default is a perfect mirror (material \"none\"), which \
+                 niebla's conductors do not have",
+            ))
+        }
+        _ => return Err(p.error("give `material`, or both `eta` and `k`")),
+    }
+    Ok(())
+}
+
+/// The niebla JSON of a `<bsdf>` element.
+pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<Value, SceneError> {
+    let p = Props::new(node)?;
+    let t = p.plugin_type()?;
+    let mut out = Map::new();
+    out.insert("type".into(), json!(t));
+    match t {
+        "null" => {}
+        "diffuse" => {
+            out.insert("reflectance".into(), color_json(p.color("reflectance")?.unwrap_or([0.5; 3])));
+        }
+        "dielectric" => {
+            out.insert("int_ior".into(), json!(ior(&p, "int_ior", "bk7")?));
+            out.insert("ext_ior".into(), json!(ior(&p, "ext_ior", "air")?));
+            unit_only(&p, "specular_reflectance")?;
+            unit_only(&p, "specular_transmittance")?;
+        }
+        "conductor" => {
+            conductor_index(&p, &mut out)?;
+            if let Some(Value::String(m)) = out.get("material") {
+                if crate::bsdf::conductor_preset(m).is_none() {
+                    let names: Vec<&str> = crate::bsdf::CONDUCTOR_PRESETS.iter().map(|p| p.symbol).collect();
+                    return Err(p.error(format!("material \"{m}\": niebla's conductors know {}", names.join(", "))));
+                }
+            }
+            unit_only(&p, "specular_reflectance")?;
+        }
+        "roughconductor" => {
+            microfacet(&p, &mut out)?;
+            conductor_index(&p, &mut out)?;
+            copy_color(&p, "specular_reflectance", &mut out)?;
+        }
+        "roughdielectric" | "thindielectric" => {
+            if t == "roughdielectric" {
+                microfacet(&p, &mut out)?;
+            }
+            out.insert("int_ior".into(), json!(ior(&p, "int_ior", "bk7")?));
+            out.insert("ext_ior".into(), json!(ior(&p, "ext_ior", "air")?));
+            copy_color(&p, "specular_reflectance", &mut out)?;
+            copy_color(&p, "specular_transmittance", &mut out)?;
+        }
+        "plastic" | "roughplastic" => {
+            if t == "roughplastic" {
+                microfacet(&p, &mut out)?;
+                if out.contains_key("alpha_u") {
+                    return Err(p.error("roughplastic is isotropic: give `alpha`"));
+                }
+            }
+            out.insert("diffuse_reflectance".into(), color_json(p.color("diffuse_reflectance")?.unwrap_or([0.5; 3])));
+            out.insert("specular_reflectance".into(), color_json(p.color("specular_reflectance")?.unwrap_or([1.0; 3])));
+            out.insert("int_ior".into(), json!(ior(&p, "int_ior", "polypropylene")?));
+            out.insert("ext_ior".into(), json!(ior(&p, "ext_ior", "air")?));
+            out.insert("nonlinear".into(), json!(p.boolean("nonlinear")?.unwrap_or(false)));
+        }
+        "twosided" => {
+            let mut inner = p.plugins("bsdf");
+            inner.extend(p.unnamed_refs());
+            let sides = inner
+                .iter()
+                .map(|n| {
+                    let n = c.resolve(n, "bsdf")?;
+                    convert_bsdf(c, n)
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            match sides.len() {
+                1 => out.insert("bsdf".into(), sides.into_iter().next().unwrap_or(Value::Null)),
+                2 => out.insert("bsdf".into(), Value::Array(sides)),
+                n => return Err(p.error(format!("expected one or two nested bsdfs, found {n}"))),
+            };
+        }
+        _ => return Err(p.error("not supported")),
+    }
+    p.harmless(&["sample_visible"], "ignored (niebla always samples visible normals)", &mut c.notes);
+    p.finish()?;
+    Ok(Value::Object(out))
+}

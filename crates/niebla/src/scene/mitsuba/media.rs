@@ -1,0 +1,236 @@
+//! `<medium>` (`homogeneous`, `heterogeneous`), its `<phase>` (`isotropic`,
+//! `hg`, `rayleigh`, `blendphase`) and `<volume>` (`constvolume`,
+//! `gridvolume`) into niebla media.
+//!
+//! Placement of a `gridvolume` (Mitsuba 3): its `to_world` maps the unit
+//! cube `[0, 1]^3` to the world; the box stored in the `.vol` file is used
+//! only with `use_grid_bbox` (then `to_world` applies after it). niebla's
+//! `vol` source fills the file's box, so the importer reads the file's
+//! header and gives the medium the `to_world` that maps that box where
+//! Mitsuba puts the grid.
+
+use std::io::Read;
+use std::path::Path;
+
+use serde_json::{json, Map, Value};
+
+use super::convert::{color_json, Converter};
+use super::props::{Props, Rgb3};
+use super::transform::{is_axis_aligned, mul, point, to_json, Mat4, IDENTITY};
+use super::xml::Node;
+use crate::scene::SceneError;
+
+/// A medium property: a constant color, or a grid.
+enum Field<'a> {
+    Constant(Rgb3),
+    Grid(&'a Node),
+}
+
+/// Reads property `name` of a medium: a color, or a `<volume>` (a
+/// `constvolume` becomes its constant).
+fn field<'a>(c: &Converter<'a>, p: &Props<'a>, name: &str, default: f64) -> Result<Field<'a>, SceneError> {
+    if let Some(v) = p.plugin_named(name) {
+        let v = c.resolve(v, "volume")?;
+        let vp = Props::new(v)?;
+        return match vp.plugin_type()? {
+            "constvolume" => {
+                let value = vp.color("value")?.unwrap_or([1.0; 3]);
+                vp.harmless(&["to_world"], "a constant volume has no placement", &mut Vec::new());
+                vp.finish()?;
+                Ok(Field::Constant(value))
+            }
+            "gridvolume" => Ok(Field::Grid(v)),
+            _ => Err(vp.error("not supported (expected constvolume or gridvolume)")),
+        };
+    }
+    Ok(Field::Constant(p.color(name)?.unwrap_or([default; 3])))
+}
+
+/// The niebla JSON of a `<medium>` element.
+pub(super) fn convert_medium<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<Value, SceneError> {
+    let p = Props::new(node)?;
+    let t = p.plugin_type()?;
+    if t != "homogeneous" && t != "heterogeneous" {
+        return Err(p.error("not supported (expected homogeneous or heterogeneous)"));
+    }
+    let sigma_t = field(c, &p, "sigma_t", 1.0)?;
+    let albedo = match field(c, &p, "albedo", 0.75)? {
+        Field::Constant(a) => a,
+        Field::Grid(g) => {
+            return Err(g.loc.error(format!(
+                "{}: `albedo` as a gridvolume: niebla's grid media have one albedo per medium (not supported)",
+                p.what()
+            )))
+        }
+    };
+    let scale = p.float_or("scale", 1.0)?;
+    let phases = p.plugins("phase");
+    let mut phase_nodes: Vec<&Node> = phases;
+    for r in p.unnamed_refs() {
+        if c.target_tag(r) == Some("phase") {
+            phase_nodes.push(r);
+        } else {
+            return Err(r.loc.error(format!("{}: expected a reference to a <phase> here", r.describe())));
+        }
+    }
+    if phase_nodes.len() > 1 {
+        return Err(phase_nodes[1].loc.error("a medium has one phase function"));
+    }
+    let phase = match phase_nodes.first() {
+        Some(ph) => convert_phase(c, c.resolve(ph, "phase")?)?,
+        None => json!({"type": "isotropic"}),
+    };
+    let spectral = p.boolean("has_spectral_extinction")?;
+    if spectral == Some(false) {
+        if let Field::Constant(s) = sigma_t {
+            if !(s[0] == s[1] && s[1] == s[2]) {
+                c.notes.push(format!(
+                    "{}: {}: has_spectral_extinction false with a colored sigma_t: Mitsuba then uses only one \
+                     channel of it, niebla all three",
+                    node.loc.at(),
+                    p.what()
+                ));
+            }
+        }
+    }
+    p.harmless(&["sample_emitters"], "ignored (niebla always samples emitters)", &mut c.notes);
+    let mut out = Map::new();
+    match sigma_t {
+        Field::Constant(s) => {
+            out.insert("type".into(), json!("homogeneous"));
+            out.insert("sigma_t".into(), color_json(s));
+        }
+        Field::Grid(g) => {
+            let (density, to_world) = grid_density(c, g)?;
+            out.insert("type".into(), json!("grid"));
+            out.insert("density".into(), density);
+            out.insert("sigma_t".into(), json!(1.0));
+            if let Some(m) = to_world {
+                out.insert("to_world".into(), to_json(&m));
+            }
+        }
+    }
+    out.insert("albedo".into(), color_json(albedo));
+    if scale != 1.0 {
+        out.insert("scale".into(), json!(scale));
+    }
+    out.insert("phase".into(), phase);
+    p.finish()?;
+    Ok(Value::Object(out))
+}
+
+/// The bounding box and channel count in a `.vol` header (48 bytes).
+fn vol_header(path: &Path) -> Result<([f64; 3], [f64; 3], i32), String> {
+    let mut head = [0u8; 48];
+    let mut f = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    f.read_exact(&mut head).map_err(|_| "shorter than a .vol header (48 bytes)".to_string())?;
+    if &head[..3] != b"VOL" || head[3] != 3 {
+        return Err("not a Mitsuba .vol file of version 3".into());
+    }
+    let i32_at = |o: usize| i32::from_le_bytes([head[o], head[o + 1], head[o + 2], head[o + 3]]);
+    let f32_at = |o: usize| f32::from_le_bytes([head[o], head[o + 1], head[o + 2], head[o + 3]]) as f64;
+    let channels = i32_at(20);
+    let lo = [f32_at(24), f32_at(28), f32_at(32)];
+    let hi = [f32_at(36), f32_at(40), f32_at(44)];
+    Ok((lo, hi, channels))
+}
+
+/// A `gridvolume` as niebla's density source and the medium's `to_world`
+/// (`None` when the file's box is already where Mitsuba puts the grid).
+fn grid_density(c: &mut Converter, node: &Node) -> Result<(Value, Option<Mat4>), SceneError> {
+    let p = Props::new(node)?;
+    let (file, full) = c.file(&p, "filename")?;
+    if !file.ends_with(".vol") {
+        return Err(p.error(format!("\"{file}\": only .vol grids are read by the importer")));
+    }
+    let (lo, hi, channels) = vol_header(&full).map_err(|e| p.error(format!("\"{file}\": {e}")))?;
+    if channels != 1 {
+        return Err(p.error(format!(
+            "\"{file}\" has {channels} channels: niebla's grid media take a one-channel density (not supported)"
+        )));
+    }
+    if !(0..3).all(|i| hi[i] > lo[i]) {
+        return Err(p.error(format!("\"{file}\": its bounding box {lo:?} to {hi:?} is empty")));
+    }
+    match p.string("filter_type")?.unwrap_or("trilinear") {
+        "trilinear" => {}
+        other => {
+            return Err(p.error(format!("filter_type \"{other}\" is not supported (niebla interpolates trilinearly)")))
+        }
+    }
+    match p.string("wrap_mode")?.unwrap_or("clamp") {
+        "clamp" => {}
+        other => return Err(p.error(format!("wrap_mode \"{other}\" is not supported (niebla clamps)"))),
+    }
+    let use_bbox = p.boolean("use_grid_bbox")?.unwrap_or(false);
+    let m = p.transform("to_world")?.unwrap_or(IDENTITY);
+    p.harmless(&["raw", "accel", "max_value"], "ignored", &mut c.notes);
+    p.finish()?;
+    // `box_of`: [0,1]^3 -> the file's box.
+    let mut box_of = IDENTITY;
+    for i in 0..3 {
+        box_of[i][i] = hi[i] - lo[i];
+        box_of[i][3] = lo[i];
+    }
+    let density = json!({"type": "vol", "file": file});
+    if use_bbox {
+        return Ok((density, (m != IDENTITY).then_some(m)));
+    }
+    // Mitsuba's box is m([0,1]^3). When it is axis-aligned and equals the
+    // file's box within the precision of f32 text, no transform is needed.
+    if is_axis_aligned(&m) {
+        let (a, b) = (point(&m, [0.0; 3]), point(&m, [1.0; 3]));
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-6 * x.abs().max(y.abs()).max(1e-30);
+        if (0..3).all(|i| close(a[i], lo[i]) && close(b[i], hi[i])) {
+            return Ok((density, None));
+        }
+    }
+    // to_world = m * box_of^-1.
+    let mut inv = IDENTITY;
+    for i in 0..3 {
+        inv[i][i] = 1.0 / (hi[i] - lo[i]);
+        inv[i][3] = -lo[i] / (hi[i] - lo[i]);
+    }
+    Ok((density, Some(mul(&m, &inv))))
+}
+
+/// The niebla JSON of a `<phase>` element.
+fn convert_phase(c: &mut Converter, node: &Node) -> Result<Value, SceneError> {
+    let p = Props::new(node)?;
+    let out = match p.plugin_type()? {
+        "isotropic" => json!({"type": "isotropic"}),
+        "hg" => json!({"type": "hg", "g": p.float_or("g", 0.8)?}),
+        "rayleigh" => json!({"type": "rayleigh"}),
+        "blendphase" => {
+            let w = p.float_or("weight", 0.5)?;
+            if !(0.0..=1.0).contains(&w) {
+                return Err(p.error(format!("`weight` must be in [0, 1], got {w}")));
+            }
+            let mut inner = p.plugins("phase");
+            inner.extend(p.unnamed_refs());
+            if inner.len() != 2 {
+                return Err(p.error(format!("expected two nested phase functions, found {}", inner.len())));
+            }
+            let mut gs = [0.0; 2];
+            for (k, n) in inner.iter().enumerate() {
+                let n = c.resolve(n, "phase")?;
+                let v = convert_phase(c, n)?;
+                gs[k] = match v["type"].as_str() {
+                    Some("isotropic") => 0.0,
+                    Some("hg") => v["g"].as_f64().unwrap_or(0.0),
+                    _ => {
+                        return Err(n.loc.error(format!(
+                            "{}: inside a blendphase only isotropic and hg are supported (niebla's double_hg)",
+                            n.describe()
+                        )))
+                    }
+                };
+            }
+            // Mitsuba: (1 - weight) * first + weight * second; niebla: w * HG(g1) + (1 - w) * HG(g2).
+            json!({"type": "double_hg", "w": 1.0 - w, "g1": gs[0], "g2": gs[1]})
+        }
+        _ => return Err(p.error("not supported (expected isotropic, hg, rayleigh or blendphase)")),
+    };
+    p.finish()?;
+    Ok(out)
+}

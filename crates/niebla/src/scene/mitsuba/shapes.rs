@@ -1,0 +1,195 @@
+//! `<shape>`: `sphere`, `cube`, `rectangle`, `obj`, `ply` (with their
+//! `to_world`, bsdf, `interior`/`exterior` media and an `area` emitter) into
+//! niebla shapes, or into an area light for an emitting rectangle or sphere.
+
+use serde_json::{json, Map, Value};
+
+use super::convert::{color_json, Converter};
+use super::props::Props;
+use super::transform::{
+    dot, is_axis_aligned, is_identity, mul, norm, point, rotation, to_json, vector, Mat4, IDENTITY,
+};
+use super::xml::Node;
+use crate::scene::SceneError;
+
+/// The unit cube `[-1, 1]^3` as 8 corners (corner `i` has x, y, z from bits 0, 1, 2).
+fn cube_positions() -> Vec<[f64; 3]> {
+    (0..8).map(|i| [bit(i, 0), bit(i, 1), bit(i, 2)]).collect()
+}
+
+fn bit(i: u32, b: u32) -> f64 {
+    if i >> b & 1 == 1 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// Its 12 triangles, counter-clockwise seen from outside.
+const CUBE_TRIANGLES: [[u32; 3]; 12] = [
+    [0, 4, 6],
+    [0, 6, 2],
+    [1, 3, 7],
+    [1, 7, 5],
+    [0, 1, 5],
+    [0, 5, 4],
+    [2, 6, 7],
+    [2, 7, 3],
+    [0, 2, 3],
+    [0, 3, 1],
+    [4, 5, 7],
+    [4, 7, 6],
+];
+
+/// Converts one `<shape>` and appends it to the scene's shapes (or lights).
+pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<(), SceneError> {
+    let p = Props::new(node)?;
+    let t = p.plugin_type()?;
+    let m = p.transform("to_world")?.unwrap_or(IDENTITY);
+    let flip = p.boolean("flip_normals")?.unwrap_or(false);
+    let mut shape = Map::new();
+    match t {
+        "sphere" => {
+            let center = p.vec3("center")?.unwrap_or([0.0; 3]);
+            let radius = p.float_or("radius", 1.0)?;
+            if flip {
+                return Err(p.error("`flip_normals` on a sphere is not supported"));
+            }
+            let s = uniform_scale(&m).ok_or_else(|| {
+                p.error(
+                    "to_world of a sphere must be a uniform scale, rotation and translation (niebla has no ellipsoids)",
+                )
+            })?;
+            if !(radius > 0.0) {
+                return Err(p.error(format!("`radius` must be > 0, got {radius}")));
+            }
+            shape.insert("type".into(), json!("sphere"));
+            shape.insert("center".into(), json!(point(&m, center)));
+            shape.insert("radius".into(), json!(radius * s));
+        }
+        "cube" => {
+            if is_axis_aligned(&m) && !flip {
+                let lo = point(&m, [-1.0; 3]);
+                let hi = point(&m, [1.0; 3]);
+                shape.insert("type".into(), json!("box"));
+                shape.insert("min".into(), json!(lo));
+                shape.insert("max".into(), json!(hi));
+            } else {
+                shape.insert("type".into(), json!("mesh"));
+                shape.insert("positions".into(), json!(cube_positions()));
+                shape.insert("indices".into(), json!(CUBE_TRIANGLES));
+                shape.insert("to_world".into(), to_json(&m));
+                if flip {
+                    shape.insert("flip_normals".into(), json!(true));
+                }
+            }
+        }
+        "rectangle" => {
+            // Flipping the normal of [-1, 1]^2 is a half turn about x: the same square, facing -z.
+            let m = if flip { mul(&m, &rotation([1.0, 0.0, 0.0], 180.0)) } else { m };
+            shape.insert("type".into(), json!("rectangle"));
+            if !is_identity(&m) {
+                shape.insert("to_world".into(), to_json(&m));
+            }
+        }
+        "obj" | "ply" => {
+            let (file, _) = c.file(&p, "filename")?;
+            shape.insert("type".into(), json!("mesh"));
+            shape.insert("file".into(), json!(file));
+            if !is_identity(&m) {
+                shape.insert("to_world".into(), to_json(&m));
+            }
+            if flip {
+                shape.insert("flip_normals".into(), json!(true));
+            }
+            if p.boolean("face_normals")?.unwrap_or(false) {
+                shape.insert("face_normals".into(), json!(true));
+            }
+            p.harmless(&["flip_tex_coords"], "ignored (niebla's importer reads no textures)", &mut c.notes);
+        }
+        "disk" => return Err(p.error("not supported (niebla has no disk shape; use a rectangle or a mesh)")),
+        _ => return Err(p.error("not supported")),
+    }
+
+    // Media, surface and emitter.
+    let mut media = Map::new();
+    for side in ["interior", "exterior"] {
+        if let Some(mnode) = p.plugin_named(side) {
+            let name = c.medium(mnode)?;
+            media.insert(side.into(), json!(name));
+        }
+    }
+    let mut bsdfs = p.plugins("bsdf");
+    let mut emitters = p.plugins("emitter");
+    for r in p.unnamed_refs() {
+        match c.target_tag(r) {
+            Some("bsdf") => bsdfs.push(r),
+            Some("emitter") => emitters.push(r),
+            _ => return Err(r.loc.error(format!("{}: expected a reference to a <bsdf> here", r.describe()))),
+        }
+    }
+    if bsdfs.len() > 1 {
+        return Err(bsdfs[1].loc.error(format!("{}: a shape has one bsdf", bsdfs[1].describe())));
+    }
+    let bsdf = match bsdfs.first() {
+        Some(b) => {
+            let b = c.resolve(b, "bsdf")?;
+            super::bsdfs::convert_bsdf(c, b)?
+        }
+        // Mitsuba's default surface.
+        None => json!({"type": "diffuse", "reflectance": 0.5}),
+    };
+    p.finish()?;
+    if emitters.len() > 1 {
+        return Err(emitters[1].loc.error("a shape has at most one emitter"));
+    }
+    if let Some(e) = emitters.first() {
+        let e = c.resolve(e, "emitter")?;
+        let ep = Props::new(e)?;
+        if ep.plugin_type()? != "area" {
+            return Err(ep.error("not supported inside a shape (expected area)"));
+        }
+        let radiance = ep.color("radiance")?.unwrap_or([1.0; 3]);
+        ep.finish()?;
+        if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "sphere")) {
+            return Err(p.error(
+                "an area emitter on this shape is not supported (niebla's area lights are rectangles and spheres)",
+            ));
+        }
+        let black = bsdf == json!({"type": "diffuse", "reflectance": 0.0});
+        if !black {
+            c.notes.push(format!(
+                "{}: {}: niebla's area lights absorb what reaches them; the surface's bsdf is not used",
+                node.loc.at(),
+                p.what()
+            ));
+        }
+        for (side, name) in &media {
+            c.notes.push(format!(
+                "{}: {}: `{side}` medium \"{}\" of an area light: niebla takes the medium around a light from the \
+                 shapes containing it",
+                node.loc.at(),
+                p.what(),
+                name.as_str().unwrap_or("")
+            ));
+        }
+        c.lights.push(json!({"type": "area", "shape": Value::Object(shape), "radiance": color_json(radiance)}));
+        return Ok(());
+    }
+    shape.extend(media);
+    shape.insert("bsdf".into(), bsdf);
+    c.shapes.push(Value::Object(shape));
+    Ok(())
+}
+
+/// `s` when the 3x3 part of `m` is `s` times a rotation (within 1e-6 relative).
+fn uniform_scale(m: &Mat4) -> Option<f64> {
+    let cols = [vector(m, [1.0, 0.0, 0.0]), vector(m, [0.0, 1.0, 0.0]), vector(m, [0.0, 0.0, 1.0])];
+    let s = norm(cols[0]);
+    let ok = cols.iter().all(|c| (norm(*c) / s - 1.0).abs() < 1e-6)
+        && (dot(cols[0], cols[1]) / (s * s)).abs() < 1e-6
+        && (dot(cols[0], cols[2]) / (s * s)).abs() < 1e-6
+        && (dot(cols[1], cols[2]) / (s * s)).abs() < 1e-6
+        && super::transform::det3(m) > 0.0;
+    ok.then_some(s)
+}

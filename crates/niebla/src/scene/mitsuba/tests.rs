@@ -1,0 +1,203 @@
+//! Unit tests of the Mitsuba importer: conversions checked against the
+//! values Mitsuba's own definitions give, and errors with file:line.
+
+use std::path::Path;
+
+use serde_json::json;
+
+use super::*;
+
+const SENSOR: &str = r#"<sensor type="perspective">
+    <float name="fov" value="40"/><string name="fov_axis" value="y"/>
+    <transform name="to_world"><lookat origin="0, 1, 5" target="0, 1, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="20"/>
+      <rfilter type="box"/></film></sensor>"#;
+
+fn import(body: &str) -> Result<MitsubaImport, crate::scene::SceneError> {
+    let text = format!("<scene version=\"3.0.0\">\n{SENSOR}\n{body}\n</scene>");
+    import_mitsuba_str(&text, "t.xml", Path::new("/nonexistent"), &[])
+}
+
+fn err(body: &str) -> String {
+    import(body).unwrap_err().to_string()
+}
+
+#[test]
+fn camera_from_look_at() {
+    let s = import("").unwrap().scene;
+    assert_eq!(s["camera"]["position"], json!([0.0, 1.0, 5.0]));
+    assert_eq!(s["camera"]["target"], json!([0.0, 1.0, 4.0]));
+    assert_eq!(s["camera"]["up"], json!([0.0, 1.0, 0.0]));
+    assert_eq!(s["camera"]["fov_y"], json!(40.0));
+    assert_eq!(s["render"], json!({"spp": 8, "seed": 0, "sampler": "independent", "integrator": {"type": "volpath"}}));
+    crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+}
+
+/// fov_axis x (Mitsuba's default) on a 2:1 image: tan(fov_y / 2) = tan(fov_x / 2) / 2.
+#[test]
+fn horizontal_fov_becomes_vertical() {
+    let text = SENSOR.replace("<string name=\"fov_axis\" value=\"y\"/>", "");
+    let text = format!("<scene version=\"3.0.0\">{text}</scene>");
+    let s = import_mitsuba_str(&text, "t.xml", Path::new("."), &[]).unwrap().scene;
+    let fov_y = s["camera"]["fov_y"].as_f64().unwrap();
+    let expected = 2.0 * ((20f64.to_radians()).tan() / 2.0).atan().to_degrees();
+    assert!((fov_y - expected).abs() < 1e-12, "{fov_y} vs {expected}");
+}
+
+#[test]
+fn max_depth_counts_segments() {
+    let s = import(r#"<integrator type="volpathmis"><integer name="max_depth" value="65"/></integrator>"#).unwrap();
+    assert_eq!(s.scene["render"]["integrator"], json!({"type": "volpath", "max_depth": 64}));
+    let s = import(r#"<integrator type="moment"><integrator type="path"/></integrator>"#).unwrap();
+    assert_eq!(s.scene["render"]["integrator"], json!({"type": "volpath"}));
+    assert!(err(r#"<integrator type="volpath"><integer name="max_depth" value="1"/></integrator>"#)
+        .contains("max_depth` 1"));
+}
+
+#[test]
+fn media_shapes_and_refs() {
+    let s = import(
+        r#"<medium type="homogeneous" id="fog">
+             <rgb name="sigma_t" value="1, 2, 3"/><float name="albedo" value="0.5"/><float name="scale" value="2"/>
+             <phase type="blendphase"><float name="weight" value="0.25"/>
+               <phase type="hg"><float name="g" value="0.7"/></phase><phase type="isotropic"/></phase>
+           </medium>
+           <shape type="cube"><transform name="to_world"><scale value="2"/><translate x="1"/></transform>
+             <bsdf type="null"/><ref name="interior" id="fog"/></shape>
+           <shape type="cube"><transform name="to_world"><rotate y="1" angle="30"/></transform></shape>
+           <shape type="sphere"><float name="radius" value="0.5"/>
+             <transform name="to_world"><scale value="2"/><translate y="3"/></transform>
+             <emitter type="area"><rgb name="radiance" value="4"/></emitter>
+             <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf></shape>"#,
+    )
+    .unwrap();
+    let sc = &s.scene;
+    assert_eq!(
+        sc["media"]["fog"],
+        json!({"type": "homogeneous", "sigma_t": [1.0, 2.0, 3.0], "albedo": 0.5, "scale": 2.0,
+               "phase": {"type": "double_hg", "w": 0.75, "g1": 0.7, "g2": 0.0}})
+    );
+    assert_eq!(
+        sc["shapes"][0],
+        json!({"type": "box", "min": [-1.0, -2.0, -2.0], "max": [3.0, 2.0, 2.0], "interior": "fog",
+               "bsdf": {"type": "null"}})
+    );
+    assert_eq!(sc["shapes"][1]["type"], json!("mesh"));
+    assert_eq!(sc["shapes"][1]["bsdf"], json!({"type": "diffuse", "reflectance": 0.5}));
+    assert_eq!(
+        sc["lights"][0],
+        json!({"type": "area", "shape": {"type": "sphere", "center": [0.0, 3.0, 0.0], "radius": 1.0}, "radiance": 4.0})
+    );
+    assert!(s.notes.is_empty(), "{:?}", s.notes);
+    crate::scene::parse_scene_str(&sc.to_string(), "t").unwrap();
+}
+
+#[test]
+fn rough_bsdfs_keep_mitsuba_names() {
+    let s = import(
+        r#"<shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
+             <float name="alpha" value="0.2"/><string name="int_ior" value="water"/></bsdf></shape>
+           <shape type="sphere"><bsdf type="twosided"><bsdf type="roughplastic"/></bsdf></shape>
+           <shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>
+             <float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf></shape>"#,
+    )
+    .unwrap();
+    let sh = &s.scene["shapes"];
+    assert_eq!(
+        sh[0]["bsdf"],
+        json!({"type": "roughdielectric", "distribution": "ggx", "alpha": 0.2, "int_ior": 1.333, "ext_ior": 1.000277})
+    );
+    assert_eq!(
+        sh[1]["bsdf"],
+        json!({"type": "twosided", "bsdf": {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.1,
+               "diffuse_reflectance": 0.5, "specular_reflectance": 1.0, "int_ior": 1.49, "ext_ior": 1.000277,
+               "nonlinear": false}})
+    );
+    assert_eq!(
+        sh[2]["bsdf"],
+        json!({"type": "roughconductor", "distribution": "beckmann", "alpha_u": 0.1, "alpha_v": 0.3, "material": "Au"})
+    );
+}
+
+#[test]
+fn lights_keep_their_numbers() {
+    let s = import(
+        r#"<emitter type="spot"><transform name="to_world"><lookat origin="0, 4, 0" target="0, 0, 0" up="1, 0, 0"/></transform>
+             <rgb name="intensity" value="10, 20, 30"/><float name="cutoff_angle" value="30"/></emitter>
+           <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/><float name="irradiance" value="3"/></emitter>
+           <emitter type="point"><point name="position" value="1, 2, 3"/></emitter>"#,
+    )
+    .unwrap();
+    let l = &s.scene["lights"];
+    assert_eq!(
+        l[0],
+        json!({"type": "spot", "position": [0.0, 4.0, 0.0], "direction": [0.0, -1.0, 0.0],
+               "intensity": [10.0, 20.0, 30.0], "cutoff_angle": 30.0, "beam_width": 22.5})
+    );
+    assert_eq!(l[1], json!({"type": "directional", "direction": [0.0, -1.0, 0.0], "irradiance": 3.0}));
+    assert_eq!(l[2], json!({"type": "point", "position": [1.0, 2.0, 3.0], "intensity": 1.0}));
+}
+
+#[test]
+fn errors_name_file_line_and_element() {
+    assert!(
+        err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>")
+            .starts_with("t.xml:9: <bsdf type=\"hair\">: not supported"),
+        "{}",
+        err("<shape type=\"sphere\">\n<bsdf type=\"hair\"/></shape>")
+    );
+    let e = err("<shape type=\"sphere\"><ref name=\"interior\" id=\"nope\"/></shape>");
+    assert!(e.starts_with("t.xml:8: <ref id=\"nope\">: no element has id \"nope\""), "{e}");
+    let e = err("<shape type=\"cube\"><transform name=\"to_world\">\n<skew value=\"1\"/></transform></shape>");
+    assert!(e.starts_with("t.xml:9: <transform>: unknown operation <skew>"), "{e}");
+    let e = err("<shape type=\"cube\"><transform name=\"to_world\"><scale x=\"0\"/></transform></shape>");
+    assert!(e.starts_with("t.xml:8: <scale>: a scale factor is zero"), "{e}");
+    let e = err("<shape type=\"ply\"><string name=\"filename\" value=\"missing.ply\"/></shape>");
+    assert!(e.starts_with("t.xml:8: <shape type=\"ply\">: file \"missing.ply\" not found"), "{e}");
+    let e =
+        err("<shape type=\"sphere\"><float name=\"radius\" value=\"1\"/><float name=\"radiuss\" value=\"1\"/></shape>");
+    assert!(
+        e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"),
+        "{e}"
+    );
+    let e = err("<shape type=\"disk\"/>");
+    assert!(e.starts_with("t.xml:8: <shape type=\"disk\">: not supported"), "{e}");
+    let e = err("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>");
+    assert!(e.contains("expected one number"), "{e}");
+    let e = err("<shape type=\"sphere\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"400:0.1, 700:0.5\"/></bsdf></shape>");
+    assert!(e.contains("spectra sampled at wavelengths"), "{e}");
+}
+
+#[test]
+fn harmless_elements_become_notes() {
+    let text = SENSOR.replace("<rfilter type=\"box\"/>", "<string name=\"pixel_format\" value=\"rgba\"/>");
+    let text = format!("<scene version=\"3.0.0\">{text}</scene>");
+    let s = import_mitsuba_str(&text, "t.xml", Path::new("."), &[]).unwrap();
+    assert_eq!(s.notes.len(), 2, "{:?}", s.notes);
+    assert!(s.notes.iter().any(|n| n.contains("pixel_format")), "{:?}", s.notes);
+    assert!(s.notes.iter().any(|n| n.contains("Gaussian")), "{:?}", s.notes);
+}
+
+/// Every prefix of a real scene (every 5th byte) and every number in it
+/// replaced by awkward values: errors, never panics.
+#[test]
+fn truncated_and_mangled_scenes_are_errors_not_panics() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mitsuba");
+    let text = std::fs::read_to_string(dir.join("chromatic_mis.xml")).unwrap();
+    for cut in (0..text.len()).step_by(5).filter(|&c| text.is_char_boundary(c)) {
+        let _ = import_mitsuba_str(&text[..cut], "t.xml", &dir, &[]);
+    }
+    for bad in ["nan", "-1", "0", "1e40", "-0", "inf", "", "1 2", "$spp"] {
+        let mut start = 0;
+        while let Some(i) = text[start..].find("value=\"") {
+            let a = start + i + 7;
+            let b = a + text[a..].find('"').unwrap();
+            let mangled = format!("{}{bad}{}", &text[..a], &text[b..]);
+            if let Ok(s) = import_mitsuba_str(&mangled, "t.xml", &dir, &[]) {
+                let _ = crate::scene::parse_scene_str(&s.scene.to_string(), "t");
+            }
+            start = b;
+        }
+    }
+}

@@ -1,0 +1,106 @@
+"""Mitsuba 3 references for the XML test scenes in scenes/mitsuba/.
+
+    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--renders 16] [--spp 64] [NAME ...]
+
+`--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
+uniform 16x8 sky, and smoke.vol, a 16^3 smooth blob), both from fixed formulas.
+For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
+...) of `--spp` samples per pixel, and the script stores only small
+statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
+block and channel the mean over the renders and its standard error (the
+spread of the per-render block means over sqrt(renders)), the image mean per
+channel with its standard error, and the Mitsuba version and variant. The
+Rust test tests/mitsuba_scenes.rs renders the same XML with niebla and
+compares.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import struct
+import sys
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, "scenes", "mitsuba")
+OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
+BLOCK = 8
+NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
+         "spot_rough_glass", "thin_boundaries"]
+
+
+def write_data(mi):
+    os.makedirs(os.path.join(SCENES, "data"), exist_ok=True)
+    # Sky: one color. niebla looks environment maps up per pixel (nearest),
+    # Mitsuba interpolates bilinearly with rows centered on the poles, so only a
+    # map without gradients is the same light in both (see the envmap docs).
+    sky = np.empty((8, 16, 3), np.float32)
+    sky[:] = [0.9, 1.0, 1.3]
+    mi.Bitmap(sky).write(os.path.join(SCENES, "data", "sky.exr"))
+    # Smoke: a smooth blob with a lobe, zero on the faces, 16^3, box [0,1]^3 in the file.
+    n = 16
+    c = (np.arange(n) + 0.5) / n
+    z, y, x = np.meshgrid(c, c, c, indexing="ij")
+    d = np.exp(-(((x - 0.5) / 0.25) ** 2 + ((y - 0.4) / 0.3) ** 2 + ((z - 0.5) / 0.25) ** 2))
+    d += 0.6 * np.exp(-(((x - 0.7) / 0.12) ** 2 + ((y - 0.7) / 0.12) ** 2 + ((z - 0.4) / 0.15) ** 2))
+    d[0, :, :] = d[-1, :, :] = d[:, 0, :] = d[:, -1, :] = d[:, :, 0] = d[:, :, -1] = 0
+    with open(os.path.join(SCENES, "data", "smoke.vol"), "wb") as f:
+        f.write(b"VOL" + struct.pack("<B", 3) + struct.pack("<iiiii", 1, n, n, n, 1))
+        f.write(struct.pack("<6f", 0, 0, 0, 1, 1, 1))
+        f.write(d.astype("<f4").tobytes())
+
+
+def block_means(img: np.ndarray) -> np.ndarray:
+    h, w, _ = img.shape
+    return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, 3).mean(axis=(1, 3))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--data", action="store_true")
+    ap.add_argument("--renders", type=int, default=16)
+    ap.add_argument("--spp", type=int, default=64)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("names", nargs="*")
+    a = ap.parse_args()
+    sys.path.insert(0, os.path.join(ROOT, "bench"))
+    import llvm
+
+    llvm.use_newest_llvm()
+    import mitsuba as mi
+
+    mi.set_variant(a.variant)
+    if a.data:
+        write_data(mi)
+    os.makedirs(OUT, exist_ok=True)
+    for name in a.names or NAMES:
+        scene = mi.load_file(os.path.join(SCENES, name + ".xml"), spp=str(a.spp))
+        blocks, means = [], []
+        for seed in range(a.renders):
+            img = np.array(mi.render(scene, seed=seed, spp=a.spp), dtype=np.float64)[:, :, :3]
+            blocks.append(block_means(img))
+            means.append(img.mean(axis=(0, 1)))
+        blocks, means = np.array(blocks), np.array(means)
+        k = a.renders
+        out = {
+            "scene": f"scenes/mitsuba/{name}.xml",
+            "mitsuba": mi.__version__,
+            "variant": a.variant,
+            "renders": k,
+            "spp_per_render": a.spp,
+            "block": BLOCK,
+            "block_mean": np.round(blocks.mean(0), 7).tolist(),
+            "block_stderr": np.round(blocks.std(0, ddof=1) / np.sqrt(k), 7).tolist(),
+            "image_mean": means.mean(0).tolist(),
+            "image_stderr": (means.std(0, ddof=1) / np.sqrt(k)).tolist(),
+        }
+        with open(os.path.join(OUT, name + ".json"), "w") as f:
+            json.dump(out, f)
+        print(name, "mean", np.round(out["image_mean"], 5), "rel stderr", np.round(np.array(out["image_stderr"]) / out["image_mean"], 5))
+
+
+if __name__ == "__main__":
+    main()
