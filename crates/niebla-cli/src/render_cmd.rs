@@ -79,6 +79,18 @@ pub struct RenderArgs {
     /// the result is bit-identical to a render that was never stopped.
     #[arg(long, value_name = "CHECKPOINT.exr")]
     pub resume: Option<PathBuf>,
+    /// Layers written beside the beauty, comma-separated (added to the
+    /// scene's `film.aovs`): alpha, direct, indirect, emission, surface,
+    /// albedo, normal, depth, variance, or all. EXR outputs hold them as
+    /// channel groups (`A`, `direct.R`, ...); PNG outputs stay the beauty
+    /// (RGBA with alpha).
+    #[arg(long, value_name = "LIST")]
+    pub aovs: Option<String>,
+    /// Hold out the background (the scene's `film.transparent`): rays that
+    /// see the environment directly see black, alpha is written, and the
+    /// environment still lights the scene.
+    #[arg(long)]
+    pub transparent: bool,
 }
 
 /// Scattering-point sampling of `single`.
@@ -146,10 +158,15 @@ pub fn override_integrator(
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let max_memory = args.max_memory.limit();
-    let crate::load::LoadedScene { built, stem, hash } = crate::load::load_limited(args.scene.as_deref(), max_memory)?;
+    let crate::load::LoadedScene { mut built, stem, hash } =
+        crate::load::load_limited(args.scene.as_deref(), max_memory)?;
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
-    let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
+    let aovs = crate::aov_flags::layers(&mut built, args.aovs.as_deref(), args.transparent, &integrator)?;
+    let (width, height) = (built.scene.camera.width, built.scene.camera.height);
+    let left = max_memory
+        .saturating_sub(render_memory(width, height))
+        .saturating_sub(niebla::aov::aov_memory(width, height, aovs));
     crate::load::check_precompute_memory(
         &crate::load::scene_label(args.scene.as_deref()),
         &integrator,
@@ -181,6 +198,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
 
     let scene = &built.scene;
+    let transparent = scene.transparent_background;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
     let (start_acc, seed) = match &args.resume {
@@ -188,7 +206,10 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
             Accumulator::starting_at(scene.camera.width, scene.camera.height, args.first_sample),
             args.seed.or(built.settings.seed),
         ),
-        Some(path) => resume_state(path, scene, &hash, (&integrator, sampler), args.seed.seed)?,
+        Some(path) => {
+            let (acc, seed) = resume_state(path, scene, &hash, (&integrator, sampler), args.seed.seed)?;
+            (crate::aov_flags::resume_layers(path, acc, aovs, transparent)?, seed)
+        }
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
@@ -235,7 +256,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            if is_exr {
+            if let Some(layers) = acc.aov_sums() {
+                niebla::aov::write_aov_outputs(acc.sums(), layers, &checkpoint, transparent, out, exposure)
+            } else if is_exr {
                 write_checkpoint(acc.sums(), &checkpoint, out)
             } else {
                 write_image(&acc.image(), out, exposure)
@@ -262,6 +285,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         threads,
         sampler,
         progress: &progress,
+        aovs,
         ..ProgressiveOptions::new(&integrator, seed, budget)
     };
     let acc = resume_progressive_sums(scene, &options, start_acc, on_pass)?;

@@ -278,6 +278,37 @@ class Scene:
         self.last_render = RenderStats(name, spp_done, seconds)
         return image
 
+    def render_layers(
+        self,
+        aovs: Union[str, Sequence[str]],
+        integrator: Optional[IntegratorSpec] = None,
+        *,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Union[None, bool, ProgressCallback] = None,
+    ) -> Dict[str, np.ndarray]:
+        """Render the scene with layers beside the beauty; returns a dict of
+        float32 arrays: ``beauty`` (H, W, 3) and each layer asked for
+        (``aovs``: names or ``"all"``): ``alpha`` and ``depth`` (H, W),
+        ``direct``, ``indirect``, ``emission``, ``surface``, ``albedo``,
+        ``normal``, ``variance`` (H, W, 3); alpha is added when the scene's
+        film is transparent. The values are those ``niebla render --aovs``
+        writes for the same scene, seed and spp. The split layers
+        (direct, indirect, emission, surface) need ``volpath``. The other
+        arguments are those of :meth:`render`.
+        """
+        names = aovs if isinstance(aovs, str) else ",".join(aovs)
+        integrator_json = self._integrator_json(integrator)
+        callback, close = _progress_callback(progress, None)
+        try:
+            layers, spp_done, seconds = self._native.render_layers(names, integrator_json, spp, seed, threads, callback)
+        finally:
+            close()
+        name = integrator if isinstance(integrator, str) else self.integrator
+        self.last_render = RenderStats(str(name), spp_done, seconds)
+        return layers
+
     def render_sums(
         self,
         integrator: Optional[IntegratorSpec] = None,

@@ -2,7 +2,7 @@
 is the ``niebla`` package, which wraps it; units are documented there."""
 
 from os import PathLike
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -85,6 +85,16 @@ class Scene:
     ) -> Tuple[npt.NDArray[np.int64], int, float, str]:
         """Returns (exact sums as (H, W, 3, 4) int64 32-bit words, spp rendered, seconds, integrator key)."""
     def integrator_key(self, integrator: Optional[str] = None) -> str: ...
+    def render_layers(
+        self,
+        aovs: str,
+        integrator: Optional[str] = None,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Optional[Callable[[int, int], Any]] = None,
+    ) -> Tuple[Dict[str, npt.NDArray[np.float32]], int, float]:
+        """Returns (layers by name, beauty included, spp rendered, seconds)."""
 
 def write_exr(image: npt.NDArray[np.floating[Any]], path: _Path) -> None: ...
 def write_png(image: npt.NDArray[np.floating[Any]], path: _Path, exposure: float = 0.0) -> None: ...
