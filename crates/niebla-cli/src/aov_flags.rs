@@ -1,5 +1,6 @@
 //! `niebla render`'s layers: `--aovs`, `--transparent` and the scene's
-//! `film` object combined and checked, and resumed checkpoints' layer sums.
+//! `film` object combined and checked, resumed checkpoints' layer sums, and
+//! `--denoise` (its library, its feature layers, its outputs).
 
 use std::path::Path;
 
@@ -52,4 +53,49 @@ pub fn resume_layers(path: &Path, acc: Accumulator, set: AovSet, transparent: bo
         )),
         Err(e) => Err(mismatch(e)),
     }
+}
+
+/// The OIDN library when `--denoise` is asked for (loaded before
+/// rendering, so a missing library is reported at once).
+pub fn denoiser(asked: bool) -> Result<Option<niebla::denoise::Denoiser>, CliError> {
+    if !asked {
+        return Ok(None);
+    }
+    niebla::denoise::Denoiser::load().map(Some).map_err(|e| CliError::invalid_option("--denoise", e.to_string()))
+}
+
+/// `set` with the albedo and normal layers the denoiser is guided by.
+pub fn with_denoise_features(set: AovSet, denoise: bool, integrator: &IntegratorSettings) -> Result<AovSet, CliError> {
+    if !denoise {
+        return Ok(set);
+    }
+    let set = set.with(Aov::Albedo).with(Aov::Normal);
+    match unsupported_reason(set, integrator) {
+        Some(reason) => Err(CliError::invalid_option("--denoise", reason)),
+        None => Ok(set),
+    }
+}
+
+/// Denoises the final image with its albedo and normal layers and writes
+/// it beside each output (`niebla::denoise::denoised_path`), the raw
+/// outputs staying as written.
+pub fn write_denoised(
+    denoiser: &niebla::denoise::Denoiser,
+    acc: &Accumulator,
+    outputs: &[std::path::PathBuf],
+    exposure: f32,
+) -> Result<(), CliError> {
+    let image = acc.image();
+    let layers = acc.aov_image().expect("--denoise renders the albedo and normal layers");
+    let (albedo, normal) = (layers.get(Aov::Albedo).expect("albedo"), layers.get(Aov::Normal).expect("normal"));
+    let n = image.pixels.len();
+    let albedo: Vec<_> = (0..n).map(|i| albedo.rgb(i)).collect();
+    let normal: Vec<[f32; 3]> = (0..n).map(|i| normal.vec3(i).to_array()).collect();
+    let denoised = denoiser
+        .denoise(&image, Some(&albedo), Some(&normal))
+        .map_err(|e| CliError::invalid_option("--denoise", e.to_string()))?;
+    for out in outputs {
+        niebla::film::write_image(&denoised, &niebla::denoise::denoised_path(out), exposure)?;
+    }
+    Ok(())
 }

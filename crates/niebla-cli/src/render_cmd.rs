@@ -91,6 +91,12 @@ pub struct RenderArgs {
     /// environment still lights the scene.
     #[arg(long)]
     pub transparent: bool,
+    /// Also write a denoised image beside each output (`shot.exr` ->
+    /// `shot.denoised.exr`), by Intel Open Image Denoise on the CPU guided by
+    /// the albedo and normal layers (rendered for it). Needs the OIDN
+    /// library: `pip install pyoidn` and NIEBLA_OIDN_LIBRARY (see README).
+    #[arg(long)]
+    pub denoise: bool,
 }
 
 /// Scattering-point sampling of `single`.
@@ -162,7 +168,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         crate::load::load_limited(args.scene.as_deref(), max_memory)?;
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
+    let denoiser = crate::aov_flags::denoiser(args.denoise)?;
     let aovs = crate::aov_flags::layers(&mut built, args.aovs.as_deref(), args.transparent, &integrator)?;
+    let aovs = crate::aov_flags::with_denoise_features(aovs, denoiser.is_some(), &integrator)?;
     let (width, height) = (built.scene.camera.width, built.scene.camera.height);
     let left = max_memory
         .saturating_sub(render_memory(width, height))
@@ -298,6 +306,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     if spp_written != spp_done {
         write_outputs(&acc)?;
+    }
+    if let Some(denoiser) = &denoiser {
+        crate::aov_flags::write_denoised(denoiser, &acc, &outputs, exposure)?;
     }
     bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();

@@ -380,23 +380,8 @@ impl PyScene {
         let budget = Budget::Samples(spp);
         let request = RenderRequest { settings, seed, budget, threads, first_sample: 0, sampler, aovs: set };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
-        let dict = pyo3::types::PyDict::new(py);
-        dict.set_item("beauty", image_to_array(py, &done.image))?;
-        if let Some(layers) = &done.layers {
-            let (h, w) = (layers.height as usize, layers.width as usize);
-            for layer in &layers.layers {
-                use numpy::IntoPyArray;
-                let data = layer.data.clone();
-                if layer.components == 1 {
-                    let a = numpy::ndarray::Array2::from_shape_vec((h, w), data).expect("one value per pixel");
-                    dict.set_item(layer.aov.name(), a.into_pyarray(py))?;
-                } else {
-                    let a = numpy::ndarray::Array3::from_shape_vec((h, w, layer.components), data)
-                        .expect("components per pixel");
-                    dict.set_item(layer.aov.name(), a.into_pyarray(py))?;
-                }
-            }
-        }
+        let layers = done.layers.as_ref().expect("a render with layers returns them");
+        let dict = crate::layers::layers_dict(py, &done.image, layers)?;
         Ok((dict, done.spp, done.seconds))
     }
 

@@ -164,3 +164,49 @@ pub fn write_aov_outputs(
         None => crate::film::write_image(&image, path, exposure),
     }
 }
+
+/// The beauty and layers of an EXR written with layers (by
+/// [`write_aov_checkpoint`], the `niebla render --aovs` output): the
+/// layers its `nieblaAovs` attribute names, read from their float channels.
+pub fn read_aov_exr(path: &Path) -> std::result::Result<(crate::film::Image, super::AovImage), String> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let size = image.layer_data.size;
+    let (width, height) = (size.width() as u32, size.height() as u32);
+    let pixels = size.width() * size.height();
+    let channel = |name: &str| -> std::result::Result<&Vec<f32>, String> {
+        let found = image.layer_data.channel_data.list.iter().find(|c| c.name.eq(name));
+        match found.map(|c| &c.sample_data) {
+            Some(FlatSamples::F32(values)) if values.len() == pixels => Ok(values),
+            _ => Err(format!("{}: no float channel {name} of {pixels} values", path.display())),
+        }
+    };
+    let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
+    let beauty =
+        crate::film::Image { width, height, pixels: (0..pixels).map(|i| Rgb::new(r[i], g[i], b[i])).collect() };
+    let recorded = match image.layer_data.attributes.other.get(&Text::from(AOVS_ATTRIBUTE)) {
+        Some(AttributeValue::Text(t)) => t.to_string(),
+        _ => return Err(format!("{}: no attribute {AOVS_ATTRIBUTE} (not written with layers)", path.display())),
+    };
+    let list = recorded.strip_suffix(TRANSPARENT_SUFFIX).unwrap_or(&recorded);
+    let set = AovSet::parse_list(list).map_err(|e| format!("{}: {AOVS_ATTRIBUTE}: {e}", path.display()))?;
+    let mut layers = Vec::new();
+    for aov in set.iter() {
+        let components = if matches!(aov, super::Aov::Alpha | super::Aov::Depth) { 1 } else { 3 };
+        let mut layer = super::AovLayer { aov, components, data: vec![0.0; pixels * components] };
+        for (c, name) in layer.channel_names().iter().enumerate() {
+            for (i, v) in channel(name)?.iter().enumerate() {
+                layer.data[i * components + c] = *v;
+            }
+        }
+        layers.push(layer);
+    }
+    Ok((beauty, super::AovImage { width, height, layers }))
+}

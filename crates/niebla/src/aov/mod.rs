@@ -42,7 +42,7 @@ mod render;
 mod split;
 mod sums;
 
-pub use exr::{read_aov_sums, write_aov_checkpoint, write_aov_outputs, write_rgba_png};
+pub use exr::{read_aov_exr, read_aov_sums, write_aov_checkpoint, write_aov_outputs, write_rgba_png};
 pub use render::render_aov_sums_with;
 pub use split::{FirstVertex, LayerSplit, PathClass, RadianceSum};
 pub use sums::{AovChannel, AovImage, AovLayer, AovSample, AovSums};
