@@ -150,3 +150,29 @@ fn bad_layer_requests_are_clear_errors() {
     let err = run_err(&dir, &["render", "bad.json", "-o", "x.exr"]);
     assert!(err.contains("film.aovs[1]") && err.contains("unknown layer \"zdepth\""), "{err}");
 }
+
+#[test]
+fn denoise_keeps_the_raw_image_or_says_what_is_missing() {
+    let dir = temp_dir("cli_denoise");
+    std::fs::write(dir.join("fog.json"), SCENE).unwrap();
+    let args = ["render", "fog.json", "-o", "x.exr", "--denoise", "--spp", "2", "--quiet"];
+    let out =
+        niebla().current_dir(&dir).args(args).env("NIEBLA_OIDN_LIBRARY", "/nonexistent/libOIDN.so").output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--denoise") && err.contains("pip install pyoidn"), "{err}");
+    assert!(!dir.join("x.exr").exists(), "nothing is rendered without the library");
+    if std::env::var_os("NIEBLA_OIDN_LIBRARY").is_none() && std::env::var_os("NIEBLA_REQUIRE_OIDN").is_none() {
+        eprintln!("skipped the denoised render: NIEBLA_OIDN_LIBRARY is not set");
+        return;
+    }
+    run_ok(&dir, &args);
+    run_ok(&dir, &["render", "fog.json", "-o", "plain.exr", "--spp", "2", "--quiet"]);
+    let (raw, plain, denoised) =
+        (channels(&dir.join("x.exr")), channels(&dir.join("plain.exr")), channels(&dir.join("x.denoised.exr")));
+    for c in ["R", "G", "B"] {
+        assert_eq!(raw[c], plain[c], "the raw image is kept, channel {c}");
+        assert_eq!(denoised[c].len(), raw[c].len());
+        assert_ne!(denoised[c], raw[c]);
+    }
+    assert!(raw.contains_key("albedo.R") && raw.contains_key("normal.Z"), "the features are written");
+}

@@ -49,6 +49,10 @@ const FORMAT_FLOAT3: i32 = 3;
 
 type Handle = *mut c_void;
 
+/// `oidnSetSharedFilterImage(filter, name, data, format, width, height,
+/// byteOffset, bytePixelStride, byteRowStride)`.
+type SetSharedImage = unsafe extern "C" fn(Handle, *const c_char, *mut c_void, i32, usize, usize, usize, usize, usize);
+
 /// The OIDN functions niebla calls (C API of OIDN 2).
 struct Api {
     new_device: unsafe extern "C" fn(i32) -> Handle,
@@ -56,7 +60,7 @@ struct Api {
     release_device: unsafe extern "C" fn(Handle),
     get_device_error: unsafe extern "C" fn(Handle, *mut *const c_char) -> i32,
     new_filter: unsafe extern "C" fn(Handle, *const c_char) -> Handle,
-    set_shared_image: unsafe extern "C" fn(Handle, *const c_char, *mut c_void, i32, usize, usize, usize, usize, usize),
+    set_shared_image: SetSharedImage,
     set_bool: unsafe extern "C" fn(Handle, *const c_char, bool),
     commit_filter: unsafe extern "C" fn(Handle),
     execute_filter: unsafe extern "C" fn(Handle),
@@ -96,28 +100,33 @@ impl Denoiser {
         // SAFETY: loading runs the library's initializers; OIDN's are plain
         // C++ static constructors.
         let library = unsafe { libloading::Library::new(path) }.map_err(|e| missing(e.to_string()))?;
-        // SAFETY: the signatures are those of OIDN 2's C API (oidn.h).
-        let api = unsafe {
-            let get = |names: &[&str]| -> Result<*mut c_void, DenoiseError> {
-                for name in names {
-                    if let Ok(symbol) = library.get::<*mut c_void>(name.as_bytes()) {
-                        return Ok(*symbol);
+        // The first of `names` the library exports, as the function type
+        // the field it is assigned to expects.
+        macro_rules! function {
+            ($($name:literal),+) => {{
+                let mut found = None;
+                for name in [$($name),+] {
+                    // SAFETY: the field types are the signatures of OIDN 2's C API (oidn.h).
+                    if let Ok(symbol) = unsafe { library.get(name.as_bytes()) } {
+                        found = Some(*symbol);
+                        break;
                     }
                 }
-                Err(missing(format!("the library has no function {}", names[0])))
-            };
-            Api {
-                new_device: std::mem::transmute::<*mut c_void, _>(get(&["oidnNewDevice"])?),
-                commit_device: std::mem::transmute::<*mut c_void, _>(get(&["oidnCommitDevice"])?),
-                release_device: std::mem::transmute::<*mut c_void, _>(get(&["oidnReleaseDevice"])?),
-                get_device_error: std::mem::transmute::<*mut c_void, _>(get(&["oidnGetDeviceError"])?),
-                new_filter: std::mem::transmute::<*mut c_void, _>(get(&["oidnNewFilter"])?),
-                set_shared_image: std::mem::transmute::<*mut c_void, _>(get(&["oidnSetSharedFilterImage"])?),
-                set_bool: std::mem::transmute::<*mut c_void, _>(get(&["oidnSetFilterBool", "oidnSetFilter1b"])?),
-                commit_filter: std::mem::transmute::<*mut c_void, _>(get(&["oidnCommitFilter"])?),
-                execute_filter: std::mem::transmute::<*mut c_void, _>(get(&["oidnExecuteFilter"])?),
-                release_filter: std::mem::transmute::<*mut c_void, _>(get(&["oidnReleaseFilter"])?),
-            }
+                let first = [$($name),+][0];
+                found.ok_or_else(|| missing(format!("the library has no function {first}")))?
+            }};
+        }
+        let api = Api {
+            new_device: function!("oidnNewDevice"),
+            commit_device: function!("oidnCommitDevice"),
+            release_device: function!("oidnReleaseDevice"),
+            get_device_error: function!("oidnGetDeviceError"),
+            new_filter: function!("oidnNewFilter"),
+            set_shared_image: function!("oidnSetSharedFilterImage"),
+            set_bool: function!("oidnSetFilterBool", "oidnSetFilter1b"),
+            commit_filter: function!("oidnCommitFilter"),
+            execute_filter: function!("oidnExecuteFilter"),
+            release_filter: function!("oidnReleaseFilter"),
         };
         Ok(Denoiser { api, source: tried, _library: library })
     }

@@ -89,6 +89,7 @@ fn alpha_of_a_slab_is_one_minus_its_transmittance() {
             mean_error += (got - expected) / 256.0;
         }
     }
+    eprintln!("grid slab: mean alpha error {mean_error:.2e}, per-pixel SE bound {se:.4}");
     // The image mean: 256 independent pixels.
     assert!(mean_error.abs() <= 4.0 * se / 16.0 + WITHIN_PIXEL, "mean alpha error {mean_error}");
 }
@@ -141,6 +142,10 @@ fn transparent_render_over_its_background_is_the_opaque_render() {
     assert!(sky_pixels > 0 && sky_pixels < n, "{sky_pixels} of {n} pixels see the sky alone");
     // Image mean within 4 combined SE; single pixels beyond 4 SE are rare.
     let (mean_diff, se) = (diff_sum / (3 * n) as f64, var_sum.sqrt() / (3 * n) as f64);
+    eprintln!(
+        "composite - opaque: mean {mean_diff:.3e}, SE {se:.3e}, {outliers} of {} pixel channels beyond 4 SE",
+        3 * n
+    );
     assert!(mean_diff.abs() <= 4.0 * se, "mean difference {mean_diff}, SE {se}");
     assert!(outliers <= 3 * n / 100, "{outliers} of {} pixel channels beyond 4 SE", 3 * n);
 }
@@ -182,6 +187,7 @@ fn split_layers_add_up_to_the_beauty() {
             }
         }
     }
+    eprintln!("image sums of direct, indirect, emission, surface: {totals:?}");
     assert!(totals.iter().all(|&t| t > 0.0), "every split layer has light: {totals:?}");
     // Features: albedo in [0, 1], normals of length 1 or 0 per sample.
     let albedo = layers.get(Aov::Albedo).unwrap();
@@ -229,6 +235,7 @@ fn direct_layer_equals_the_single_integrator() {
     let (direct, se_direct) = means(&volpath, true);
     let (single_mean, se_single) = means(&single, false);
     let se = (se_direct.powi(2) + se_single.powi(2)).sqrt();
+    eprintln!("volpath direct {direct:.5} (SE {se_direct:.1e}), single {single_mean:.5} (SE {se_single:.1e})");
     assert!(direct > 0.0 && se < 0.05 * direct, "direct {direct}, SE {se}");
     assert!(
         (direct - single_mean).abs() <= 4.0 * se,
