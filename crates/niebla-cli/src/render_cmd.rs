@@ -97,6 +97,14 @@ pub struct RenderArgs {
     /// library: `pip install pyoidn` and NIEBLA_OIDN_LIBRARY (see README).
     #[arg(long)]
     pub denoise: bool,
+    /// Adaptive sampling: pixels whose estimated relative standard error
+    /// (from all but their last pass) is below THRESHOLD, in (0, 1), stop
+    /// taking samples; the image stays unbiased. --spp is the most a pixel
+    /// takes. The EXR also holds `spp.Z` (samples per pixel) and
+    /// `variance.RGB`; it is not a checkpoint (no --resume). Uses the
+    /// independent sampler (the argument needs independent passes).
+    #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "aovs", "denoise", "transparent"])]
+    pub adaptive: Option<f32>,
 }
 
 /// Scattering-point sampling of `single`.
@@ -209,6 +217,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let transparent = scene.transparent_background;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
+    if let Some(threshold) = args.adaptive {
+        let seed = args.seed.or(built.settings.seed);
+        let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet: args.quiet.quiet };
+        return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, &outputs);
+    }
     let (start_acc, seed) = match &args.resume {
         None => (
             Accumulator::starting_at(scene.camera.width, scene.camera.height, args.first_sample),

@@ -10,6 +10,7 @@
 // also catch NaN, which the rewritten comparison would let through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod adaptive;
 pub mod aov;
 pub mod bsdf;
 pub mod camera;

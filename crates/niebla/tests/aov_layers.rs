@@ -122,10 +122,10 @@ fn transparent_render_over_its_background_is_the_opaque_render() {
     let (var_o, var_t) = (opaque_layers.get(Aov::Variance).unwrap(), layers.get(Aov::Variance).unwrap());
     let n = opaque.pixels.len();
     let (mut diff_sum, mut var_sum, mut outliers, mut sky_pixels) = (0.0f64, 0.0f64, 0, 0);
-    for i in 0..n {
+    for (i, &a) in alpha.iter().enumerate() {
         // The sky has radiance 1: composite = held_out + (1 - alpha) * 1.
-        let composite = held_out.pixels[i] + Rgb::splat(1.0 - alpha[i]);
-        if alpha[i] == 0.0 {
+        let composite = held_out.pixels[i] + Rgb::splat(1.0 - a);
+        if a == 0.0 {
             sky_pixels += 1;
             assert_eq!(held_out.pixels[i], Rgb::ZERO, "pixel {i}: the sky seen directly is held out");
         }

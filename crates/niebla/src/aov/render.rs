@@ -29,6 +29,22 @@ pub fn render_aov_sums_with<I: Integrator>(
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
 ) -> Result<(SampleSums, AovSums), RenderError> {
+    render_aov_sums_masked_with(scene, integrator, options, set, None, progress, cancel)
+}
+
+/// [`render_aov_sums_with`] for the pixels whose `active` flag is set
+/// (`active[y * width + x]`; all when `None`): the others take no sample
+/// and their sums are zero.
+pub fn render_aov_sums_masked_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    options: &RenderOptions,
+    set: AovSet,
+    active: Option<&[bool]>,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+) -> Result<(SampleSums, AovSums), RenderError> {
+    let width = scene.camera.width as usize;
     let channels = AovSums::channels_for(set);
     let k = channels.len();
     let needs_features =
@@ -36,6 +52,9 @@ pub fn render_aov_sums_with<I: Integrator>(
     let pixels = map_pixels(scene, options, progress, cancel, |x, y| {
         let mut beauty = [0i128; 3];
         let mut layers = vec![0i128; k];
+        if active.is_some_and(|a| !a[y as usize * width + x as usize]) {
+            return (beauty, layers);
+        }
         for s in options.first_sample..options.first_sample + options.spp as u64 {
             let mut sampler = PixelSampler::for_pixel(options.sampler, options.seed, x, y, s);
             let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
@@ -49,8 +68,8 @@ pub fn render_aov_sums_with<I: Integrator>(
                 // Dropped like the beauty sample (counted as zero in every split layer).
                 split = Default::default();
             }
-            for c in 0..3 {
-                beauty[c] += quantize_sample(split.total[c]);
+            for (sum, v) in beauty.iter_mut().zip(split.total.0) {
+                *sum += quantize_sample(v);
             }
             let features = if needs_features {
                 let mut own = PixelSampler::for_pixel(
