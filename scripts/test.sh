@@ -29,6 +29,21 @@ if [ ! -x /usr/bin/chromium ]; then
   fi
 fi
 
+# Denoising (`--denoise`, niebla.denoise) loads Intel Open Image Denoise at
+# run time; its CPU library comes from the PyPI wheel `pyoidn`, installed into
+# a virtual environment of its own (.venv-oidn, reused by later runs). The
+# denoising tests then must find it (NIEBLA_REQUIRE_OIDN).
+oidn_venv=.venv-oidn
+oidn_lib() { ls "$oidn_venv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 2>/dev/null | head -n 1; }
+if [ -z "$(oidn_lib)" ]; then
+  { python3 -m venv "$oidn_venv" && "$oidn_venv/bin/python" -m pip install -q --no-deps pyoidn; } >/dev/null 2>&1 ||
+    echo "warning: could not install pyoidn (Intel Open Image Denoise); the denoising tests are skipped" >&2
+fi
+if [ -n "$(oidn_lib)" ]; then
+  NIEBLA_OIDN_LIBRARY="$PWD/$(oidn_lib)"
+  export NIEBLA_OIDN_LIBRARY NIEBLA_REQUIRE_OIDN=1
+fi
+
 cargo test --workspace --all-targets
 cargo test --workspace --doc
 

@@ -1,5 +1,7 @@
 //! The `niebla` command: render scenes, describe them, and measure the renderer.
 
+mod adaptive_cmd;
+mod aov_flags;
 mod bench;
 mod bench_geometry;
 mod bench_interactive;

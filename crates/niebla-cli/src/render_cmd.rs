@@ -83,6 +83,32 @@ pub struct RenderArgs {
     /// the result is bit-identical to a render that was never stopped.
     #[arg(long, value_name = "CHECKPOINT.exr")]
     pub resume: Option<PathBuf>,
+    /// Layers written beside the beauty, comma-separated (added to the
+    /// scene's `film.aovs`): alpha, direct, indirect, emission, surface,
+    /// albedo, normal, depth, variance, or all. EXR outputs hold them as
+    /// channel groups (`A`, `direct.R`, ...); PNG outputs stay the beauty
+    /// (RGBA with alpha).
+    #[arg(long, value_name = "LIST")]
+    pub aovs: Option<String>,
+    /// Hold out the background (the scene's `film.transparent`): rays that
+    /// see the environment directly see black, alpha is written, and the
+    /// environment still lights the scene.
+    #[arg(long)]
+    pub transparent: bool,
+    /// Also write a denoised image beside each output (`shot.exr` ->
+    /// `shot.denoised.exr`), by Intel Open Image Denoise on the CPU guided by
+    /// the albedo and normal layers (rendered for it). Needs the OIDN
+    /// library: `pip install pyoidn` and NIEBLA_OIDN_LIBRARY (see README).
+    #[arg(long)]
+    pub denoise: bool,
+    /// Adaptive sampling: pixels whose estimated relative standard error
+    /// (from all but their last pass) is below THRESHOLD, in (0, 1), stop
+    /// taking samples; the image stays unbiased. --spp is the most a pixel
+    /// takes. The EXR also holds `spp.Z` (samples per pixel) and
+    /// `variance.RGB`; it is not a checkpoint (no --resume). Uses the
+    /// independent sampler (the argument needs independent passes).
+    #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "aovs", "denoise", "transparent"])]
+    pub adaptive: Option<f32>,
 }
 
 /// Scattering-point sampling of `single`.
@@ -150,14 +176,20 @@ pub fn override_integrator(
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     let max_memory = args.max_memory.limit();
-    let crate::load::LoadedScene { built, stem, hash, notes } =
+    let crate::load::LoadedScene { mut built, stem, hash, notes } =
         crate::load::load_limited_defined(args.scene.as_deref(), max_memory, &args.define.define)?;
     for note in &notes {
         eprintln!("note: {note}");
     }
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
-    let left = max_memory.saturating_sub(render_memory(built.scene.camera.width, built.scene.camera.height));
+    let denoiser = crate::aov_flags::denoiser(args.denoise)?;
+    let aovs = crate::aov_flags::layers(&mut built, args.aovs.as_deref(), args.transparent, &integrator)?;
+    let aovs = crate::aov_flags::with_denoise_features(aovs, denoiser.is_some(), &integrator)?;
+    let (width, height) = (built.scene.camera.width, built.scene.camera.height);
+    let left = max_memory
+        .saturating_sub(render_memory(width, height))
+        .saturating_sub(niebla::aov::aov_memory(width, height, aovs));
     crate::load::check_precompute_memory(
         &crate::load::scene_label(args.scene.as_deref()),
         &integrator,
@@ -189,14 +221,23 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
 
     let scene = &built.scene;
+    let transparent = scene.transparent_background;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
+    if let Some(threshold) = args.adaptive {
+        let seed = args.seed.or(built.settings.seed);
+        let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet: args.quiet.quiet };
+        return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, &outputs);
+    }
     let (start_acc, seed) = match &args.resume {
         None => (
             Accumulator::starting_at(scene.camera.width, scene.camera.height, args.first_sample),
             args.seed.or(built.settings.seed),
         ),
-        Some(path) => resume_state(path, scene, &hash, (&integrator, sampler), args.seed.seed)?,
+        Some(path) => {
+            let (acc, seed) = resume_state(path, scene, &hash, (&integrator, sampler), args.seed.seed)?;
+            (crate::aov_flags::resume_layers(path, acc, aovs, transparent)?, seed)
+        }
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
@@ -243,7 +284,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         };
         for out in &outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-            if is_exr {
+            if let Some(layers) = acc.aov_sums() {
+                niebla::aov::write_aov_outputs(acc.sums(), layers, &checkpoint, transparent, out, exposure)
+            } else if is_exr {
                 write_checkpoint(acc.sums(), &checkpoint, out)
             } else {
                 write_image(&acc.image(), out, exposure)
@@ -270,6 +313,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         threads,
         sampler,
         progress: &progress,
+        aovs,
         ..ProgressiveOptions::new(&integrator, seed, budget)
     };
     let acc = resume_progressive_sums(scene, &options, start_acc, on_pass)?;
@@ -282,6 +326,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     if spp_written != spp_done {
         write_outputs(&acc)?;
+    }
+    if let Some(denoiser) = &denoiser {
+        crate::aov_flags::write_denoised(denoiser, &acc, &outputs, exposure)?;
     }
     bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();

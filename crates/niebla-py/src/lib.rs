@@ -19,6 +19,7 @@
 //! and `message` attributes) and [`RenderError`] (a `RuntimeError`).
 
 mod image;
+mod layers;
 mod render;
 mod scene;
 mod sums;
@@ -69,6 +70,8 @@ fn _niebla(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(image::write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_png, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::read_exr_layers, m)?)?;
+    m.add_function(wrap_pyfunction!(layers::denoise, m)?)?;
     m.add_function(wrap_pyfunction!(image::relative_mse, m)?)?;
     m.add_function(wrap_pyfunction!(sums::sums_to_image, m)?)?;
     m.add_function(wrap_pyfunction!(sums::write_sums_exr, m)?)?;

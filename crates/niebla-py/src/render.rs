@@ -43,6 +43,8 @@ pub(crate) struct RenderRequest {
     pub first_sample: u64,
     /// The numbers of the camera samples (the scene's `render.sampler`).
     pub sampler: niebla::sampling::SamplerKind,
+    /// Layers rendered beside the beauty (`niebla::aov`).
+    pub aovs: niebla::aov::AovSet,
 }
 
 /// A finished render.
@@ -55,6 +57,8 @@ pub(crate) struct RenderDone {
     pub spp: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// The layer images (`None` when no layers were asked for).
+    pub layers: Option<niebla::aov::AovImage>,
 }
 
 /// Render `request` on a worker thread; see the module documentation.
@@ -99,6 +103,7 @@ pub(crate) fn render_blocking(
                 budget: request.budget,
                 progress: &on_progress,
                 cancel: Some(cancel),
+                aovs: request.aovs,
             };
             let start = Accumulator::starting_at(scene.camera.width, scene.camera.height, request.first_sample);
             let result = resume_progressive_sums(scene, &options, start, on_pass);
@@ -153,6 +158,7 @@ pub(crate) fn render_blocking(
             spp: acc.spp,
             sums: acc.sums().clone(),
             seconds: start.elapsed().as_secs_f64(),
+            layers: acc.aov_image(),
         })
     })
 }

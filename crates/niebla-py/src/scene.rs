@@ -338,9 +338,58 @@ impl PyScene {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
         let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
-        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0, sampler };
+        let aovs = niebla::aov::AovSet::EMPTY;
+        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0, sampler, aovs };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
         Ok((image_to_array(py, &done.image), done.spp, done.seconds))
+    }
+
+    /// Render the scene with layers (`aovs`: comma-separated names or
+    /// `all`, see `niebla render --aovs`; alpha is added when the scene's
+    /// film is transparent); returns `(layers, spp, seconds)` with `layers`
+    /// a dict: `beauty` (H, W, 3), `alpha` and `depth` (H, W), the others
+    /// (H, W, 3), all float32, equal to the channels the command writes.
+    /// The other arguments are those of `render`.
+    #[pyo3(signature = (aovs, integrator = None, spp = None, seed = None, threads = None, progress = None))]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn render_layers<'py>(
+        &self,
+        py: Python<'py>,
+        aovs: &str,
+        integrator: Option<&str>,
+        spp: Option<u32>,
+        seed: Option<u64>,
+        threads: Option<usize>,
+        progress: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, pyo3::types::PyDict>, u64, f64)> {
+        let settings = match integrator {
+            Some(text) => self.integrator_from_json(py, text)?,
+            None => self.built.settings.integrator,
+        };
+        let mut set = niebla::aov::AovSet::parse_list(aovs).map_err(|e| PyValueError::new_err(format!("aovs: {e}")))?;
+        if self.built.scene.transparent_background {
+            set = set.with(niebla::aov::Aov::Alpha);
+        }
+        if set.is_empty() {
+            return Err(PyValueError::new_err("aovs: name at least one layer"));
+        }
+        if let Some(reason) = niebla::aov::unsupported_reason(set, &settings) {
+            return Err(PyValueError::new_err(format!("aovs: {reason}")));
+        }
+        let spp = spp.unwrap_or(self.built.settings.spp);
+        if spp == 0 {
+            return Err(PyValueError::new_err("spp: must be at least 1"));
+        }
+        if threads == Some(0) {
+            return Err(PyValueError::new_err("threads: must be at least 1"));
+        }
+        let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
+        let budget = Budget::Samples(spp);
+        let request = RenderRequest { settings, seed, budget, threads, first_sample: 0, sampler, aovs: set };
+        let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
+        let layers = done.layers.as_ref().expect("a render with layers returns them");
+        let dict = crate::layers::layers_dict(py, &done.image, layers)?;
+        Ok((dict, done.spp, done.seconds))
     }
 
     /// The stable key of the integrator settings `integrator` (JSON text of
@@ -385,7 +434,9 @@ impl PyScene {
             return Err(PyValueError::new_err("threads: must be at least 1"));
         }
         let (seed, sampler) = (seed.unwrap_or(self.built.settings.seed), self.built.settings.sampler);
-        let request = RenderRequest { settings, seed, budget: Budget::Samples(spp), threads, first_sample, sampler };
+        let aovs = niebla::aov::AovSet::EMPTY;
+        let request =
+            RenderRequest { settings, seed, budget: Budget::Samples(spp), threads, first_sample, sampler, aovs };
         let done = render_blocking(py, Arc::clone(&self.built), request, progress.as_ref())?;
         // The key the command line records in its checkpoints (integrator and sampler).
         let key = niebla::render::recorded_key(&settings, sampler);

@@ -10,9 +10,12 @@
 // also catch NaN, which the rewritten comparison would let through.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod adaptive;
+pub mod aov;
 pub mod bsdf;
 pub mod camera;
 pub mod color;
+pub mod denoise;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

@@ -17,6 +17,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+use crate::aov::{AovImage, AovSet, AovSums};
 use crate::film::{Image, SampleSums};
 use crate::integrator::IntegratorSettings;
 use crate::render::{RenderError, RenderOptions};
@@ -54,6 +55,8 @@ pub enum Budget {
 #[derive(Clone, Debug)]
 pub struct Accumulator {
     sums: SampleSums,
+    /// The layers' sums of the same samples (`None`: a render without layers).
+    aov: Option<AovSums>,
     /// Index of the first sample accumulated (samples `first_sample ..
     /// first_sample + spp` are in the sums; the next pass starts after them).
     pub first_sample: u64,
@@ -71,13 +74,13 @@ impl Accumulator {
     /// An empty accumulator whose first pass renders sample index
     /// `first_sample` (a render of a sample range, e.g. one machine's share).
     pub fn starting_at(width: u32, height: u32, first_sample: u64) -> Accumulator {
-        Accumulator { sums: SampleSums::new(width, height), first_sample, spp: 0 }
+        Accumulator { sums: SampleSums::new(width, height), aov: None, first_sample, spp: 0 }
     }
 
     /// An accumulator continuing from `sums`, the sums of samples
     /// `first_sample .. first_sample + spp` (a checkpoint's sums).
     pub fn from_sums(sums: SampleSums, first_sample: u64, spp: u64) -> Accumulator {
-        Accumulator { sums, first_sample, spp }
+        Accumulator { sums, aov: None, first_sample, spp }
     }
 
     /// An accumulator continuing from `mean`, the mean of samples `0 .. spp`
@@ -85,7 +88,27 @@ impl Accumulator {
     /// the sums are recovered from the f32 mean, so the continued render
     /// may differ from an uninterrupted one in the last bits.
     pub fn from_mean(mean: Image, spp: u64) -> Accumulator {
-        Accumulator { sums: SampleSums::from_mean(&mean, spp), first_sample: 0, spp }
+        Accumulator { sums: SampleSums::from_mean(&mean, spp), aov: None, first_sample: 0, spp }
+    }
+
+    /// The accumulator with layer sums `aov` of the same samples (zero sums,
+    /// `AovSums::new`, for a new render; a checkpoint's for a resumed one).
+    ///
+    /// # Panics
+    /// If the image sizes differ.
+    pub fn with_aovs(self, aov: AovSums) -> Accumulator {
+        assert_eq!((aov.width, aov.height), (self.sums.width, self.sums.height), "layer sums of another size");
+        Accumulator { aov: Some(aov), ..self }
+    }
+
+    /// The layers' sums, if the render has layers.
+    pub fn aov_sums(&self) -> Option<&AovSums> {
+        self.aov.as_ref()
+    }
+
+    /// The layer images so far (`None` without layers).
+    pub fn aov_image(&self) -> Option<AovImage> {
+        self.aov.as_ref().map(|a| a.layers(&self.sums, self.spp))
     }
 
     /// Add the sums of the `spp` samples per pixel of a pass (exact).
@@ -167,6 +190,9 @@ pub struct ProgressiveOptions<'a> {
     /// Set to stop the render between two pixel blocks (the render then
     /// returns [`RenderError::Cancelled`]).
     pub cancel: Option<&'a AtomicBool>,
+    /// Layers rendered beside the beauty (`crate::aov`); the accumulator
+    /// must carry their sums ([`Accumulator::with_aovs`]) when not empty.
+    pub aovs: AovSet,
 }
 
 impl<'a> ProgressiveOptions<'a> {
@@ -174,7 +200,16 @@ impl<'a> ProgressiveOptions<'a> {
     /// sampler, no progress callback and no cancellation.
     pub fn new(settings: &'a IntegratorSettings, seed: u64, budget: Budget) -> ProgressiveOptions<'a> {
         let sampler = SamplerKind::default();
-        ProgressiveOptions { settings, seed, threads: None, sampler, budget, progress: &no_progress, cancel: None }
+        ProgressiveOptions {
+            settings,
+            seed,
+            threads: None,
+            sampler,
+            budget,
+            progress: &no_progress,
+            cancel: None,
+            aovs: AovSet::EMPTY,
+        }
     }
 }
 
@@ -187,6 +222,7 @@ impl std::fmt::Debug for ProgressiveOptions<'_> {
             .field("sampler", &self.sampler)
             .field("budget", &self.budget)
             .field("cancel", &self.cancel)
+            .field("aovs", &self.aovs)
             .finish_non_exhaustive()
     }
 }
@@ -232,7 +268,12 @@ pub fn resume_progressive_sums(
     mut acc: Accumulator,
     mut on_pass: impl FnMut(&Accumulator, PassInfo) -> bool,
 ) -> Result<Accumulator, RenderError> {
-    let ProgressiveOptions { settings, seed, threads, sampler, budget, progress, cancel } = *options;
+    let ProgressiveOptions { settings, seed, threads, sampler, budget, progress, cancel, aovs } = *options;
+    if !aovs.is_empty() && acc.aov.as_ref().is_none_or(|a| a.set != aovs) {
+        let (w, h) = (acc.sums.width, acc.sums.height);
+        assert!(acc.spp == 0, "resuming a render with layers needs the checkpoint's layer sums");
+        acc = acc.with_aovs(AovSums::new(w, h, aovs));
+    }
     let start = Instant::now();
     let mut k = 0u32;
     let mut seconds_per_spp = 0.0f64;
@@ -257,9 +298,15 @@ pub fn resume_progressive_sums(
         }
         let pass = RenderOptions { spp: size as u32, seed, first_sample: acc.next_sample(), threads, sampler };
         let pass_start = Instant::now();
-        let sums = prepared.render_sums(scene, &pass, progress, cancel)?;
+        if aovs.is_empty() {
+            let sums = prepared.render_sums(scene, &pass, progress, cancel)?;
+            acc.add(&sums, size);
+        } else {
+            let (sums, layers) = prepared.render_aov_sums(scene, &pass, aovs, progress, cancel)?;
+            acc.add(&sums, size);
+            acc.aov.as_mut().expect("set above").add(&layers);
+        }
         seconds_per_spp = pass_start.elapsed().as_secs_f64() / size as f64;
-        acc.add(&sums, size);
         rendered += size;
         let info = PassInfo { pass: k, spp: acc.spp, elapsed: start.elapsed() };
         if !on_pass(&acc, info) {

@@ -129,32 +129,46 @@ pub fn render_sums_with<I: Integrator>(
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
 ) -> Result<SampleSums, RenderError> {
+    let sums = map_pixels(scene, options, progress, cancel, |x, y| pixel_sum(scene, integrator, options, x, y))?;
+    Ok(SampleSums { width: scene.camera.width, height: scene.camera.height, sums })
+}
+
+/// `pixel(x, y)` for every pixel of the scene's image, in 16x16 tiles on
+/// `options.threads` threads (progress counted as `options.spp` samples
+/// per pixel), assembled row by row from the top whatever the tile order.
+pub(crate) fn map_pixels<P: Send>(
+    scene: &Scene,
+    options: &RenderOptions,
+    progress: ProgressFn,
+    cancel: Option<&AtomicBool>,
+    pixel: impl Fn(u32, u32) -> P + Sync,
+) -> Result<Vec<P>, RenderError> {
     match options.threads {
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .map_err(|e| RenderError::ThreadPool { threads, message: e.to_string() })?;
-            pool.install(|| render_tiles(scene, integrator, options, progress, cancel))
+            pool.install(|| render_tiles(scene, options, progress, cancel, &pixel))
         }
-        None => render_tiles(scene, integrator, options, progress, cancel),
+        None => render_tiles(scene, options, progress, cancel, &pixel),
     }
 }
 
-fn render_tiles<I: Integrator>(
+fn render_tiles<P: Send>(
     scene: &Scene,
-    integrator: &I,
     options: &RenderOptions,
     progress: ProgressFn,
     cancel: Option<&AtomicBool>,
-) -> Result<SampleSums, RenderError> {
+    pixel: &(impl Fn(u32, u32) -> P + Sync),
+) -> Result<Vec<P>, RenderError> {
     use rayon::prelude::*;
     let (w, h) = (scene.camera.width, scene.camera.height);
     let tiles_x = w.div_ceil(TILE_SIZE);
     let tiles_y = h.div_ceil(TILE_SIZE);
     let total = w as u64 * h as u64 * options.spp as u64;
     let done = AtomicU64::new(0);
-    let tiles: Vec<(u32, u32, Vec<[i128; 3]>)> = (0..tiles_x * tiles_y)
+    let tiles: Vec<(u32, u32, Vec<P>)> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
             let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
@@ -165,7 +179,7 @@ fn render_tiles<I: Integrator>(
             }
             for y in y0..y1 {
                 for x in x0..x1 {
-                    out.push(pixel_sum(scene, integrator, options, x, y));
+                    out.push(pixel(x, y));
                 }
             }
             let n = (x1 - x0) as u64 * (y1 - y0) as u64 * options.spp as u64;
@@ -176,17 +190,18 @@ fn render_tiles<I: Integrator>(
     if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || tiles.iter().any(|t| t.1 == 0) {
         return Err(RenderError::Cancelled);
     }
-    let mut image = SampleSums::new(w, h);
-    for (tile, _, pixels) in tiles {
-        let (x0, y0) = ((tile % tiles_x) * TILE_SIZE, (tile / tiles_x) * TILE_SIZE);
-        let x1 = (x0 + TILE_SIZE).min(w);
-        let tw = (x1 - x0) as usize;
-        for (i, p) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 + (i % tw) as u32, y0 + (i / tw) as u32);
-            image.sums[(y * w + x) as usize] = p;
+    // Tiles come in index order (rayon's collect keeps it) and hold their
+    // pixels row by row: take each image row from the tiles it crosses.
+    let mut tiles: Vec<std::vec::IntoIter<P>> = tiles.into_iter().map(|t| t.2.into_iter()).collect();
+    let mut pixels = Vec::with_capacity(w as usize * h as usize);
+    for y in 0..h {
+        let row = (y / TILE_SIZE) * tiles_x;
+        for tx in 0..tiles_x {
+            let tw = ((tx + 1) * TILE_SIZE).min(w) - tx * TILE_SIZE;
+            pixels.extend(tiles[(row + tx) as usize].by_ref().take(tw as usize));
         }
     }
-    Ok(image)
+    Ok(pixels)
 }
 
 /// Mean radiance of `options.spp` samples of pixel `(x, y)`:

@@ -51,6 +51,9 @@ __all__ = [
     "SceneError",
     "load_scene",
     "read_exr",
+    "read_exr_layers",
+    "denoise",
+    "oidn_library",
     "relative_mse",
     "scene_hash",
     "write_exr",
@@ -283,6 +286,37 @@ class Scene:
         self.last_render = RenderStats(name, spp_done, seconds)
         return image
 
+    def render_layers(
+        self,
+        aovs: Union[str, Sequence[str]],
+        integrator: Optional[IntegratorSpec] = None,
+        *,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Union[None, bool, ProgressCallback] = None,
+    ) -> Dict[str, np.ndarray]:
+        """Render the scene with layers beside the beauty; returns a dict of
+        float32 arrays: ``beauty`` (H, W, 3) and each layer asked for
+        (``aovs``: names or ``"all"``): ``alpha`` and ``depth`` (H, W),
+        ``direct``, ``indirect``, ``emission``, ``surface``, ``albedo``,
+        ``normal``, ``variance`` (H, W, 3); alpha is added when the scene's
+        film is transparent. The values are those ``niebla render --aovs``
+        writes for the same scene, seed and spp. The split layers
+        (direct, indirect, emission, surface) need ``volpath``. The other
+        arguments are those of :meth:`render`.
+        """
+        names = aovs if isinstance(aovs, str) else ",".join(aovs)
+        integrator_json = self._integrator_json(integrator)
+        callback, close = _progress_callback(progress, None)
+        try:
+            layers, spp_done, seconds = self._native.render_layers(names, integrator_json, spp, seed, threads, callback)
+        finally:
+            close()
+        name = integrator if isinstance(integrator, str) else self.integrator
+        self.last_render = RenderStats(str(name), spp_done, seconds)
+        return layers
+
     def render_sums(
         self,
         integrator: Optional[IntegratorSpec] = None,
@@ -436,6 +470,42 @@ def write_image(image: np.ndarray, path: PathLike, exposure: float = 0.0) -> Non
 def read_exr(path: PathLike) -> np.ndarray:
     """Read an OpenEXR file's RGB channels into an (H, W, 3) float32 array."""
     return _niebla.read_exr(os.fspath(path))
+
+
+def oidn_library() -> Optional[str]:
+    """The Intel Open Image Denoise library :func:`denoise` loads: the file
+    named by ``NIEBLA_OIDN_LIBRARY``, else the one shipped in the ``pyoidn``
+    wheel when that package is installed (``pip install pyoidn``), else None
+    (the dynamic loader's search path)."""
+    given = os.environ.get("NIEBLA_OIDN_LIBRARY")
+    if given:
+        return given
+    import importlib.util
+
+    spec = importlib.util.find_spec("pyoidn")
+    if spec is not None and spec.submodule_search_locations:
+        for folder in spec.submodule_search_locations:
+            candidate = Path(folder) / "oidn" / "lib" / "libOpenImageDenoise.so.2"
+            if candidate.exists():
+                return str(candidate)
+    return None
+
+
+def denoise(
+    image: np.ndarray, albedo: Optional[np.ndarray] = None, normal: Optional[np.ndarray] = None
+) -> np.ndarray:
+    """Denoise a render ((H, W, 3) linear radiance) with Intel Open Image
+    Denoise on the CPU, guided by the ``albedo`` and ``normal`` layers of
+    :meth:`Scene.render_layers` (a normal needs the albedo too); returns a
+    new (H, W, 3) float32 array. Raises RuntimeError with install advice
+    when the library is missing (:func:`oidn_library`)."""
+    return _niebla.denoise(image, albedo, normal, oidn_library())
+
+
+def read_exr_layers(path: PathLike) -> Dict[str, np.ndarray]:
+    """Read an OpenEXR file written by ``niebla render --aovs`` into the dict
+    :meth:`Scene.render_layers` returns (``beauty`` and each layer)."""
+    return _niebla.read_exr_layers(os.fspath(path))
 
 
 def relative_mse(image: np.ndarray, reference: np.ndarray) -> float:

@@ -2,7 +2,7 @@
 is the ``niebla`` package, which wraps it; units are documented there."""
 
 from os import PathLike
-from typing import Any, Callable, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -85,8 +85,25 @@ class Scene:
     ) -> Tuple[npt.NDArray[np.int64], int, float, str]:
         """Returns (exact sums as (H, W, 3, 4) int64 32-bit words, spp rendered, seconds, integrator key)."""
     def integrator_key(self, integrator: Optional[str] = None) -> str: ...
+    def render_layers(
+        self,
+        aovs: str,
+        integrator: Optional[str] = None,
+        spp: Optional[int] = None,
+        seed: Optional[int] = None,
+        threads: Optional[int] = None,
+        progress: Optional[Callable[[int, int], Any]] = None,
+    ) -> Tuple[Dict[str, npt.NDArray[np.float32]], int, float]:
+        """Returns (layers by name, beauty included, spp rendered, seconds)."""
 
 def write_exr(image: npt.NDArray[np.floating[Any]], path: _Path) -> None: ...
+def read_exr_layers(path: _Path) -> Dict[str, npt.NDArray[np.float32]]: ...
+def denoise(
+    image: npt.NDArray[np.floating[Any]],
+    albedo: Optional[npt.NDArray[np.floating[Any]]] = None,
+    normal: Optional[npt.NDArray[np.floating[Any]]] = None,
+    library: Optional[_Path] = None,
+) -> npt.NDArray[np.float32]: ...
 def write_png(image: npt.NDArray[np.floating[Any]], path: _Path, exposure: float = 0.0) -> None: ...
 def read_exr(path: _Path) -> npt.NDArray[np.float32]: ...
 def relative_mse(image: npt.NDArray[np.floating[Any]], reference: npt.NDArray[np.floating[Any]]) -> float: ...

@@ -141,6 +141,18 @@ fn sum_channel_name(color: usize, word: usize) -> String {
 /// sums themselves to the EXR `path` with `info` in its header, through a
 /// temporary file and a rename.
 pub fn write_checkpoint(sums: &SampleSums, info: &CheckpointInfo, path: &Path) -> Result<(), OutputError> {
+    write_checkpoint_with(sums, info, path, Vec::new(), &[])
+}
+
+/// [`write_checkpoint`] with `extra` channels (the layers of `crate::aov`
+/// and their sums) and extra text attributes.
+pub(crate) fn write_checkpoint_with(
+    sums: &SampleSums,
+    info: &CheckpointInfo,
+    path: &Path,
+    extra: Vec<exr::prelude::AnyChannel<exr::prelude::FlatSamples>>,
+    extra_attributes: &[(&str, String)],
+) -> Result<(), OutputError> {
     use exr::prelude::*;
     let encode = |message: String| OutputError::Encode { path: path.to_path_buf(), message };
     let attributes = [
@@ -161,8 +173,9 @@ pub fn write_checkpoint(sums: &SampleSums, info: &CheckpointInfo, path: &Path) -
             list.push(AnyChannel::new(sum_channel_name(color, word).as_str(), FlatSamples::U32(values)));
         }
     }
+    list.extend(extra);
     let mut layer_attributes = LayerAttributes::default();
-    for (name, value) in attributes {
+    for (name, value) in attributes.into_iter().chain(extra_attributes.iter().map(|(n, v)| (*n, v.clone()))) {
         let value =
             Text::new_or_none(&value).ok_or_else(|| encode(format!("attribute value {value:?} is not ASCII")))?;
         layer_attributes.other.insert(Text::from(name), AttributeValue::Text(value));

@@ -13,6 +13,7 @@ mod exr_read;
 mod output;
 mod sums;
 
+pub(crate) use checkpoint::write_checkpoint_with;
 pub use checkpoint::{
     read_checkpoint, read_checkpoint_full, scene_hash, write_checkpoint, Checkpoint, CheckpointError, CheckpointInfo,
 };

@@ -86,7 +86,11 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
 
         // Escaped: the environment.
         let Some(hit) = hit else {
-            l += beta * scene.escaped_radiance(path.ray.d);
+            // A transparent film holds out the background seen directly
+            // (not through glass or mirrors, which are opaque for alpha).
+            if !(scene.transparent_background && specular_bounces == 0) {
+                l += beta * scene.escaped_radiance(path.ray.d);
+            }
             break;
         };
 

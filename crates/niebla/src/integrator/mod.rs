@@ -46,4 +46,17 @@ pub trait Integrator: Sync {
     /// Radiance (W/(sr m^2)) arriving at `ray.o` from direction `-ray.d`, for a
     /// ray that starts inside `medium`.
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb;
+
+    /// [`Integrator::radiance`] split by path class for the layers of
+    /// `crate::aov` (its `total` is the same sample, bit for bit);
+    /// integrators that do not classify their paths give the total alone.
+    fn radiance_split(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> crate::aov::LayerSplit {
+        crate::aov::LayerSplit::unsplit(self.radiance(scene, ray, medium, sampler))
+    }
 }

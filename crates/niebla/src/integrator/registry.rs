@@ -387,6 +387,45 @@ impl PreparedIntegrator {
             PreparedIntegrator::Ppm(p) => photon::render_ppm(scene, p, options, progress, cancel),
         }
     }
+
+    /// The beauty sums (equal to [`Self::render_sums`]'s) and the sums of
+    /// the layers `set` (`crate::aov`). `photon` and `ppm` write no layers:
+    /// check [`crate::aov::unsupported_reason`] first (they panic here).
+    pub fn render_aov_sums(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        set: crate::aov::AovSet,
+        progress: ProgressFn,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<(SampleSums, crate::aov::AovSums), RenderError> {
+        self.render_aov_sums_masked(scene, options, set, None, progress, cancel)
+    }
+
+    /// [`Self::render_aov_sums`] of the pixels whose `active` flag is set
+    /// (all when `None`; the others take no sample and have zero sums).
+    pub fn render_aov_sums_masked(
+        &self,
+        scene: &Scene,
+        options: &RenderOptions,
+        set: crate::aov::AovSet,
+        active: Option<&[bool]>,
+        progress: ProgressFn,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<(SampleSums, crate::aov::AovSums), RenderError> {
+        use crate::aov::render_aov_sums_masked_with as with;
+        match self {
+            PreparedIntegrator::Emission(i) => with(scene, i, options, set, active, progress, cancel),
+            PreparedIntegrator::Single(i) => with(scene, i, options, set, active, progress, cancel),
+            PreparedIntegrator::VolPath(i) => with(scene, i.as_ref(), options, set, active, progress, cancel),
+            PreparedIntegrator::Analytic(i) => with(scene, i, options, set, active, progress, cancel),
+            PreparedIntegrator::Hegeman(i) => with(scene, i.as_ref(), options, set, active, progress, cancel),
+            PreparedIntegrator::Zhou(i) => with(scene, i.as_ref(), options, set, active, progress, cancel),
+            PreparedIntegrator::Photon(_) | PreparedIntegrator::Ppm(_) => {
+                panic!("photon and ppm write no layers (aov::unsupported_reason says so)")
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -280,6 +280,7 @@ pub fn build_scene_with_options(
         camera_medium: None,
         bounds: (lo, hi),
         accel: Default::default(),
+        transparent_background: desc.film.transparent,
     };
     assign_enclosing_exteriors(&mut scene, &explicit_exterior);
     scene.camera_medium = scene.medium_at(scene.camera.position);
@@ -290,6 +291,7 @@ pub fn build_scene_with_options(
         seed: desc.render.seed,
         sampler: desc.render.sampler,
         exposure: desc.render.exposure,
+        film: crate::scene::FilmSettings::from_desc(&desc.film),
     };
     Ok(BuiltScene {
         scene,

@@ -56,6 +56,8 @@ pub struct RenderSettings {
     pub sampler: crate::sampling::SamplerKind,
     /// PNG exposure in stops (the PNG is the EXR times 2^exposure).
     pub exposure: f32,
+    /// The film's layers and transparency.
+    pub film: FilmSettings,
 }
 
 /// Load, validate and build a scene file (niebla JSON, or Mitsuba 3 XML for

@@ -72,6 +72,9 @@ fn validate_scene(desc: &SceneDesc) -> Check {
     if let Some(name) = &desc.ambient_medium {
         medium_exists(desc, "ambient_medium", name)?;
     }
+    if let Err((i, message)) = desc.film.check() {
+        return fail(format!("film.aovs[{i}]"), message);
+    }
     Ok(())
 }
 

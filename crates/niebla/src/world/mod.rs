@@ -78,6 +78,11 @@ pub struct Scene {
     pub bounds: (Vec3, Vec3),
     /// The hierarchy over `objects` (built on first use; see [`SceneAccel`]).
     pub accel: SceneAccel,
+    /// The film's `transparent` option: camera rays that reach the
+    /// environment without scattering (or a specular bounce) see black; the
+    /// alpha layer tells the compositor where the background shows. The
+    /// environment still lights the scene.
+    pub transparent_background: bool,
 }
 
 /// Offset from a surface point along `d` that moves a ray origin off the

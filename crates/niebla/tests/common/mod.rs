@@ -68,6 +68,7 @@ pub fn scene(
         camera_medium: None,
         bounds: (lo, hi),
         accel: Default::default(),
+        transparent_background: false,
     };
     s.camera_medium = s.medium_at(s.camera.position);
     s

@@ -31,6 +31,7 @@ mod nee;
 mod path;
 pub(crate) mod settings;
 
+use crate::aov::{LayerSplit, RadianceSum};
 use crate::color::Rgb;
 use crate::math::Ray;
 use crate::medium::MediumId;
@@ -115,34 +116,56 @@ struct LightSampling<'a> {
 
 impl Integrator for VolPathIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
+        self.radiance_sum(scene, ray, medium, sampler)
+    }
+
+    fn radiance_split(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> LayerSplit {
+        self.radiance_sum(scene, ray, medium, sampler)
+    }
+}
+
+impl VolPathIntegrator {
+    /// The radiance (`Rgb`) or its split by path class (`LayerSplit`).
+    #[inline]
+    fn radiance_sum<S: RadianceSum>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> S {
         match &self.scene_constants {
             Some(constants) => self.radiance_with(constants, scene, ray, medium, sampler),
             None => self.radiance_with(&SceneConstants::new(scene), scene, ray, medium, sampler),
         }
     }
-}
 
-impl VolPathIntegrator {
     /// [`Integrator::radiance`] with the scene's constants: one path per channel group.
     #[inline]
-    fn radiance_with(
+    fn radiance_with<S: RadianceSum>(
         &self,
         constants: &SceneConstants,
         scene: &Scene,
         ray: Ray,
         medium: Option<MediumId>,
         sampler: &mut PixelSampler,
-    ) -> Rgb {
+    ) -> S {
         let SceneConstants { groups: (groups, count), lights, ref guide } = *constants;
         let guiding = (self.guide_fraction > 0.0 && lights.points > 0 && guide.is_active())
             .then_some(Guiding { guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
-        let mut l = Rgb::ZERO;
+        let mut l = S::default();
         // Each group's path gives only its channels, so the paths may share
         // their numbers: each starts at the same dimension.
         let first_dimension = sampler.dimension();
         for &group in &groups[..count] {
             sampler.rewind_for_another_estimate(first_dimension);
-            l += self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler);
+            l.merge(self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler));
         }
         l
     }

@@ -2,6 +2,7 @@
 //! events, medium emission, surfaces, index-matched boundaries, escape to
 //! the environment and Russian roulette.
 
+use crate::aov::{FirstVertex, PathClass, RadianceSum};
 use crate::color::Rgb;
 use crate::math::Ray;
 use crate::math::Vec3;
@@ -27,7 +28,7 @@ struct PreviousVertex {
 impl VolPathIntegrator {
     /// One path for the channels of `group` (the other channels of the
     /// result are 0), with the hero channel and spectral MIS over that group.
-    pub(super) fn trace(
+    pub(super) fn trace<S: RadianceSum>(
         &self,
         scene: &Scene,
         ray: Ray,
@@ -35,12 +36,14 @@ impl VolPathIntegrator {
         group: Channels,
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
-    ) -> Rgb {
+    ) -> S {
         let LightSampling { lights, guiding } = light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
-        let mut l = Rgb::ZERO;
+        // Contributions, split by path class when `S` keeps the split.
+        let mut l = S::default();
+        let mut first = FirstVertex::None;
         let mut beta = group.indicator();
         let mut r_u = Rgb::ONE;
         let mut r_l = Rgb::ONE;
@@ -65,7 +68,9 @@ impl VolPathIntegrator {
                 if depth < self.max_depth {
                     let segment =
                         EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput: beta / group.average(r_u) };
-                    l += equiangular_ld(scene, &segment, group, lights, sampler);
+                    let v = equiangular_ld(scene, &segment, group, lights, sampler);
+                    let at = if depth == 0 { FirstVertex::Medium } else { first };
+                    l.add(v, || PathClass::of(at, depth + 1));
                 }
                 let mut scattered: Option<(Vec3, Vec3)> = None;
                 let mut terminated = false;
@@ -77,7 +82,7 @@ impl VolPathIntegrator {
                         let beta_e = beta * c.t_maj / pdf;
                         let r_e = r_u * c.sigma_maj * c.t_maj / pdf;
                         if group.average(r_e) > 0.0 {
-                            l += beta_e * c.point.l_ve / group.average(r_e);
+                            l.add(beta_e * c.point.l_ve / group.average(r_e), || PathClass::of(first, depth));
                         }
                     }
                     if c.is_real(hero, sampler.next_1d()) {
@@ -87,6 +92,9 @@ impl VolPathIntegrator {
                             return false;
                         }
                         depth += 1;
+                        if depth == 1 {
+                            first = FirstVertex::Medium;
+                        }
                         let Some(w) = c.real_scatter_weights(hero) else {
                             terminated = true;
                             return false;
@@ -109,7 +117,8 @@ impl VolPathIntegrator {
                             segment: Some(segment),
                             guiding,
                         };
-                        l += sample_ld(scene, &vertex, group, hero, lights, sampler);
+                        let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
+                        l.add(v, || PathClass::of(first, depth));
                         let Some(ps) = sample_phase(phase, c.p, wo, guiding, sampler) else {
                             terminated = true;
                             return false;
@@ -174,12 +183,16 @@ impl VolPathIntegrator {
                     if le.is_black() {
                         continue;
                     }
+                    if depth == 0 && scene.transparent_background {
+                        // Held out: the background is left to the compositor (alpha).
+                        continue;
+                    }
                     if depth == 0 || specular_bounce {
-                        l += beta * le / group.average(r_u);
+                        l.add(beta * le / group.average(r_u), || PathClass::of(first, depth));
                     } else {
                         let pmf = lights.pmf_of(light);
                         let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
-                        l += beta * le / group.average(r_u + r_l_env);
+                        l.add(beta * le / group.average(r_u + r_l_env), || PathClass::of(first, depth));
                     }
                 }
                 return l;
@@ -199,12 +212,12 @@ impl VolPathIntegrator {
             if let Some((le, index)) = scene.emitted_radiance(&hit, -ray.d) {
                 if !le.is_black() {
                     if depth == 0 || specular_bounce {
-                        l += beta * le / group.average(r_u);
+                        l.add(beta * le / group.average(r_u), || PathClass::of(first, depth));
                     } else {
                         let light = &scene.lights[index as usize];
                         let pmf = lights.pmf_of(light);
                         let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
-                        l += beta * le / group.average(r_u + r_l_hit);
+                        l.add(beta * le / group.average(r_u + r_l_hit), || PathClass::of(first, depth));
                     }
                 }
                 return l;
@@ -215,6 +228,9 @@ impl VolPathIntegrator {
                 return l;
             }
             depth += 1;
+            if depth == 1 {
+                first = FirstVertex::Surface;
+            }
             let wo = -ray.d;
             // The BSDF is evaluated about the shading normal `ns` (outward),
             // light sampling faces `wo`'s side (`n`, and the geometric `ng`).
@@ -237,7 +253,8 @@ impl VolPathIntegrator {
                     segment: None,
                     guiding: surface_guiding,
                 };
-                l += sample_ld(scene, &vertex, group, hero, lights, sampler);
+                let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
+                l.add(v, || PathClass::of(first, depth));
             }
             let Some(bs) = sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler) else {
                 return l;

@@ -69,6 +69,9 @@ pub struct SceneDesc {
     /// `None` means vacuum.
     #[serde(default)]
     pub ambient_medium: Option<String>,
+    /// Layers beside the beauty and the transparent background (optional).
+    #[serde(default)]
+    pub film: FilmDesc,
 }
 
 // ---------------------------------------------------------------------------
@@ -400,11 +403,13 @@ impl Default for IntegratorSpec {
     }
 }
 
+mod film;
 mod lights;
 mod medium;
 mod shapes;
 mod surfaces;
 
+pub use film::*;
 pub use lights::*;
 pub use medium::*;
 pub use shapes::*;
