@@ -7,6 +7,9 @@ use crate::error::CliError;
 
 /// `niebla info`.
 pub fn run(scene: Option<&Path>) -> Result<(), CliError> {
+    if let Some(vdb) = scene.filter(|p| crate::info_vdb::is_vdb(p)) {
+        return crate::info_vdb::run(vdb);
+    }
     let (built, _) = crate::load::load(scene)?;
     let s = &built.scene;
     let c = &s.camera;
