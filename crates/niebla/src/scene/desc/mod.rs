@@ -402,8 +402,10 @@ impl Default for IntegratorSpec {
 
 mod lights;
 mod medium;
+mod pyro;
 mod shapes;
 
 pub use lights::*;
 pub use medium::*;
+pub use pyro::*;
 pub use shapes::*;
