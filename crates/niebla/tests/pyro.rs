@@ -143,8 +143,8 @@ fn blackbody_of_a_constant_temperature_grid_is_the_blackbody_of_that_temperature
     let exact = blackbody_rgb_exact(1500.0);
     let factor = 5.670373e-14 / std::f64::consts::PI * 1500f64.powi(4);
     let tint = [1.0, 0.5, 2.0];
-    for c in 0..3 {
-        let want = factor * tint[c] * exact.0[c] as f64;
+    for (c, t) in tint.iter().enumerate() {
+        let want = factor * t * exact.0[c] as f64;
         // The table interpolates in 20 K steps: 1e-3 relative.
         assert!((l_ve.0[c] as f64 - want).abs() <= 1e-3 * want, "{c}: {} vs {want}", l_ve.0[c]);
     }
@@ -227,4 +227,44 @@ fn bad_grids_name_the_file_the_grid_and_the_field() {
     // Unknown keys are refused (a typo of a Blender parameter).
     let e = err(r#"{"type": "pyro", "file": "pyro.vdb", "emision_strength": 1}"#);
     assert!(e.message.contains("emision_strength"), "{e}");
+}
+
+#[test]
+fn mantaflow_style_file_reads_by_default_names_and_renders() {
+    // density, flame, temperature (floats), vel and color (Vec3), and the
+    // empty heat, fuel, react and velocity_guide grids of a Blender fire.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pyro_mantaflow");
+    if !dir.join("mantaflow_fire.vdb").exists() {
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../niebla-volume/tests/oracle/make_vec3_vdbs.py");
+        let scratch = dir.with_extension(format!("tmp{}", std::process::id()));
+        let out = Command::new("/usr/bin/python3").arg(&script).arg(&scratch).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        if std::fs::rename(&scratch, &dir).is_err() {
+            let _ = std::fs::remove_dir_all(&scratch);
+        }
+    }
+    let text = r#"{"version": 1,
+        "camera": {"type": "perspective", "position": [0, 1.2, 5], "target": [0, 1.2, 0], "width": 12, "height": 12},
+        "render": {"integrator": {"type": "volpath"}, "spp": 8},
+        "media": {"fire": {"type": "pyro", "file": "mantaflow_fire.vdb", "density": 10,
+                           "emission_strength": 1, "blackbody_intensity": 1}},
+        "ambient_medium": "fire"}"#;
+    let desc = parse_scene_str(text, FILE).unwrap();
+    let built = build_scene(&desc, FILE, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let niebla::medium::Medium::Grid(g) = &built.scene.media[0] else { panic!("a grid medium") };
+    let niebla::medium::GridEmission::Pyro(e) = &g.emission else { panic!("pyro emission") };
+    assert!(e.flame.is_some() && e.temperature.field.is_some(), "flame and temperature found by name");
+    let image = render_image(&built, 8);
+    assert!(image.pixels.iter().all(|p| p.0.iter().all(|v| v.is_finite() && *v >= 0.0)));
+    let center = image.pixels[6 * 12 + 6];
+    assert!(center.0[0] > 0.0, "the fire glows: {center:?}");
+
+    // An empty grid as the temperature: T is the offset everywhere.
+    let text =
+        text.replace("\"blackbody_intensity\": 1", "\"blackbody_intensity\": 1, \"temperature_attribute\": \"heat\"");
+    let desc = parse_scene_str(&text, FILE).unwrap();
+    let built = build_scene(&desc, FILE, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let niebla::medium::Medium::Grid(g) = &built.scene.media[0] else { panic!("a grid medium") };
+    let niebla::medium::GridEmission::Pyro(e) = &g.emission else { panic!("pyro emission") };
+    assert_eq!(e.temperature.kelvin(Vec3::new(0.0, 1.0, 0.0)), 0.0);
 }

@@ -48,7 +48,7 @@ pub(super) fn build_pyro_medium(
         scale: 1.0,
         phase: desc.phase.clone(),
         density: vdb_source(desc, &density_name),
-        to_world: desc.to_world.clone(),
+        to_world: desc.to_world,
         emission: None,
         majorant_resolution: desc.majorant_resolution,
         storage: GridStorageDesc::F32,
