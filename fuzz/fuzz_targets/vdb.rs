@@ -1,5 +1,6 @@
 //! OpenVDB reader: parse the header and descriptors, then decode every grid
-//! (scalar grids into sparse grids; other types must give an error).
+//! (scalar grids into sparse grids, Vec3 grids into sparse vector grids;
+//! other types must give an error), and read each grid's class metadata.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -16,5 +17,10 @@ fuzz_target!(|data: &[u8]| {
             // Touch what a renderer would: bounds and a lookup.
             let _ = grid.lookup_world([0.0, 0.0, 0.0]);
         }
+        if let Ok(grid) = file.read_vec3_grid_limited(&name, MAX_GRID_BYTES) {
+            let _ = grid.lookup_world([0.0, 0.0, 0.0]);
+            let _ = grid.active_length_range();
+        }
+        let _ = file.grid_string_metadata(&name, "class");
     }
 });

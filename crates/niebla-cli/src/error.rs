@@ -27,6 +27,10 @@ pub enum CliError {
     /// the settings parser and names the option.
     #[error("{0}")]
     Integrator(String),
+    /// A voxel file given on the command line (e.g. `niebla info FILE.vdb`)
+    /// could not be read; the message names the file and what is wrong.
+    #[error("{0}")]
+    Volume(#[from] niebla_volume::VolumeError),
     /// The scene file named on the command line does not exist.
     #[error("{}: scene file not found", .0.display())]
     SceneNotFound(PathBuf),

@@ -7,6 +7,9 @@ use crate::error::CliError;
 
 /// `niebla info`.
 pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), CliError> {
+    if let Some(vdb) = scene.filter(|p| crate::info_vdb::is_vdb(p)) {
+        return crate::info_vdb::run(vdb);
+    }
     let (built, notes) = crate::load::load_defined(scene, defines)?;
     let s = &built.scene;
     let c = &s.camera;
@@ -50,6 +53,16 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
                         niebla::medium::GridEmission::Temperature { scale, .. } => {
                             format!("blackbody of a temperature grid x {scale}")
                         }
+                        niebla::medium::GridEmission::Pyro(e) => format!(
+                            "pyro: {:?} x flame{}, blackbody intensity {} tint {:?}, T = {} x {} + {} K",
+                            e.emission.0,
+                            if e.flame.is_some() { " grid" } else { " 1 (no flame grid)" },
+                            e.blackbody_intensity,
+                            e.blackbody_tint.0,
+                            e.temperature.scale,
+                            if e.temperature.field.is_some() { "temperature grid" } else { "1" },
+                            e.temperature.offset
+                        ),
                     };
                     println!(
                         "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \

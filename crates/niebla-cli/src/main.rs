@@ -12,6 +12,7 @@ mod convert_cmd;
 mod error;
 mod flags;
 mod info_cmd;
+mod info_vdb;
 mod load;
 mod merge_cmd;
 mod preview_cmd;
@@ -40,9 +41,11 @@ enum Command {
     /// Add up renders of disjoint sample ranges of one scene (EXR outputs of
     /// `niebla render --first-sample N --spp M`) into one EXR.
     Merge(merge_cmd::MergeArgs),
-    /// Print what a scene holds: camera, media, shapes, lights, render settings.
+    /// Print what a scene holds: camera, media, shapes, lights, render settings;
+    /// or, for a `.vdb` file, every grid it holds.
     Info {
-        /// Scene file (JSON, version 1, or Mitsuba 3 XML). Without it, describes the built-in default scene.
+        /// Scene file (JSON, version 1, or Mitsuba 3 XML) or OpenVDB file
+        /// (`.vdb`). Without it, describes the built-in default scene.
         scene: Option<PathBuf>,
         #[command(flatten)]
         define: flags::DefineFlag,

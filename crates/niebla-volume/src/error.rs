@@ -68,8 +68,9 @@ pub enum VolumeError {
         /// The names of the grids in the file (unique names, in file order).
         available: Vec<String>,
     },
-    /// The grid exists but does not hold scalar floating-point values.
-    #[error("{path}: grid {grid:?} has type {grid_type}, expected a scalar float, half or double grid")]
+    /// The grid exists but does not hold the values asked for (a scalar
+    /// float grid was asked for and it holds vectors, or the reverse).
+    #[error("{path}: grid {grid:?} has type {grid_type}, expected {expected}")]
     UnsupportedGridType {
         /// The file.
         path: PathBuf,
@@ -77,6 +78,8 @@ pub enum VolumeError {
         grid: String,
         /// The grid's type as written in the file, e.g. `Tree_vec3s_5_4_3`.
         grid_type: String,
+        /// What was asked for, e.g. "a scalar float, half or double grid".
+        expected: &'static str,
     },
     /// A grid built in code has inconsistent arguments.
     #[error("invalid grid: {what}")]

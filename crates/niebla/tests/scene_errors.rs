@@ -607,7 +607,7 @@ const MEDIA: &[ErrorCase] = &[
         from: r#""type": "homogeneous""#,
         to: r#""type": "foam""#,
         path: "media.smoke.type",
-        message: r#"unknown medium type "foam"; expected one of: homogeneous, grid"#,
+        message: r#"unknown medium type "foam"; expected one of: homogeneous, grid, pyro"#,
         also: &[],
     },
     ErrorCase {

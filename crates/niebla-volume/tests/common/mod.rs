@@ -113,3 +113,41 @@ pub fn expected() -> serde_json::Value {
     let text = std::fs::read_to_string(vdb_dir().join("expected.json")).expect("read expected.json");
     serde_json::from_str(&text).expect("parse expected.json")
 }
+
+/// The folder holding the Vec3 and Mantaflow-style VDB files written by
+/// `tests/oracle/make_vec3_vdbs.py` and their `expected.json`, generated on
+/// first use under the cargo target directory (same rules as [`vdb_dir`]).
+pub fn vec3_vdb_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("niebla_test_vec3_vdbs");
+        if dir.join("expected.json").exists() {
+            return dir;
+        }
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/oracle/make_vec3_vdbs.py");
+        let python = python_with_openvdb().unwrap_or_else(|| {
+            panic!(
+                "no Python with the OpenVDB bindings: install them with \
+                 `apt-get install -y python3-openvdb libopenvdb-tools` (CI does)"
+            )
+        });
+        let scratch = dir.with_extension(format!("tmp{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&scratch);
+        let out = Command::new(&python)
+            .arg(&script)
+            .arg(&scratch)
+            .env("OPENVDB_DISABLE_DELAYED_LOAD", "1")
+            .output()
+            .expect("run make_vec3_vdbs.py");
+        assert!(out.status.success(), "make_vec3_vdbs.py failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            !String::from_utf8_lossy(&out.stderr).contains("vdb_tool not found"),
+            "vdb_tool is missing: install it with `apt-get install -y libopenvdb-tools`"
+        );
+        if std::fs::rename(&scratch, &dir).is_err() {
+            assert!(dir.join("expected.json").exists(), "cannot move VDB files to {}", dir.display());
+            let _ = std::fs::remove_dir_all(&scratch);
+        }
+        dir
+    })
+}

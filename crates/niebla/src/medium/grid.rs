@@ -84,6 +84,9 @@ pub enum GridEmission {
         /// Tabulated blackbody colors.
         table: Arc<BlackbodyTable>,
     },
+    /// The pyro medium's emission (flame and blackbody terms, zero where the
+    /// density is not positive).
+    Pyro(Box<super::PyroEmission>),
 }
 
 /// A heterogeneous medium: `sigma_x(p) = density(p) * sigma_x`.
@@ -176,6 +179,7 @@ impl GridMedium {
             GridEmission::ProportionalToDensity(l) => *l * density,
             GridEmission::Field { field, scale } => *scale * field.eval(p).max(0.0),
             GridEmission::Temperature { field, scale, table } => table.rgb(field.eval(p)) * *scale,
+            GridEmission::Pyro(e) => e.l_ve(p, density),
         }
     }
 

@@ -8,9 +8,11 @@
 
 mod grid;
 mod homogeneous;
+mod pyro;
 
 pub use grid::{DensityGrid, GridEmission, GridField, GridMedium};
 pub use homogeneous::HomogeneousMedium;
+pub use pyro::{ColorRamp, PyroEmission, PyroTemperature, PYRO_STEFAN_BOLTZMANN};
 
 use crate::color::Rgb;
 use crate::math::{Ray, Vec3};

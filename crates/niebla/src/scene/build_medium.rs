@@ -27,6 +27,8 @@ use crate::limits::{format_bytes, MemoryBudget};
 use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, HomogeneousMedium, Medium};
 use crate::phase::PhaseFunction;
 
+mod pyro;
+
 /// Majorant cells per axis of a dense grid when the file gives none (at most
 /// one cell per voxel).
 pub const DEFAULT_DENSE_MAJORANT_RESOLUTION: usize = 16;
@@ -60,6 +62,12 @@ pub(crate) fn build_medium(
             let mut loader = Loader { source, base_dir, vdb_files: Vec::new(), vdb_file_bytes: 0, budget };
             let medium = build_grid_medium(g, path, &mut loader, phase).map(Medium::Grid);
             // The files are dropped here; their bytes no longer count.
+            loader.budget.used = loader.budget.used.saturating_sub(loader.vdb_file_bytes);
+            medium
+        }
+        MediumDesc::Pyro(p) => {
+            let mut loader = Loader { source, base_dir, vdb_files: Vec::new(), vdb_file_bytes: 0, budget };
+            let medium = pyro::build_pyro_medium(p, path, &mut loader, phase).map(Medium::Grid);
             loader.budget.used = loader.budget.used.saturating_sub(loader.vdb_file_bytes);
             medium
         }
@@ -317,6 +325,32 @@ impl Loader<'_> {
                 Err(self.error(at, format!("{}: has 3 channels (RGB); {hint}", file.display())))
             }
         }
+    }
+
+    /// The names and value types of the grids of an OpenVDB file (read
+    /// once per medium, like [`Loader::read_vdb`]).
+    fn vdb_grid_kinds(
+        &mut self,
+        field: &str,
+        file: &Path,
+    ) -> Result<Vec<(String, niebla_volume::VdbValueKind)>, SceneError> {
+        let index = self.open_vdb(field, file)?;
+        Ok(self.vdb_files[index].1.grids().iter().map(|g| (g.unique_name.clone(), g.value_kind())).collect())
+    }
+
+    /// The index in `vdb_files` of `file`, opening it (within the budget)
+    /// on first use.
+    fn open_vdb(&mut self, field: &str, file: &Path) -> Result<usize, SceneError> {
+        if let Some(i) = self.vdb_files.iter().position(|(p, _)| p == file) {
+            return Ok(i);
+        }
+        let at = if field.ends_with(".file") { field.to_string() } else { format!("{field}.file") };
+        let len = self.check_file(&at, file, 1)?;
+        self.charge(&at, len, &format!("{}: reading the file", file.display()))?;
+        self.vdb_file_bytes += len;
+        let opened = VdbFile::open(file).map_err(|e| self.error(&at, e.to_string()))?;
+        self.vdb_files.push((file.to_path_buf(), opened));
+        Ok(self.vdb_files.len() - 1)
     }
 
     /// One float grid of an OpenVDB file; each file is read once per medium.

@@ -247,6 +247,15 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                 storage: raw.storage,
             }))
         }
+        "pyro" => {
+            let mut pyro: PyroMediumDesc = rest(object)?;
+            pyro.phase = if pyro.anisotropy == 0.0 {
+                PhaseDesc::Isotropic
+            } else {
+                PhaseDesc::HenyeyGreenstein { g: pyro.anisotropy }
+            };
+            Ok(MediumDesc::Pyro(pyro))
+        }
         _ => Err(unknown_type("medium", &tag, MediumDesc::TYPES)),
     }
 }

@@ -270,7 +270,53 @@ fn validate_medium(base: &str, medium: &MediumDesc) -> Check {
             }
             Ok(())
         }
+        MediumDesc::Pyro(m) => validate_pyro(base, m),
     }
+}
+
+/// The pyro medium's parameters (the grids are checked when they are read).
+fn validate_pyro(base: &str, m: &PyroMediumDesc) -> Check {
+    let at = |key: &str| format!("{base}.{key}");
+    non_negative(&at("density"), m.density)?;
+    color(&at("color"), &m.color, in_unit_interval)?;
+    color(&at("absorption_color"), &m.absorption_color, in_unit_interval)?;
+    validate_phase(&at("anisotropy"), &m.phase)?;
+    non_negative(&at("emission_strength"), m.emission_strength)?;
+    color(&at("emission_color"), &m.emission_color, non_negative)?;
+    in_unit_interval(&at("blackbody_intensity"), m.blackbody_intensity)?;
+    color(&at("blackbody_tint"), &m.blackbody_tint, non_negative)?;
+    positive(&at("temperature"), m.temperature)?;
+    finite(&at("temperature_offset"), m.temperature_offset)?;
+    if m.temperature + m.temperature_offset.max(0.0) > PYRO_MAX_KELVIN {
+        return fail(
+            at("temperature"),
+            format!(
+                "temperature {} + temperature_offset {} exceeds {PYRO_MAX_KELVIN} K: \
+                 is the remap of the raw temperatures right?",
+                m.temperature, m.temperature_offset
+            ),
+        );
+    }
+    if let Some(ramp) = &m.flame_ramp {
+        if ramp.is_empty() {
+            return fail(at("flame_ramp"), "a color ramp needs at least one stop");
+        }
+        for (i, (position, c)) in ramp.iter().enumerate() {
+            finite(&format!("{base}.flame_ramp[{i}][0]"), *position)?;
+            color(&format!("{base}.flame_ramp[{i}][1]"), c, non_negative)?;
+            if i > 0 && !(*position > ramp[i - 1].0) {
+                return fail(
+                    format!("{base}.flame_ramp[{i}][0]"),
+                    format!("ramp positions must increase: {} follows {}", position, ramp[i - 1].0),
+                );
+            }
+        }
+    }
+    validate_transform(&at("to_world"), &m.to_world)?;
+    if let Some(r) = &m.majorant_resolution {
+        resolution(&at("majorant_resolution"), r, MAX_MAJORANT_RESOLUTION)?;
+    }
+    Ok(())
 }
 
 fn validate_coefficients(base: &str, coefficients: &CoefficientsDesc, scale: f32) -> Check {

@@ -1,5 +1,6 @@
 //! OpenVDB `.vdb` files: the header, the grid descriptors, and reading
-//! scalar grids into [`SparseGrid`]s.
+//! scalar grids into [`SparseGrid`]s and vector grids into
+//! [`SparseVec3Grid`]s.
 //!
 //! File layout (format versions 222-224; `openvdb/io/Archive.cc`,
 //! `File.cc`, `GridDescriptor.cc`): magic `0x56444220` as i64, format
@@ -19,7 +20,7 @@ mod values;
 use std::path::{Path, PathBuf};
 
 use crate::io::bytes::{read_file, ByteReader};
-use crate::{SparseGrid, VolumeError};
+use crate::{SparseGrid, SparseVec3Grid, VolumeError};
 use values::{ScalarKind, ValueCodec};
 
 const MAGIC: i64 = 0x5644_4220;
@@ -59,14 +60,58 @@ impl VdbGridInfo {
         }
     }
 
-    fn scalar_kind(&self) -> Option<ScalarKind> {
+    /// What the grid's voxels hold, read from its type name.
+    pub fn value_kind(&self) -> VdbValueKind {
         match self.grid_type.as_str() {
-            "Tree_float_5_4_3" => Some(ScalarKind::Float),
-            "Tree_double_5_4_3" => Some(ScalarKind::Double),
-            _ => None,
+            "Tree_float_5_4_3" => VdbValueKind::Float,
+            "Tree_double_5_4_3" => VdbValueKind::Double,
+            "Tree_vec3s_5_4_3" => VdbValueKind::Vec3Float,
+            "Tree_vec3d_5_4_3" => VdbValueKind::Vec3Double,
+            _ => VdbValueKind::Other,
+        }
+    }
+
+    /// (component type, components) of the grids this crate decodes.
+    fn decoded_kind(&self) -> Option<(ScalarKind, usize)> {
+        match self.value_kind() {
+            VdbValueKind::Float => Some((ScalarKind::Float, 1)),
+            VdbValueKind::Double => Some((ScalarKind::Double, 1)),
+            VdbValueKind::Vec3Float => Some((ScalarKind::Float, 3)),
+            VdbValueKind::Vec3Double => Some((ScalarKind::Double, 3)),
+            VdbValueKind::Other => None,
         }
     }
 }
+
+/// The value types of VDB grids, as far as this crate reads them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VdbValueKind {
+    /// `FloatGrid` (`Tree_float_5_4_3`), full or half precision on disk.
+    Float,
+    /// `DoubleGrid` (`Tree_double_5_4_3`), read as `f32`.
+    Double,
+    /// `Vec3SGrid` (`Tree_vec3s_5_4_3`), full or half precision on disk.
+    Vec3Float,
+    /// `Vec3DGrid` (`Tree_vec3d_5_4_3`), read as `f32`.
+    Vec3Double,
+    /// Any other type (booleans, integers, masks, points): listed, not read.
+    Other,
+}
+
+impl VdbValueKind {
+    /// Whether the grid holds 3-vectors.
+    pub fn is_vec3(self) -> bool {
+        matches!(self, VdbValueKind::Vec3Float | VdbValueKind::Vec3Double)
+    }
+
+    /// Whether the grid holds scalars this crate reads.
+    pub fn is_scalar(self) -> bool {
+        matches!(self, VdbValueKind::Float | VdbValueKind::Double)
+    }
+}
+
+const EXPECTED_SCALAR: &str = "a scalar float, half or double grid";
+const EXPECTED_VEC3: &str = "a Vec3 grid (vec3s or vec3d, full or half precision)";
 
 /// An OpenVDB file held in memory, with its grid list.
 ///
@@ -162,12 +207,68 @@ impl VdbFile {
     /// ```
     pub fn read_float_grid_limited(&self, name: &str, max_bytes: u64) -> Result<SparseGrid, VolumeError> {
         let info = self.grid(name)?;
-        let Some(kind) = info.scalar_kind() else {
-            return Err(VolumeError::UnsupportedGridType {
-                path: self.path.clone(),
-                grid: info.unique_name.clone(),
-                grid_type: info.file_type_name(),
-            });
+        let [grid] = self.read_components::<1>(info, EXPECTED_SCALAR, max_bytes)?;
+        Ok(grid)
+    }
+
+    /// Decodes the vector grid `name` (`Vec3SGrid` or `Vec3DGrid`, full or
+    /// half precision; see [`VdbFile::grid`] for how names match) into a
+    /// [`SparseVec3Grid`]. A scalar grid, or any other type, is a
+    /// [`VolumeError::UnsupportedGridType`]. Component values are as stored
+    /// (no change of basis for covariant or contravariant vector types).
+    pub fn read_vec3_grid(&self, name: &str) -> Result<SparseVec3Grid, VolumeError> {
+        self.read_vec3_grid_limited(name, u64::MAX)
+    }
+
+    /// [`VdbFile::read_vec3_grid`] refusing, with a [`VolumeError::TooLarge`],
+    /// a tree whose three component grids would take more than `max_bytes`.
+    pub fn read_vec3_grid_limited(&self, name: &str, max_bytes: u64) -> Result<SparseVec3Grid, VolumeError> {
+        let info = self.grid(name)?;
+        let components = self.read_components::<3>(info, EXPECTED_VEC3, max_bytes)?;
+        Ok(SparseVec3Grid { components })
+    }
+
+    /// Reads the string metadata `key` of grid `name` (e.g. `class`, which
+    /// OpenVDB writes as `fog volume`, `level set`, `staggered` or
+    /// `unknown`), `None` if the grid has no such entry or it is not a string.
+    pub fn grid_string_metadata(&self, name: &str, key: &str) -> Result<Option<String>, VolumeError> {
+        let info = self.grid(name)?;
+        let data = &self.data[..info.end_pos as usize];
+        let mut r = ByteReader::new(data, info.grid_pos as usize, &self.path);
+        r.u32("grid compression flags")?;
+        let count = r.u32("grid metadata")?;
+        let mut found = None;
+        for _ in 0..count {
+            let entry = r.string("grid metadata name")?;
+            let type_name = r.string("grid metadata type")?;
+            let size = r.u32("grid metadata size")? as usize;
+            let bytes = r.bytes(size, "grid metadata value")?;
+            if entry == key && type_name == "string" && found.is_none() {
+                found = Some(String::from_utf8_lossy(bytes).into_owned());
+            }
+        }
+        Ok(found)
+    }
+
+    /// Decodes grid `info` into `N` component grids (1 for scalar grids, 3
+    /// for Vec3 grids), refusing other types with an error that says
+    /// `expected`.
+    fn read_components<const N: usize>(
+        &self,
+        info: &VdbGridInfo,
+        expected: &'static str,
+        max_bytes: u64,
+    ) -> Result<[SparseGrid; N], VolumeError> {
+        let kind = match info.decoded_kind() {
+            Some((kind, arity)) if arity == N => kind,
+            _ => {
+                return Err(VolumeError::UnsupportedGridType {
+                    path: self.path.clone(),
+                    grid: info.unique_name.clone(),
+                    grid_type: info.file_type_name(),
+                    expected,
+                })
+            }
         };
         // An instance stores its own metadata and transform, and shares the
         // tree of its parent.
@@ -185,15 +286,18 @@ impl VdbFile {
                 })?,
         };
         let (_, _, map_type, affine) = self.grid_reader(info)?;
-        let mut grid = SparseGrid::empty(0.0, affine);
-        grid.name = info.name.clone();
-        grid.map_type = map_type;
+        let mut grids: [SparseGrid; N] = std::array::from_fn(|_| {
+            let mut grid = SparseGrid::empty(0.0, affine);
+            grid.name = info.name.clone();
+            grid.map_type = map_type.clone();
+            grid
+        });
 
         let (mut r, compression, _, _) = self.grid_reader(tree_source)?;
-        let mut codec = ValueCodec { kind, half: info.half, compression, background: 0.0 };
+        let mut codec = ValueCodec { kind, arity: N, half: info.half, compression, background: [0.0; 3] };
         let limit = tree::MemoryLimit { max_bytes, grid: &info.unique_name };
-        tree::read_tree(&mut r, &mut codec, &mut grid, &limit)?;
-        Ok(grid)
+        tree::read_tree(&mut r, &mut codec, &mut grids, &limit)?;
+        Ok(grids)
     }
 
     /// A reader positioned at the grid's tree, with its compression and

@@ -1,4 +1,6 @@
-//! Reading a VDB tree (5-4-3 configuration) into a [`SparseGrid`]:
+//! Reading a VDB tree (5-4-3 configuration) into one [`SparseGrid`] per
+//! value component (one for scalar grids, three for Vec3 grids, all with the
+//! same nodes and leaves):
 //! topology first (`RootNode::readTopology`, `InternalNode::readTopology`,
 //! `LeafNode::readTopology`), then the leaf buffers in the same order
 //! (`LeafNode::readBuffers`).
@@ -20,13 +22,19 @@ pub(crate) struct MemoryLimit<'a> {
 }
 
 impl MemoryLimit<'_> {
-    /// An error when `grid` plus one more node of `extra` bytes exceeds the
-    /// limit.
-    fn check(&self, r: &ByteReader, grid: &SparseGrid, extra: usize) -> Result<(), VolumeError> {
-        let bytes = (grid.leaves.len() * std::mem::size_of::<Leaf>()
-            + (grid.uppers.len() + grid.lowers.len()) * std::mem::size_of::<u32>()
-            + grid.tiles.len() * std::mem::size_of::<Tile>()
-            + extra) as u64;
+    /// An error when the component grids plus one more node of `extra`
+    /// bytes in each exceed the limit.
+    fn check(&self, r: &ByteReader, grids: &[SparseGrid], extra: usize) -> Result<(), VolumeError> {
+        let bytes: u64 = grids
+            .iter()
+            .map(|grid| {
+                (grid.leaves.len() * std::mem::size_of::<Leaf>()
+                    + (grid.uppers.len() + grid.lowers.len()) * std::mem::size_of::<u32>()
+                    + grid.tiles.len() * std::mem::size_of::<Tile>()
+                    + extra) as u64
+            })
+            .sum();
+        let grid = &grids[0];
         if bytes <= self.max_bytes {
             return Ok(());
         }
@@ -44,22 +52,26 @@ impl MemoryLimit<'_> {
     }
 }
 
-/// Reads the tree at the reader's position into `grid` (whose transform,
-/// name and background are set by the caller; the background is read
-/// here). `codec.background` is updated with it.
+/// Reads the tree at the reader's position into `grids`, one per value
+/// component (`codec.arity` of them, whose transform and name are set by
+/// the caller; the background is read here). `codec.background` is updated
+/// with it.
 pub(crate) fn read_tree(
     r: &mut ByteReader,
     codec: &mut ValueCodec,
-    grid: &mut SparseGrid,
+    grids: &mut [SparseGrid],
     limit: &MemoryLimit,
 ) -> Result<(), VolumeError> {
+    debug_assert_eq!(grids.len(), codec.arity);
     let pos = r.pos();
     let buffer_count = r.i32("tree buffer count")?;
     if buffer_count != 1 {
         return Err(r.corrupt_at(pos, format!("tree buffer count {buffer_count} (expected 1)")));
     }
-    codec.background = read_value(r, codec.kind, "background value")?;
-    grid.background = codec.background;
+    codec.background = read_value(r, codec.kind, codec.arity, "background value")?;
+    for (c, grid) in grids.iter_mut().enumerate() {
+        grid.background = codec.background[c];
+    }
     let num_tiles = r.u32("root tile count")?;
     let num_children = r.u32("root child count")?;
 
@@ -67,15 +79,17 @@ pub(crate) fn read_tree(
     for _ in 0..num_tiles {
         let pos = r.pos();
         let origin = read_origin(r, "root tile origin")?;
-        let value = read_value(r, codec.kind, "root tile value")?;
+        let value = read_value(r, codec.kind, codec.arity, "root tile value")?;
         let active = r.u8("root tile active flag")? != 0;
         check_aligned(r, pos, origin, UPPER_TOTAL)?;
         let key = origin.map(|v| v >> UPPER_TOTAL);
-        let entry = grid
-            .tile_entry(Tile { origin, depth: 0, value, active })
-            .ok_or_else(|| r.corrupt_at(pos, "too many tiles"))?;
-        if grid.root.insert(key, entry).is_some() {
-            return Err(r.corrupt_at(pos, format!("two root entries at {origin:?}")));
+        for (c, grid) in grids.iter_mut().enumerate() {
+            let entry = grid
+                .tile_entry(Tile { origin, depth: 0, value: value[c], active })
+                .ok_or_else(|| r.corrupt_at(pos, "too many tiles"))?;
+            if grid.root.insert(key, entry).is_some() {
+                return Err(r.corrupt_at(pos, format!("two root entries at {origin:?}")));
+            }
         }
     }
 
@@ -86,22 +100,29 @@ pub(crate) fn read_tree(
         let origin = read_origin(r, "root child origin")?;
         check_aligned(r, pos, origin, UPPER_TOTAL)?;
         let key = origin.map(|v| v >> UPPER_TOTAL);
-        if grid.root.contains_key(&key) {
+        if grids[0].root.contains_key(&key) {
             return Err(r.corrupt_at(pos, format!("two root entries at {origin:?}")));
         }
-        let upper = read_upper(r, codec, grid, origin, &mut leaf_order, limit)?;
-        grid.root.insert(key, upper);
+        let upper = read_upper(r, codec, grids, origin, &mut leaf_order, limit)?;
+        for grid in grids.iter_mut() {
+            grid.root.insert(key, upper);
+        }
     }
 
     // Leaf buffers, in topology order.
-    let mut values = [0f32; LEAF_SIZE];
+    let arity = codec.arity;
+    let mut values = vec![0f32; LEAF_SIZE * arity];
     for &l in &leaf_order {
         let mask = read_mask(r, LEAF_SIZE, "leaf value mask")?;
         read_compressed_values(r, codec, &mask, &mut values)?;
-        let leaf = &mut grid.leaves[l as usize];
-        leaf.values = values;
-        for (w, word) in leaf.active.iter_mut().zip(mask) {
-            *w = word;
+        for (c, grid) in grids.iter_mut().enumerate() {
+            let leaf = &mut grid.leaves[l as usize];
+            for (n, v) in leaf.values.iter_mut().enumerate() {
+                *v = values[n * arity + c];
+            }
+            for (w, &word) in leaf.active.iter_mut().zip(&mask) {
+                *w = word;
+            }
         }
     }
     Ok(())
@@ -131,6 +152,7 @@ fn child_origin(origin: [i32; 3], n: usize, log2_dim: u32, child_log2: u32) -> [
 struct InternalNode {
     child_mask: Vec<u64>,
     value_mask: Vec<u64>,
+    /// `arity` components per entry.
     values: Vec<f32>,
 }
 
@@ -159,36 +181,45 @@ fn read_internal(r: &mut ByteReader, codec: &ValueCodec, level: Level) -> Result
     };
     let child_mask = read_mask(r, size, &format!("{what} child mask"))?;
     let value_mask = read_mask(r, size, &format!("{what} value mask"))?;
-    let mut values = vec![0f32; size];
+    let mut values = vec![0f32; size * codec.arity];
     read_compressed_values(r, codec, &value_mask, &mut values)?;
     Ok(InternalNode { child_mask, value_mask, values })
 }
 
-/// Allocates the node table for `node` and fills its non-child slots with
-/// tiles (active ones, and inactive ones whose value is not the background).
+/// Allocates the node table for `node` in every component grid and fills
+/// its non-child slots with tiles (active ones, and inactive ones whose
+/// value is not the background; a component equal to its background in an
+/// inactive tile stays empty in that component's grid).
 fn place_node(
     r: &ByteReader,
     codec: &ValueCodec,
-    grid: &mut SparseGrid,
+    grids: &mut [SparseGrid],
     node: &InternalNode,
     origin: [i32; 3],
     level: Level,
 ) -> Result<usize, VolumeError> {
     let (size, log2_dim, child_log2, depth) = level.shape();
-    let index = match level {
-        Level::Upper => grid.push_upper(origin, EMPTY),
-        Level::Lower => grid.push_lower(origin, EMPTY),
-    } as usize;
-    for (n, &value) in node.values.iter().enumerate() {
+    let mut index = 0;
+    for grid in grids.iter_mut() {
+        index = match level {
+            Level::Upper => grid.push_upper(origin, EMPTY),
+            Level::Lower => grid.push_lower(origin, EMPTY),
+        } as usize;
+    }
+    let arity = codec.arity;
+    for (n, value) in node.values.chunks_exact(arity).enumerate() {
         let active = bit(&node.value_mask, n);
-        if bit(&node.child_mask, n) || (!active && value.to_bits() == codec.background.to_bits()) {
+        let is_background = value.iter().zip(codec.background).all(|(v, b)| v.to_bits() == b.to_bits());
+        if bit(&node.child_mask, n) || (!active && is_background) {
             continue;
         }
-        let tile = Tile { origin: child_origin(origin, n, log2_dim, child_log2), depth, value, active };
-        let entry = grid.tile_entry(tile).ok_or_else(|| r.corrupt_at(r.pos(), "too many tiles"))?;
-        match level {
-            Level::Upper => grid.uppers[index * size + n] = entry,
-            Level::Lower => grid.lowers[index * size + n] = entry,
+        for (c, grid) in grids.iter_mut().enumerate() {
+            let tile = Tile { origin: child_origin(origin, n, log2_dim, child_log2), depth, value: value[c], active };
+            let entry = grid.tile_entry(tile).ok_or_else(|| r.corrupt_at(r.pos(), "too many tiles"))?;
+            match level {
+                Level::Upper => grid.uppers[index * size + n] = entry,
+                Level::Lower => grid.lowers[index * size + n] = entry,
+            }
         }
     }
     Ok(index)
@@ -197,18 +228,20 @@ fn place_node(
 fn read_upper(
     r: &mut ByteReader,
     codec: &ValueCodec,
-    grid: &mut SparseGrid,
+    grids: &mut [SparseGrid],
     origin: [i32; 3],
     leaf_order: &mut Vec<u32>,
     limit: &MemoryLimit,
 ) -> Result<u32, VolumeError> {
     let node = read_internal(r, codec, Level::Upper)?;
-    limit.check(r, grid, UPPER_SIZE * std::mem::size_of::<u32>())?;
-    let u = place_node(r, codec, grid, &node, origin, Level::Upper)?;
+    limit.check(r, grids, UPPER_SIZE * std::mem::size_of::<u32>())?;
+    let u = place_node(r, codec, grids, &node, origin, Level::Upper)?;
     for n in ones(&node.child_mask) {
         let o = child_origin(origin, n, 5, LOWER_TOTAL);
-        let lower = read_lower(r, codec, grid, o, leaf_order, limit)?;
-        grid.uppers[u * UPPER_SIZE + n] = lower;
+        let lower = read_lower(r, codec, grids, o, leaf_order, limit)?;
+        for grid in grids.iter_mut() {
+            grid.uppers[u * UPPER_SIZE + n] = lower;
+        }
     }
     Ok(u as u32)
 }
@@ -216,24 +249,27 @@ fn read_upper(
 fn read_lower(
     r: &mut ByteReader,
     codec: &ValueCodec,
-    grid: &mut SparseGrid,
+    grids: &mut [SparseGrid],
     origin: [i32; 3],
     leaf_order: &mut Vec<u32>,
     limit: &MemoryLimit,
 ) -> Result<u32, VolumeError> {
     let node = read_internal(r, codec, Level::Lower)?;
-    limit.check(r, grid, LOWER_SIZE * std::mem::size_of::<u32>())?;
-    let l = place_node(r, codec, grid, &node, origin, Level::Lower)?;
+    limit.check(r, grids, LOWER_SIZE * std::mem::size_of::<u32>())?;
+    let l = place_node(r, codec, grids, &node, origin, Level::Lower)?;
     for n in ones(&node.child_mask) {
         let o = child_origin(origin, n, 4, LEAF_TOTAL);
         // LeafNode::readTopology: just the value mask; values come later.
         let mask = read_mask(r, LEAF_SIZE, "leaf topology mask")?;
-        limit.check(r, grid, std::mem::size_of::<Leaf>())?;
-        let mut leaf = Leaf::new(o, codec.background, false);
-        leaf.active.copy_from_slice(&mask);
-        let index = grid.push_leaf(leaf);
+        limit.check(r, grids, std::mem::size_of::<Leaf>())?;
+        let mut index = 0;
+        for (c, grid) in grids.iter_mut().enumerate() {
+            let mut leaf = Leaf::new(o, codec.background[c], false);
+            leaf.active.copy_from_slice(&mask);
+            index = grid.push_leaf(leaf);
+            grid.lowers[l * LOWER_SIZE + n] = index;
+        }
         leaf_order.push(index);
-        grid.lowers[l * LOWER_SIZE + n] = index;
     }
     Ok(l as u32)
 }

@@ -40,23 +40,34 @@ impl ScalarKind {
     }
 }
 
+/// A grid value: one component for scalar grids, three for Vec3 grids
+/// (unused components are zero).
+pub(crate) type Value = [f32; 3];
+
 /// How a grid's node values are stored.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ValueCodec {
     pub kind: ScalarKind,
+    /// Components per value: 1 (scalar grids) or 3 (Vec3 grids, stored
+    /// x, y, z consecutively).
+    pub arity: usize,
     /// Node buffers hold 16-bit halves (`_HalfFloat` grids); backgrounds,
     /// tiles of the root and inactive values stay full precision.
     pub half: bool,
     pub compression: u32,
-    pub background: f32,
+    pub background: Value,
 }
 
-/// Reads one full-precision value.
-pub(crate) fn read_value(r: &mut ByteReader, kind: ScalarKind, what: &str) -> Result<f32, VolumeError> {
-    Ok(match kind {
-        ScalarKind::Float => r.f32(what)?,
-        ScalarKind::Double => r.f64(what)? as f32,
-    })
+/// Reads one full-precision value of `arity` components.
+pub(crate) fn read_value(r: &mut ByteReader, kind: ScalarKind, arity: usize, what: &str) -> Result<Value, VolumeError> {
+    let mut v = [0.0; 3];
+    for c in v.iter_mut().take(arity) {
+        *c = match kind {
+            ScalarKind::Float => r.f32(what)?,
+            ScalarKind::Double => r.f64(what)? as f32,
+        };
+    }
+    Ok(v)
 }
 
 /// Reads a node bit mask of `bits` bits as little-endian 64-bit words.
@@ -85,27 +96,29 @@ pub(crate) fn ones(mask: &[u64]) -> impl Iterator<Item = usize> + '_ {
     })
 }
 
-/// Reads the `out.len()` values of a node whose value mask is `value_mask`
-/// into `out` (OpenVDB's `readCompressedValues`).
+/// Reads the `out.len() / codec.arity` values of a node whose value mask is
+/// `value_mask` into `out`, components of one value consecutive (OpenVDB's
+/// `readCompressedValues`).
 pub(crate) fn read_compressed_values(
     r: &mut ByteReader,
     codec: &ValueCodec,
     value_mask: &[u64],
     out: &mut [f32],
 ) -> Result<(), VolumeError> {
-    let count = out.len();
+    let arity = codec.arity;
+    let count = out.len() / arity;
     let meta_pos = r.pos();
     let metadata = r.u8("node value metadata")?;
     if metadata > NO_MASK_AND_ALL_VALS {
         return Err(r.corrupt_at(meta_pos, format!("node value metadata {metadata} (expected 0 to 6)")));
     }
     let bg = codec.background;
-    let mut inactive0 = if metadata == NO_MASK_OR_INACTIVE_VALS { bg } else { -bg };
+    let mut inactive0 = if metadata == NO_MASK_OR_INACTIVE_VALS { bg } else { bg.map(|v| -v) };
     let mut inactive1 = bg;
     if matches!(metadata, NO_MASK_AND_ONE_INACTIVE_VAL | MASK_AND_ONE_INACTIVE_VAL | MASK_AND_TWO_INACTIVE_VALS) {
-        inactive0 = read_value(r, codec.kind, "inactive value")?;
+        inactive0 = read_value(r, codec.kind, arity, "inactive value")?;
         if metadata == MASK_AND_TWO_INACTIVE_VALS {
-            inactive1 = read_value(r, codec.kind, "second inactive value")?;
+            inactive1 = read_value(r, codec.kind, arity, "second inactive value")?;
         }
     }
     let selection =
@@ -121,27 +134,27 @@ pub(crate) fn read_compressed_values(
     } else {
         count
     };
-    let values = read_data(r, codec, stored)?;
+    let values = read_data(r, codec, stored * arity)?;
     if stored == count {
         out.copy_from_slice(&values);
         return Ok(());
     }
     // Put the stored (active) values back in place and rebuild the inactive
     // ones from the background, the inactive values and the selection mask.
-    let mut next = values.iter();
-    for (n, slot) in out.iter_mut().enumerate() {
-        *slot = if bit(value_mask, n) {
-            *next.next().expect("one stored value per active bit")
+    let mut next = values.chunks_exact(arity);
+    for (n, slot) in out.chunks_exact_mut(arity).enumerate() {
+        if bit(value_mask, n) {
+            slot.copy_from_slice(next.next().expect("one stored value per active bit"));
         } else if selection.as_deref().is_some_and(|s| bit(s, n)) {
-            inactive1
+            slot.copy_from_slice(&inactive1[..arity]);
         } else {
-            inactive0
-        };
+            slot.copy_from_slice(&inactive0[..arity]);
+        }
     }
     Ok(())
 }
 
-/// Reads `count` values stored with the grid's compression
+/// Reads `count` scalars (value components) stored with the grid's compression
 /// (`io::readData` / `HalfReader::read`).
 fn read_data(r: &mut ByteReader, codec: &ValueCodec, count: usize) -> Result<Vec<f32>, VolumeError> {
     if codec.half && count == 0 {
@@ -209,7 +222,7 @@ mod tests {
     use std::path::Path;
 
     fn codec(compression: u32) -> ValueCodec {
-        ValueCodec { kind: ScalarKind::Float, half: false, compression, background: 1.5 }
+        ValueCodec { kind: ScalarKind::Float, arity: 1, half: false, compression, background: [1.5, 0.0, 0.0] }
     }
 
     #[test]
@@ -235,6 +248,32 @@ mod tests {
         let mut out = [0f32; 64];
         read_compressed_values(&mut r, &codec(COMPRESS_ACTIVE_MASK), &[1], &mut out).unwrap();
         assert_eq!((out[0], out[1], out[63]), (2.0, -1.5, -1.5));
+    }
+
+    #[test]
+    fn double_vec3_values_with_an_inactive_value_decode_per_component() {
+        // Vec3d grid (the reference Python bindings cannot write one): 64
+        // values, active bits 0 and 2, one inactive value for the rest.
+        let mut file = vec![NO_MASK_AND_ONE_INACTIVE_VAL];
+        for v in [9.0f64, 8.0, 7.0] {
+            file.extend(v.to_le_bytes());
+        }
+        for v in [1.0f64, 2.0, 3.0, -4.0, 0.5, 0.25] {
+            file.extend(v.to_le_bytes());
+        }
+        let mut r = ByteReader::new(&file, 0, Path::new("t"));
+        let codec = ValueCodec {
+            kind: ScalarKind::Double,
+            arity: 3,
+            half: false,
+            compression: COMPRESS_ACTIVE_MASK,
+            background: [0.0; 3],
+        };
+        let mut out = [0f32; 64 * 3];
+        read_compressed_values(&mut r, &codec, &[0b101], &mut out).unwrap();
+        assert_eq!(&out[..9], &[1.0, 2.0, 3.0, 9.0, 8.0, 7.0, -4.0, 0.5, 0.25]);
+        assert_eq!(&out[189..], &[9.0, 8.0, 7.0]);
+        assert_eq!(r.remaining(), 0);
     }
 
     #[test]

@@ -18,17 +18,21 @@ pub enum MediumDesc {
     Homogeneous(HomogeneousMediumDesc),
     /// `"type": "grid"`: coefficients per unit density times a voxel density.
     Grid(GridMediumDesc),
+    /// `"type": "pyro"`: fire and smoke from the grids of one VDB file, with
+    /// Blender's Principled Volume parameters.
+    Pyro(PyroMediumDesc),
 }
 
 impl MediumDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["homogeneous", "grid"];
+    pub const TYPES: &'static [&'static str] = &["homogeneous", "grid", "pyro"];
 
     /// The phase function, whatever the type.
     pub fn phase(&self) -> &PhaseDesc {
         match self {
             MediumDesc::Homogeneous(m) => &m.phase,
             MediumDesc::Grid(m) => &m.phase,
+            MediumDesc::Pyro(m) => &m.phase,
         }
     }
 }

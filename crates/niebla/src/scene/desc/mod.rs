@@ -406,11 +406,13 @@ impl Default for IntegratorSpec {
 mod film;
 mod lights;
 mod medium;
+mod pyro;
 mod shapes;
 mod surfaces;
 
 pub use film::*;
 pub use lights::*;
 pub use medium::*;
+pub use pyro::*;
 pub use shapes::*;
 pub use surfaces::*;
