@@ -27,6 +27,9 @@ pub enum CliError {
     /// the settings parser and names the option.
     #[error("{0}")]
     Integrator(String),
+    /// `niebla view` could not start (the scene's or the socket's message).
+    #[error("{0}")]
+    View(String),
     /// The scene file named on the command line does not exist.
     #[error("{}: scene file not found", .0.display())]
     SceneNotFound(PathBuf),
