@@ -51,6 +51,7 @@ pub fn run(args: &ViewArgs) -> Result<(), CliError> {
         port: args.port,
         threads: args.threads.get()?,
         watch: true,
+        inline: None,
     };
     let server = niebla_view::ViewServer::start(&config).map_err(|e| CliError::View(e.to_string()))?;
     println!("niebla view: {}", server.url());

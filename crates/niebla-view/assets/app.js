@@ -13,9 +13,11 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const state = {
   label: '', scene: null, compare: null, integrators: [], reloads: 0,
   frames: [null, null], lastId: [0, 0], frameCount: [0, 0],
-  sentAt: {}, latencies: [], relativeMse: null, error: null, saved: null,
+  sentAt: {}, latencies: [], relativeMse: null, error: null, saved: null, lastVersion: 1, busy: false,
 };
 window.nieblaView = state;
+// The benchmark edits through the same path as the controls: nieblaView.edit(interactive).
+state.edit = (interactive) => sendEdit(interactive);
 
 const HALF = new Float32Array(65536).map((_, h) => halfToFloat(h));
 let display;
@@ -32,6 +34,7 @@ let pending = null, inFlight = false;
 // Send the edited scene (the latest wins while a request is in flight).
 function sendEdit(interactive) {
   pending = { interactive };
+  state.busy = true;
   if (!inFlight) flush();
 }
 
@@ -50,6 +53,7 @@ async function flush() {
       const reply = await response.json();
       if (response.ok) {
         state.sentAt[reply.version] = sent;
+        state.lastVersion = reply.version;
         showError(null);
       } else {
         showError(reply.error);
@@ -59,6 +63,7 @@ async function flush() {
     }
   }
   inFlight = false;
+  state.busy = false;
 }
 
 // ---- state and controls --------------------------------------------------
@@ -250,7 +255,8 @@ async function pollSlot(slot) {
     if (slot === 1 && !state.compare) continue;
     if (slot === 0 && state.sentAt[frame.version] !== undefined) {
       state.latencies.push({ version: frame.version, ms: frame.receivedAt - state.sentAt[frame.version], interactive: frame.interactive });
-      delete state.sentAt[frame.version];
+      // Edits superseded before their first frame never get one.
+      for (const v of Object.keys(state.sentAt)) if (Number(v) <= frame.version) delete state.sentAt[v];
     }
     state.frames[slot] = frame;
     state.frameCount[slot] += 1;

@@ -42,11 +42,32 @@ pub struct ViewConfig {
     pub threads: Option<usize>,
     /// Reload the scene when its file changes on disk (polled twice a second).
     pub watch: bool,
+    /// A scene given as JSON instead of a file (used when `scene` is `None`):
+    /// the Python package's `Scene.view()`.
+    pub inline: Option<InlineScene>,
+}
+
+/// A scene handed over as JSON rather than read from a file.
+#[derive(Clone, Debug)]
+pub struct InlineScene {
+    /// The scene (JSON with the schema of a scene file).
+    pub value: serde_json::Value,
+    /// Its name in messages (e.g. `<dict>`).
+    pub label: String,
+    /// The folder relative paths resolve against and saved files go to.
+    pub base: PathBuf,
 }
 
 impl Default for ViewConfig {
     fn default() -> ViewConfig {
-        ViewConfig { scene: None, host: IpAddr::V4(Ipv4Addr::LOCALHOST), port: 0, threads: None, watch: true }
+        ViewConfig {
+            scene: None,
+            host: IpAddr::V4(Ipv4Addr::LOCALHOST),
+            port: 0,
+            threads: None,
+            watch: true,
+            inline: None,
+        }
     }
 }
 
@@ -102,10 +123,22 @@ fn modified(path: &PathBuf) -> Option<SystemTime> {
 impl ViewServer {
     /// Load the scene, bind the address and start serving.
     pub fn start(config: &ViewConfig) -> Result<ViewServer, ViewError> {
-        let (label, scene) = read_scene(config.scene.as_ref())?;
-        let base = match &config.scene {
-            Some(path) => path.parent().filter(|p| !p.as_os_str().is_empty()).map_or(PathBuf::from("."), PathBuf::from),
-            None => PathBuf::from("."),
+        let (label, scene, base) = match (&config.scene, &config.inline) {
+            (None, Some(inline)) => {
+                let text = inline.value.to_string();
+                niebla::scene::parse_scene_str(&text, &inline.label).map_err(|e| ViewError::Scene(e.to_string()))?;
+                (inline.label.clone(), inline.value.clone(), inline.base.clone())
+            }
+            (scene, _) => {
+                let (label, value) = read_scene(scene.as_ref())?;
+                let base = match scene {
+                    Some(path) => {
+                        path.parent().filter(|p| !p.as_os_str().is_empty()).map_or(PathBuf::from("."), PathBuf::from)
+                    }
+                    None => PathBuf::from("."),
+                };
+                (label, value, base)
+            }
         };
         let session = Arc::new(Session::new(config.scene.clone(), base, label, scene, config.threads));
         let listener = std::net::TcpListener::bind(SocketAddr::new(config.host, config.port))
@@ -147,6 +180,15 @@ impl ViewServer {
             threads.push(std::thread::spawn(move || watch(session, path)));
         }
         Ok(ViewServer { session, url, port, shutdown, threads })
+    }
+
+    /// Stop serving from another thread (the shared handle of [`ViewServer::stop`]).
+    pub fn stopper(&self) -> impl Fn() + Send + Sync + 'static {
+        let (session, shutdown) = (self.session.clone(), self.shutdown.clone());
+        move || {
+            session.shut_down();
+            shutdown.notify_one();
+        }
     }
 
     /// The page's address, access token included.

@@ -15,7 +15,7 @@ use niebla::scene::{build_scene, parse_scene_str};
 use serde_json::Value;
 
 use crate::frame::{relative_error_estimate, Frame};
-use crate::session::{Job, Session};
+use crate::session::{Job, Session, SlotInput};
 
 /// The scene slot `index` renders for `job`: the edited scene itself (slot
 /// 0), or with `render.integrator` replaced by the comparison integrator
@@ -40,19 +40,29 @@ pub fn with_integrator(scene: &Value, integrator: &Value) -> Value {
     scene
 }
 
-/// Run render slot `index` until the session stops.
+/// Run render slot `index` until the session stops. A new job whose input
+/// for this slot equals that of the last render, finished or still valid,
+/// is skipped (its frames stand).
 pub fn run_slot(session: Arc<Session>, index: usize) {
     let mut seen = 0;
+    let mut done: Option<SlotInput> = None;
     while let Some(job) = session.wait_job(seen) {
         seen = job.version;
         let slot = &session.slots[index];
+        let input = job.slot_input(index);
+        if done.as_ref() == Some(&input) && !slot.cancel.load(Ordering::SeqCst) {
+            continue;
+        }
         slot.cancel.store(false, Ordering::SeqCst);
-        if session.job().version != seen {
+        if session.job().slot_input(index) != input {
             continue; // an edit came between taking the job and clearing the flag
         }
-        let Some(scene) = slot_scene(&job, index) else { continue };
-        if let Err(message) = render_job(&session, index, &job, &scene) {
-            slot.publish_error(job.version, message);
+        done = None;
+        let Some(scene) = &input.scene else { continue };
+        match render_job(&session, index, &job, scene) {
+            Ok(()) if !slot.cancel.load(Ordering::SeqCst) => done = Some(input),
+            Ok(()) => {}
+            Err(message) => slot.publish_error(job.version, message),
         }
     }
 }

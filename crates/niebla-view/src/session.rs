@@ -30,6 +30,32 @@ pub struct Job {
     pub max_spp: u32,
 }
 
+/// Everything that decides what one slot renders (two jobs with equal
+/// inputs for a slot give the same frames there).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SlotInput {
+    /// The scene the slot renders (`None`: the slot is idle).
+    pub scene: Option<Value>,
+    /// Reduced resolution, one pass.
+    pub interactive: bool,
+    /// Divisor of the resolution while interactive.
+    pub preview_scale: u32,
+    /// Samples per pixel to stop at.
+    pub max_spp: u32,
+}
+
+impl Job {
+    /// What slot `index` renders for this job.
+    pub fn slot_input(&self, index: usize) -> SlotInput {
+        SlotInput {
+            scene: crate::render_loop::slot_scene(self, index),
+            interactive: self.interactive,
+            preview_scale: self.preview_scale,
+            max_spp: self.max_spp,
+        }
+    }
+}
+
 /// What a render slot last produced.
 #[derive(Clone, Debug)]
 pub enum Event {
@@ -171,13 +197,18 @@ impl Session {
     }
 
     /// Replace the job through `edit` (which sees the current one), give it
-    /// the next version, cancel the running renders and wake the slots.
+    /// the next version, cancel the renders of the slots whose input
+    /// changed (the split view's switch leaves slot 0 refining) and wake
+    /// the slots.
     pub fn update_job(&self, edit: impl FnOnce(&mut Job)) -> u64 {
         let mut job = lock(&self.job);
+        let before = [job.slot_input(0), job.slot_input(1)];
         edit(&mut job);
         job.version += 1;
-        for slot in &self.slots {
-            slot.cancel.store(true, Ordering::SeqCst);
+        for (index, slot) in self.slots.iter().enumerate() {
+            if job.slot_input(index) != before[index] {
+                slot.cancel.store(true, Ordering::SeqCst);
+            }
         }
         self.job_changed.notify_all();
         job.version
