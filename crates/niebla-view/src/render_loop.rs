@@ -59,7 +59,10 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
         }
         done = None;
         let Some(scene) = &input.scene else { continue };
-        match render_job(&session, index, &job, scene) {
+        slot.rendering_interactive.store(job.interactive, Ordering::SeqCst);
+        let result = render_job(&session, index, &job, scene);
+        slot.rendering_interactive.store(false, Ordering::SeqCst);
+        match result {
             Ok(()) if !slot.cancel.load(Ordering::SeqCst) => done = Some(input),
             Ok(()) => {}
             Err(message) => slot.publish_error(job.version, message),

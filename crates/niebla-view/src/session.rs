@@ -86,6 +86,8 @@ pub struct Slot {
     changed: Condvar,
     /// Raised to cancel the slot's render (an edit arrived).
     pub cancel: AtomicBool,
+    /// Set while the slot renders an interactive (drag) frame.
+    pub rendering_interactive: AtomicBool,
 }
 
 impl Slot {
@@ -206,7 +208,11 @@ impl Session {
         edit(&mut job);
         job.version += 1;
         for (index, slot) in self.slots.iter().enumerate() {
-            if job.slot_input(index) != before[index] {
+            // A drag frame in progress is finished, not cancelled, by the next
+            // drag edit (the slot then renders the latest one), so the image
+            // follows the mouse at the rate frames can be rendered.
+            let keep = job.interactive && slot.rendering_interactive.load(Ordering::SeqCst);
+            if job.slot_input(index) != before[index] && !keep {
                 slot.cancel.store(true, Ordering::SeqCst);
             }
         }
