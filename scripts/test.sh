@@ -73,6 +73,17 @@ rm -rf target/py-wheels
 "$venv/bin/python" -m pip install -q --force-reinstall --no-deps target/py-wheels/niebla-*.whl
 status=0
 NIEBLA_BIN="$PWD/target/release/niebla" "$venv/bin/python" -m pytest -q crates/niebla-py/tests || status=$?
+# The live viewer in headless Chromium (Playwright from PyPI driving Debian's
+# /usr/bin/chromium; the script prints why it skips when chromium is absent).
+if [ "$status" = 0 ]; then
+  "$venv/bin/python" -m pip install -q "playwright>=1.40,<2" pillow
+  viewer_status=0
+  NIEBLA_BIN="$PWD/target/release/niebla" "$venv/bin/python" crates/niebla-view/tests/browser/test_viewer.py || viewer_status=$?
+  if [ "$viewer_status" != 0 ] && [ "$viewer_status" != 77 ]; then
+    echo "error: the browser test of niebla view failed (exit status $viewer_status)" >&2
+    exit "$viewer_status"
+  fi
+fi
 if [ "$status" = 5 ]; then
   echo "error: pytest collected no Python tests" >&2
   exit 1

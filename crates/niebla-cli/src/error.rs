@@ -31,6 +31,9 @@ pub enum CliError {
     /// could not be read; the message names the file and what is wrong.
     #[error("{0}")]
     Volume(#[from] niebla_volume::VolumeError),
+    /// `niebla view` could not start (the scene's or the socket's message).
+    #[error("{0}")]
+    View(String),
     /// The scene file named on the command line does not exist.
     #[error("{}: scene file not found", .0.display())]
     SceneNotFound(PathBuf),

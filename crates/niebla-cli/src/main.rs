@@ -17,6 +17,7 @@ mod load;
 mod merge_cmd;
 mod preview_cmd;
 mod render_cmd;
+mod view_cmd;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -55,6 +56,8 @@ enum Command {
     /// Render frames repeatedly with an interactive method, report frames/s,
     /// and re-render when the scene file changes.
     Preview(preview_cmd::PreviewArgs),
+    /// Serve a live, editable, progressive view of a scene to the browser.
+    View(view_cmd::ViewArgs),
     /// Measure the renderer and print figures.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -88,6 +91,7 @@ fn main() -> ExitCode {
         Command::Bench(BenchCommand::Single(args)) => bench::run(&args),
         Command::Bench(BenchCommand::Trackers(args)) => bench_trackers::run(&args),
         Command::Preview(args) => preview_cmd::run(&args),
+        Command::View(args) => view_cmd::run(&args),
         Command::Bench(BenchCommand::Interactive(args)) => bench_interactive::run(&args),
         Command::Bench(BenchCommand::Photons(args)) => bench_photons::run(&args),
         Command::Bench(BenchCommand::Geometry(args)) => bench_geometry::run(&args),

@@ -23,6 +23,7 @@ mod layers;
 mod render;
 mod scene;
 mod sums;
+mod view;
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -67,6 +68,7 @@ fn _niebla(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // The names the scene parser accepts (Python passes integrators through it).
     m.add("INTEGRATORS", niebla::integrator::registry::NAMES.to_vec())?;
     m.add_class::<scene::PyScene>()?;
+    m.add_class::<view::PyViewer>()?;
     m.add_function(wrap_pyfunction!(image::write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(image::write_png, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_exr, m)?)?;

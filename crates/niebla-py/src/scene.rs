@@ -206,6 +206,24 @@ impl PyScene {
         self.full_value().to_string()
     }
 
+    /// Serve a live, editable view of the scene to the browser (what
+    /// `niebla view` does) and return the running `Viewer`; its `url`
+    /// (printed) holds the access token. Saved files go to `base_dir`.
+    #[pyo3(signature = (port = 0, host = "127.0.0.1", open = false, threads = None))]
+    fn view(&self, port: u16, host: &str, open: bool, threads: Option<usize>) -> PyResult<crate::view::PyViewer> {
+        if threads == Some(0) {
+            return Err(PyValueError::new_err("threads: must be at least 1"));
+        }
+        let viewer = crate::view::start(self.full_value(), &self.source, &self.base_dir, host, port, threads)?;
+        if open {
+            Python::with_gil(|py| -> PyResult<()> {
+                py.import("webbrowser")?.call_method1("open", (viewer.url_string(),))?;
+                Ok(())
+            })?;
+        }
+        Ok(viewer)
+    }
+
     /// Name of the description in messages (the file, or `<dict>`).
     #[getter]
     fn source(&self) -> &str {

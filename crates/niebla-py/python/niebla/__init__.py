@@ -140,6 +140,18 @@ class Scene:
         """The scene description as JSON text (see :meth:`to_dict`)."""
         return self._native.to_json()
 
+    def view(self, port: int = 0, host: str = "127.0.0.1", open: bool = False, threads: Optional[int] = None) -> "_niebla.Viewer":
+        """Serve a live, editable, progressive view of this scene to the
+        browser, as ``niebla view`` does, and return the running viewer:
+        ``viewer.url`` (with its access token) is the page's address,
+        ``viewer.stop()`` ends it (so does leaving a ``with`` block or
+        dropping the object). Saved images and scenes go to the scene's
+        folder (``base_dir``). In a notebook the viewer shows as a link.
+        """
+        viewer = self._native.view(port, host, open, threads)
+        print(f"niebla view: {viewer.url}")
+        return viewer
+
     # ------------------------------------------------------------- properties
 
     @property
