@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use clap::Args;
 use niebla::film::Image;
-use niebla::integrator::zhou::Compensation;
+use niebla::integrator::hegeman::Calibration;
+use niebla::integrator::zhou::{Compensation, LocalLights};
 use niebla::integrator::{
     HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator, ZhouIntegrator, ZhouSettings,
 };
@@ -106,51 +107,65 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             start.elapsed().as_secs_f64()
         );
         println!(
-            "{:<22} {:>10} {:>10} {:>14} {:>12} {:>14}",
-            "method", "fps 256^2", "fps 512^2", "precompute s", "memory MiB", "rel MSE"
+            "{:<22} {:>10} {:>10} {:>14} {:>12} {:>14} {:>9}",
+            "method", "fps 256^2", "fps 512^2", "precompute s", "memory MiB", "rel MSE", "mean/ref"
         );
+        let reference_mean = reference.mean().average();
+        let measure = |image: Image| (image.relative_mse(&reference), image.mean().average() / reference_mean);
         let single = crate::preview_cmd::interactive_single();
-        let single_error = frame(&small, &single, args.spp, 7, threads).relative_mse(&reference);
+        let (single_error, single_ratio) = measure(frame(&small, &single, args.spp, 7, threads));
         println!(
-            "{:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
+            "{:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
             "single (ray march)",
             fps(&scene, &single, 256, args.frames, threads),
             fps(&scene, &single, 512, args.frames, threads),
             0.0,
             0.0,
-            single_error
+            single_error,
+            single_ratio
         );
-        for (name, multiple) in [("hegeman", true), ("hegeman (single only)", false)] {
-            let settings =
-                HegemanSettings { multiple_scattering: multiple, ..hegeman_settings(built.settings.integrator) };
+        for (name, multiple, calibration) in [
+            ("hegeman", true, Calibration::None),
+            ("hegeman (mc_tables)", true, Calibration::McTables),
+            ("hegeman (mc_fluence)", true, Calibration::McFluence),
+            ("hegeman (single only)", false, Calibration::None),
+        ] {
+            let settings = HegemanSettings {
+                multiple_scattering: multiple,
+                calibration,
+                ..hegeman_settings(built.settings.integrator)
+            };
             let hegeman = HegemanIntegrator::new(&scene, settings);
-            let error = frame(&small, &hegeman, args.spp, 7, threads).relative_mse(&reference);
+            let (error, ratio) = measure(frame(&small, &hegeman, args.spp, 7, threads));
             println!(
-                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}",
+                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
                 fps(&scene, &hegeman, 256, args.frames, threads),
                 fps(&scene, &hegeman, 512, args.frames, threads),
                 hegeman.precompute_seconds,
                 hegeman.memory_bytes() as f64 / (1024.0 * 1024.0),
-                error
+                error,
+                ratio
             );
         }
         let base = zhou_settings(built.settings.integrator);
         let variants = [
             ("zhou", base),
             ("zhou (single only)", ZhouSettings { multiple_scattering: false, ..base }),
+            ("zhou (local lights rbf)", ZhouSettings { local_lights: LocalLights::Rbf, ..base }),
             ("zhou (no compensation)", ZhouSettings { compensation: Compensation::Off, ..base }),
             ("zhou (source only)", ZhouSettings { compensation: Compensation::SourceOnly, ..base }),
         ];
         for (name, settings) in variants {
             let zhou = ZhouIntegrator::new(&scene, settings);
-            let error = frame(&small, &zhou, args.spp, 7, threads).relative_mse(&reference);
+            let (error, ratio) = measure(frame(&small, &zhou, args.spp, 7, threads));
             println!(
-                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4}   (fit error {:.3})",
+                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}   (fit error {:.3})",
                 fps(&scene, &zhou, 256, args.frames, threads),
                 fps(&scene, &zhou, 512, args.frames, threads),
                 zhou.fit_seconds + zhou.lighting_seconds,
                 zhou.memory_bytes() as f64 / (1024.0 * 1024.0),
                 error,
+                ratio,
                 zhou.fit_errors().iter().copied().fold(0.0, f64::max)
             );
         }

@@ -12,29 +12,37 @@
 //! light, in small-angle transport theory): light arriving at a
 //! point `u` of a view ray from each light is split into
 //! - an unscattered beam, `E_0 = E exp(-tau_t)` from the light direction, and
-//! - a forward-scattered part, `E_ms = E exp(-tau_a) (1 - exp(-tau_s))`
-//!   (`k_loss = 1`: the pure small-angle value; a Monte Carlo calibration of
-//!   the light lost from the forward cone, which matters for `tau_s >= 5` or
-//!   `g <= 0.7`, is not done), blurred in angle around the light direction by a Gaussian of
-//!   per-axis variance `w^2` from small-angle (Fermi-Eyges) theory,
-//!   `w^2 = int z^2 sigma_s (1 - g) dz / s^2` along the straight line
-//!   light -> u (z from the light; for a directional light `w^2 = int sigma_s
-//!   (1 - g) dz`).
+//! - a scattered part `E_ms`, spread in angle around the light direction.
+//!   Calibrated ([`Calibration::McTables`]): `E_ms = E F(tau_t)`
+//!   and the angular spread convolved with the phase function `P(tau, mu)`
+//!   both come from Monte Carlo tables of a homogeneous medium with the
+//!   medium's `g` and albedo ([`calibration`]: a point source in an infinite
+//!   medium for point lights, a plane wave into a half-space for directions),
+//!   looked up at the line-integrated optical depth `tau_t`; for point
+//!   lights the shape is taken at the depth `tau_t 3 M2 / (s^2 D0)` whose
+//!   homogeneous width moment `M2 = int z^2 sigma_s (1 - g) dz` equals the
+//!   actual one (z from the light). Uncalibrated ([`Calibration::None`],
+//!   the default, which measures better on the test scenes):
+//!   `E_ms = E exp(-tau_a) (1 - exp(-tau_s))` (`k_loss = 1`) blurred by a
+//!   Gaussian of per-axis variance `w^2 = M2 / s^2` from small-angle
+//!   (Fermi-Eyges) theory (for a directional light `w^2 = int sigma_s (1 - g)
+//!   dz`), convolved with the phase function in [`blur`].
 //!
-//! The in-scattered radiance is `sigma_s [E_0 p(mu) + E_ms P_w(mu)]`, with
-//! `P_w` the phase function convolved with the blur ([`blur`], tabulated once
-//! per `g`: the "simple precomputation"), and it is composited along the view
+//! The in-scattered radiance is `sigma_s [E_0 p(mu) + E_ms P(mu)]`, with the
+//! convolved phase tabulated once per `g` (the "simple precomputation"),
+//! and it is composited along the view
 //! ray by ray marching. The line integrals toward each light are precomputed
 //! on a lattice over each grid medium ([`line_integrals`]) and turned into the
 //! per-node factors `exp(-tau_t)`, `exp(-tau_a)(1 - exp(-tau_s))` and `w`
 //! whenever coefficients change (cheap); a view ray only fetches them.
 //!
-//! Scope: point, spot and directional lights; a constant environment is
+//! Scope: point, spot and directional lights; area lights as a few
+//! Lambertian points ([`AREA_PATCHES`]^2 per rectangle, one isotropic point
+//! per sphere); a constant environment or an environment map is
 //! approximated by [`ENVIRONMENT_DIRECTIONS`] directional lights (the cube's
-//! diagonals, each carrying `4 pi / 8` of its radiance as irradiance, with
-//! the phase function taken as isotropic for them, so that their sum is one
-//! view-independent ambient term per lattice node); area
-//! lights and environment maps are not lit. Volumetric shadows come from the
+//! diagonals, each carrying the radiance integral of its octant as
+//! irradiance, with the phase function taken as isotropic for them, so that
+//! their sum is one view-independent ambient term per lattice node). Volumetric shadows come from the
 //! grid media only (surfaces do not shadow the medium). The blur uses a
 //! Henyey-Greenstein lobe with the phase function's mean cosine; the sharp
 //! term uses the true phase function. Homogeneous media segments use the
@@ -42,13 +50,15 @@
 //! with ray-marched shadow rays.
 
 pub mod blur;
+pub mod calibration;
 pub mod line_integrals;
 pub(crate) mod settings;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::color::Rgb;
-use crate::light::{Light, SpotLight};
+use crate::light::{AreaShape, Light, SpotLight};
 use crate::math::{Ray, Vec3};
 use crate::medium::{GridMedium, Medium, MediumId};
 use crate::phase::PhaseFunction;
@@ -58,14 +68,52 @@ use crate::world::Scene;
 
 use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use blur::BlurredPhaseTable;
+use calibration::{CalibrationTable, Geometry};
 use line_integrals::{LightSource, LineIntegralLattice};
 
 /// Directional lights standing in for a constant environment.
 pub const ENVIRONMENT_DIRECTIONS: usize = 8;
 
+/// How the multiple-scattering term's energy and angular spread are set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Calibration {
+    /// Monte Carlo tables ([`calibration`], first-crossing estimator): the
+    /// scattered power `F(tau)`
+    /// and the convolved phase `P(tau, mu)` of a homogeneous medium with the
+    /// medium's `g` and albedo, looked up at the line-integrated optical
+    /// depth; the angular profile at the depth whose homogeneous width moment
+    /// equals the actual one (`M2` correction for inhomogeneous media).
+    McTables,
+    /// As `McTables`, with the tables of the scattered fluence (light coming
+    /// back from beyond the receiver included: exact for an infinite
+    /// medium, too bright in bounded ones).
+    McFluence,
+    /// The uncalibrated small-angle model (the default: it measures best
+    /// against volpath on the smoke and cloud scenes, and ties with
+    /// `McTables` on the point-lit fog): `k_loss = 1` and a Gaussian
+    /// (heat-kernel) blur of the Fermi-Eyges width.
+    None,
+}
+
+impl Calibration {
+    /// Name in scene files (`"mc_tables"`, `"none"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Calibration::McTables => "mc_tables",
+            Calibration::McFluence => "mc_fluence",
+            Calibration::None => "none",
+        }
+    }
+}
+
 /// Parameters of the `hegeman` integrator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HegemanSettings {
+    /// Calibration of the multiple-scattering term.
+    pub calibration: Calibration,
+    /// Photons per Monte Carlo table (tables are built once per process for
+    /// each `g`, albedo and photon count).
+    pub calibration_photons: u32,
     /// Include the multiple-scattering (blurred) term; `false` gives single
     /// scattering with precomputed shadow volumes.
     pub multiple_scattering: bool,
@@ -77,7 +125,13 @@ pub struct HegemanSettings {
 
 impl Default for HegemanSettings {
     fn default() -> HegemanSettings {
-        HegemanSettings { multiple_scattering: true, resolution: 48, step_cells: 1.0 }
+        HegemanSettings {
+            calibration: Calibration::None,
+            calibration_photons: calibration::DEFAULT_PHOTONS,
+            multiple_scattering: true,
+            resolution: 48,
+            step_cells: 1.0,
+        }
     }
 }
 
@@ -87,18 +141,58 @@ struct ModelLight {
     source: LightSource,
     /// Intensity (W/sr) of a point or spot light, irradiance (W/m^2) of a direction.
     power: Rgb,
-    spot: Option<SpotLight>,
+    emission: Emission,
     /// One of the directions standing in for a constant environment: folded
     /// into the per-node ambient term.
     ambient: bool,
+}
+
+/// Angular distribution of a point source's intensity.
+#[derive(Clone, Copy, Debug)]
+enum Emission {
+    /// The same in every direction.
+    Isotropic,
+    /// A spot light's falloff.
+    Spot(SpotLight),
+    /// A patch of an area light: `cos` to its front normal (both sides when
+    /// two-sided).
+    Lambert { normal: Vec3, two_sided: bool },
+}
+
+impl Emission {
+    /// Intensity factor toward unit direction `w` (from the light).
+    #[inline]
+    fn factor(&self, w: Vec3) -> f32 {
+        match self {
+            Emission::Isotropic => 1.0,
+            Emission::Spot(spot) => spot.falloff(w),
+            Emission::Lambert { normal, two_sided } => {
+                let c = normal.dot(w);
+                if *two_sided {
+                    c.abs()
+                } else {
+                    c.max(0.0)
+                }
+            }
+        }
+    }
+}
+
+/// The calibration tables of one grid medium (point and collimated geometry).
+#[derive(Clone, Debug)]
+struct Tables {
+    point: Arc<CalibrationTable>,
+    collimated: Arc<CalibrationTable>,
 }
 
 /// Floats per lattice node before the per-light factors: the ambient
 /// in-scattered radiance (RGB).
 const AMBIENT: usize = 3;
 
-/// Factors per lattice node and light: `exp(-tau_t)` (3), `exp(-tau_a)(1 -
-/// exp(-tau_s))` (3) and `w` (1).
+/// Factors per lattice node and light: `exp(-tau_t)` (3), the scattered
+/// fluence ratio (3: `exp(-tau_a)(1 - exp(-tau_s))` uncalibrated, `F(tau_t)`
+/// calibrated) and the blur coordinate (1: the width `w` uncalibrated, the
+/// table row of the shape depth calibrated).
 const FACTORS: usize = 7;
 
 /// A grid medium's precomputation.
@@ -112,6 +206,7 @@ struct GridModel {
     factors: Vec<f32>,
     stride: usize,
     blur: BlurredPhaseTable,
+    tables: Option<Tables>,
     step: f32,
 }
 
@@ -131,8 +226,34 @@ impl HegemanIntegrator {
     /// Precompute for `scene`: the line-integral lattices (per grid medium
     /// and light) and the per-node factors.
     pub fn new(scene: &Scene, settings: HegemanSettings) -> HegemanIntegrator {
+        HegemanIntegrator::with_lights(scene, settings, model_lights(scene))
+    }
+
+    /// The model of the scene's point, spot and area lights only (for the
+    /// `zhou` integrator's local lights).
+    pub fn local_lights_only(scene: &Scene, settings: HegemanSettings) -> HegemanIntegrator {
+        let mut lights = model_lights(scene);
+        lights.retain(|l| matches!(l.source, LightSource::Point(_)));
+        HegemanIntegrator::with_lights(scene, settings, lights)
+    }
+
+    /// Whether any light lights the model.
+    pub fn has_lights(&self) -> bool {
+        !self.lights.is_empty()
+    }
+
+    /// Radiance scattered toward `wo` at `x` per unit `sigma_s` inside grid
+    /// medium `id` (zero for other media).
+    #[inline]
+    pub fn in_scattered_at(&self, id: MediumId, phase: &PhaseFunction, x: Vec3, wo: Vec3) -> Rgb {
+        match self.models.get(id.0 as usize) {
+            Some(Some(model)) => self.in_scattered(model, phase, x, wo),
+            _ => Rgb::ZERO,
+        }
+    }
+
+    fn with_lights(scene: &Scene, settings: HegemanSettings, lights: Vec<ModelLight>) -> HegemanIntegrator {
         let start = Instant::now();
-        let lights = model_lights(scene);
         let resolution = settings.resolution.max(2) as usize;
         let models = scene
             .media
@@ -153,6 +274,7 @@ impl HegemanIntegrator {
                         factors: Vec::new(),
                         stride: 0,
                         blur: BlurredPhaseTable::new(g.phase.mean_cosine()),
+                        tables: calibration_tables(g, &settings),
                         step,
                     };
                     model.update_factors(g, &lights, settings.multiple_scattering);
@@ -179,6 +301,7 @@ impl HegemanIntegrator {
                 m.volumes.iter().map(LineIntegralLattice::memory_bytes).sum::<usize>()
                     + m.factors.len() * 4
                     + m.blur.memory_bytes()
+                    + m.tables.as_ref().map_or(0, |t| t.point.memory_bytes() + t.collimated.memory_bytes())
             })
             .sum()
     }
@@ -214,9 +337,7 @@ impl HegemanIntegrator {
                 }
                 LightSource::Direction(w) => (w, light.power),
             };
-            if let Some(spot) = &light.spot {
-                e *= spot.falloff(-wi);
-            }
+            e *= light.emission.factor(-wi);
             if e.is_black() {
                 continue;
             }
@@ -224,7 +345,17 @@ impl HegemanIntegrator {
             let sharp = phase.eval(wo, wi);
             let mut s = Rgb::new(f[0], f[1], f[2]) * sharp;
             if self.settings.multiple_scattering {
-                s += Rgb::new(f[3], f[4], f[5]) * model.blur.eval(f[6], mu);
+                let scattered = Rgb::new(f[3], f[4], f[5]);
+                s += match &model.tables {
+                    Some(t) => {
+                        let table = match light.source {
+                            LightSource::Point(_) => &t.point,
+                            LightSource::Direction(_) => &t.collimated,
+                        };
+                        scattered * table.phase(f[6], mu)
+                    }
+                    None => scattered * model.blur.eval(f[6], mu),
+                };
             }
             l += e * s;
         }
@@ -294,8 +425,16 @@ impl GridModel {
             for (index, light) in lights.iter().enumerate() {
                 let [d0, d1, d2] = self.volumes[index].node(node);
                 let sharp = (sigma_t * d0).exp_neg();
-                let scattered =
-                    if multiple { (sigma_a * d0).exp_neg() * (Rgb::ONE - (sigma_s * d0).exp_neg()) } else { Rgb::ZERO };
+                let tau = sigma_t * d0;
+                let table = self.tables.as_ref().map(|t| match light.source {
+                    LightSource::Point(_) => &t.point,
+                    LightSource::Direction(_) => &t.collimated,
+                });
+                let scattered = match (multiple, table) {
+                    (false, _) => Rgb::ZERO,
+                    (true, Some(table)) => table.fluence(tau),
+                    (true, None) => (sigma_a * d0).exp_neg() * (Rgb::ONE - (sigma_s * d0).exp_neg()),
+                };
                 if light.ambient {
                     // Environment directions: phase taken as isotropic (a
                     // constant environment seen through no medium scatters
@@ -308,16 +447,34 @@ impl GridModel {
                 }
                 let out = &mut chunk[AMBIENT + slot * FACTORS..AMBIENT + (slot + 1) * FACTORS];
                 slot += 1;
-                let w2 = match light.source {
+                // Second moment of the density along the line, z from the
+                // light: int z^2 d dz = s^2 D0 - 2 s D1 + D2 (D_n measured from p).
+                let (m2, s2) = match light.source {
                     LightSource::Point(c) => {
                         let s = (c - p).length().max(1e-6);
-                        power * (s * s * d0 - 2.0 * s * d1 + d2).max(0.0) / (s * s)
+                        ((s * s * d0 - 2.0 * s * d1 + d2).max(0.0), s * s)
                     }
-                    LightSource::Direction(_) => power * d0,
+                    LightSource::Direction(_) => (0.0, 0.0),
                 };
                 out[..3].copy_from_slice(&sharp.0);
                 out[3..6].copy_from_slice(&scattered.0);
-                out[6] = w2.max(0.0).sqrt();
+                out[6] = if self.tables.is_some() {
+                    // M2 correction: the shape of a homogeneous medium whose
+                    // width moment M2 = T s^3 / 3 equals the actual one,
+                    // i.e. at depth tau * 3 M2 / (s^2 D0) (1 for a plane wave,
+                    // whose angular spread does not depend on where it scattered).
+                    let ratio = match light.source {
+                        LightSource::Point(_) if d0 > 0.0 => (3.0 * m2 / (s2 * d0)).clamp(0.0, 3.0),
+                        _ => 1.0,
+                    };
+                    calibration::row_of_tau(tau.average() * ratio)
+                } else {
+                    let w2 = match light.source {
+                        LightSource::Point(_) => power * m2 / s2,
+                        LightSource::Direction(_) => power * d0,
+                    };
+                    w2.max(0.0).sqrt()
+                };
             }
         }
         self.factors = factors;
@@ -344,8 +501,30 @@ impl GridModel {
     }
 }
 
-/// The scene's lights in the model: point, spot, directional, and a constant
-/// environment as [`ENVIRONMENT_DIRECTIONS`] directions.
+/// Points per side of the grid that stands in for a rectangular area light.
+pub const AREA_PATCHES: usize = 2;
+
+/// The calibration tables for a grid medium, or `None` when uncalibrated.
+fn calibration_tables(g: &GridMedium, settings: &HegemanSettings) -> Option<Tables> {
+    let estimator = match settings.calibration {
+        _ if !settings.multiple_scattering => return None,
+        Calibration::None => return None,
+        Calibration::McTables => calibration::Estimator::FirstCrossing,
+        Calibration::McFluence => calibration::Estimator::Fluence,
+    };
+    let albedo = g.sigma_s.safe_div(g.sigma_t());
+    let asymmetry = g.phase.mean_cosine();
+    let photons = settings.calibration_photons.max(1);
+    Some(Tables {
+        point: calibration::cached(Geometry::Point, estimator, asymmetry, albedo, photons),
+        collimated: calibration::cached(Geometry::Collimated, estimator, asymmetry, albedo, photons),
+    })
+}
+
+/// The scene's lights in the model: point, spot, directional; area lights
+/// as points ([`AREA_PATCHES`]^2 Lambertian points per rectangle, one
+/// isotropic point per sphere); a constant environment or an environment
+/// map as [`ENVIRONMENT_DIRECTIONS`] ambient directions.
 fn model_lights(scene: &Scene) -> Vec<ModelLight> {
     let mut lights = Vec::new();
     for light in &scene.lights {
@@ -353,19 +532,19 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
             Light::Point(l) => lights.push(ModelLight {
                 source: LightSource::Point(l.position),
                 power: l.intensity,
-                spot: None,
+                emission: Emission::Isotropic,
                 ambient: false,
             }),
             Light::Spot(l) => lights.push(ModelLight {
                 source: LightSource::Point(l.position),
                 power: l.intensity,
-                spot: Some(*l),
+                emission: Emission::Spot(*l),
                 ambient: false,
             }),
             Light::Directional(l) => lights.push(ModelLight {
                 source: LightSource::Direction(-l.direction),
                 power: l.irradiance,
-                spot: None,
+                emission: Emission::Isotropic,
                 ambient: false,
             }),
             Light::Constant(c) => {
@@ -376,12 +555,62 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                     lights.push(ModelLight {
                         source: LightSource::Direction(w),
                         power: c.radiance * share,
-                        spot: None,
+                        emission: Emission::Isotropic,
                         ambient: true,
                     });
                 }
             }
-            Light::Area(_) | Light::Environment(_) => {}
+            Light::Environment(map) => {
+                // Each octant's radiance integral on its diagonal, as for a
+                // constant environment (a uniform map gives the same lights).
+                let mut octants = [Rgb::ZERO; ENVIRONMENT_DIRECTIONS];
+                for y in 0..map.height() {
+                    let omega = map.pixel_solid_angle(y);
+                    for x in 0..map.width() {
+                        let d = map.pixel_direction(x, y);
+                        let k = usize::from(d.x < 0.0) | (usize::from(d.y < 0.0) << 1) | (usize::from(d.z < 0.0) << 2);
+                        octants[k] += map.pixel(x, y) * omega;
+                    }
+                }
+                for (k, power) in octants.into_iter().enumerate() {
+                    let s = |bit: usize| if k & bit == 0 { 1.0 } else { -1.0 };
+                    let w = Vec3::new(s(1), s(2), s(4)).normalize();
+                    lights.push(ModelLight {
+                        source: LightSource::Direction(w),
+                        power,
+                        emission: Emission::Isotropic,
+                        ambient: true,
+                    });
+                }
+            }
+            Light::Area(area) => match area.shape {
+                // Seen from outside, a sphere of radiance L is a disk of
+                // radiance L: intensity L pi r^2 in every direction.
+                AreaShape::Sphere(sphere) => lights.push(ModelLight {
+                    source: LightSource::Point(sphere.center),
+                    power: area.radiance * (std::f32::consts::PI * sphere.radius * sphere.radius),
+                    emission: Emission::Isotropic,
+                    ambient: false,
+                }),
+                // A rectangle as AREA_PATCHES x AREA_PATCHES Lambertian
+                // points at its cell centres, each of intensity L A_cell cos.
+                AreaShape::Rectangle(rect) => {
+                    let n = AREA_PATCHES;
+                    let share = area.area() / (n * n) as f32;
+                    for i in 0..n {
+                        for j in 0..n {
+                            let u = -1.0 + (2 * i + 1) as f32 / n as f32;
+                            let v = -1.0 + (2 * j + 1) as f32 / n as f32;
+                            lights.push(ModelLight {
+                                source: LightSource::Point(rect.transform.point_to_world(Vec3::new(u, v, 0.0))),
+                                power: area.radiance * share,
+                                emission: Emission::Lambert { normal: rect.normal, two_sided: area.two_sided },
+                                ambient: false,
+                            });
+                        }
+                    }
+                }
+            },
         }
     }
     lights

@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use super::HegemanSettings;
+use super::{Calibration, HegemanSettings};
 use crate::integrator::common_settings::{positive, within};
 use crate::params::{rest, Located, Object};
 
@@ -11,6 +11,12 @@ use crate::params::{rest, Located, Object};
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct HegemanFields {
+    /// Calibration of the multiple-scattering term: "none" (default), "mc_tables" or "mc_fluence".
+    #[serde(default)]
+    calibration: Option<String>,
+    /// Photons per Monte Carlo calibration table (1000 to 2^24; default 2^18).
+    #[serde(default)]
+    calibration_photons: Option<u32>,
     /// Include the multiple-scattering term (default true).
     #[serde(default)]
     multiple_scattering: Option<bool>,
@@ -26,12 +32,27 @@ struct HegemanFields {
 pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
     let fields: HegemanFields = rest(object)?;
     let defaults = HegemanSettings::default();
+    let calibration = match fields.calibration.as_deref() {
+        None => defaults.calibration,
+        Some("mc_tables") => Calibration::McTables,
+        Some("mc_fluence") => Calibration::McFluence,
+        Some("none") => Calibration::None,
+        Some(other) => {
+            return Err(Located::new(
+                "calibration",
+                format!("expected \"mc_tables\", \"mc_fluence\" or \"none\", found \"{other}\""),
+            ))
+        }
+    };
     let settings = HegemanSettings {
+        calibration,
+        calibration_photons: fields.calibration_photons.unwrap_or(defaults.calibration_photons),
         multiple_scattering: fields.multiple_scattering.unwrap_or(defaults.multiple_scattering),
         resolution: fields.resolution.unwrap_or(defaults.resolution),
         step_cells: fields.step_cells.unwrap_or(defaults.step_cells),
     };
     within("resolution", settings.resolution, 2, 512)?;
+    within("calibration_photons", settings.calibration_photons, 1000, 1 << 24)?;
     positive("step_cells", settings.step_cells)?;
     Ok(settings)
 }
@@ -39,7 +60,11 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
 /// The stable key of `hegeman`'s settings.
 pub(crate) fn key(s: &HegemanSettings) -> String {
     format!(
-        "hegeman(multiple_scattering={}, resolution={}, step_cells={:?})",
-        s.multiple_scattering, s.resolution, s.step_cells
+        "hegeman(multiple_scattering={}, resolution={}, step_cells={:?}, calibration={}, calibration_photons={})",
+        s.multiple_scattering,
+        s.resolution,
+        s.step_cells,
+        s.calibration.name(),
+        s.calibration_photons
     )
 }

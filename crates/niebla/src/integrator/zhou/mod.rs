@@ -32,9 +32,21 @@
 //!    rays), or `D~` for attenuation only (variant B), or `D~` everywhere
 //!    (compensation off).
 //!
+//! 5. **Local lights** (ours; the paper has environment light only): with
+//!    [`LocalLights::Hegeman`] (the default) point and spot lights are
+//!    left out of steps 2-4 and lit by the calibrated `hegeman` model
+//!    instead: single scattering with the transmittance of the full density
+//!    along the straight line to the light (a line-integral lattice), plus
+//!    its Monte Carlo calibrated multiple-scattering term. With
+//!    [`LocalLights::Rbf`] they go through steps 2-4 like distant lights
+//!    (their `D~` transmittance at each centre, their band-0/1 source in the
+//!    diffusion), which overestimates badly when a light sits inside the
+//!    medium (diffusion from a point source is singular there and the
+//!    smooth `D~` shadows poorly).
+//!
 //! Scope: grid media (homogeneous media use the `analytic` integrator),
 //! environment (constant, map), point, spot and directional lights; area
-//! lights do not light the model. Surfaces are lit directly with ray-marched
+//! lights light the model only through [`LocalLights::Hegeman`] (as points). Surfaces are lit directly with ray-marched
 //! shadow rays. The per-frame insertion scheme for animations and the
 //! perfect spatial hash of the residual are not implemented (niebla renders
 //! one density per scene, and the CPU reads the full grid directly).
@@ -63,6 +75,7 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
+use super::hegeman::{Calibration, HegemanIntegrator, HegemanSettings};
 use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use fit::{FitReport, FitSettings};
 use lattice::Lattice;
@@ -92,6 +105,31 @@ impl Compensation {
     }
 }
 
+/// How point and spot lights (local lights, which the paper does not treat)
+/// light the model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LocalLights {
+    /// Like distant lights: their transmittance from the RBF density at the
+    /// centres, interpolated, and their band-0/1 source in the diffusion.
+    Rbf,
+    /// Through the calibrated `hegeman` model instead (ours): single
+    /// scattering with the transmittance of the full density along the line
+    /// to the light (a line-integral lattice), plus its Monte Carlo
+    /// calibrated multiple-scattering term; the RBF model, diffusion
+    /// included, then handles only the environment and directional lights.
+    Hegeman,
+}
+
+impl LocalLights {
+    /// Name in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            LocalLights::Rbf => "rbf",
+            LocalLights::Hegeman => "hegeman",
+        }
+    }
+}
+
 /// Parameters of the `zhou` integrator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ZhouSettings {
@@ -115,6 +153,8 @@ pub struct ZhouSettings {
     pub step_cells: f32,
     /// Read and write fits in the cache folder ([`cache::cache_dir`]).
     pub cache: bool,
+    /// Point and spot lights.
+    pub local_lights: LocalLights,
 }
 
 impl Default for ZhouSettings {
@@ -129,6 +169,7 @@ impl Default for ZhouSettings {
             exact_transmittance: false,
             step_cells: 1.0,
             cache: true,
+            local_lights: LocalLights::Hegeman,
         }
     }
 }
@@ -159,6 +200,8 @@ pub struct ZhouIntegrator {
     lights: Vec<ModelLight>,
     models: Vec<Option<GridModel>>,
     analytic: AnalyticIntegrator,
+    /// The light model of point and spot lights ([`LocalLights::Hegeman`]).
+    local: Option<HegemanIntegrator>,
     /// Seconds spent fitting RBFs (0 when every fit came from the cache).
     pub fit_seconds: f64,
     /// Seconds spent on lighting, diffusion and the view pass.
@@ -169,7 +212,24 @@ impl ZhouIntegrator {
     /// Precompute for `scene`: fit (or load) the RBFs of every grid medium,
     /// compute the source radiance and the view pass for the scene's camera.
     pub fn new(scene: &Scene, settings: ZhouSettings) -> ZhouIntegrator {
-        let lights = ModelLight::from_scene(&scene.lights);
+        let mut lights = ModelLight::from_scene(&scene.lights);
+        let start = Instant::now();
+        let local = match settings.local_lights {
+            LocalLights::Rbf => None,
+            LocalLights::Hegeman => {
+                lights.retain(|l| matches!(l, ModelLight::Directional { .. }));
+                let local = HegemanIntegrator::local_lights_only(
+                    scene,
+                    HegemanSettings {
+                        multiple_scattering: settings.multiple_scattering,
+                        calibration: Calibration::McTables,
+                        ..HegemanSettings::default()
+                    },
+                );
+                local.has_lights().then_some(local)
+            }
+        };
+        let local_seconds = start.elapsed().as_secs_f64();
         let mut fit_seconds = 0.0;
         let mut lighting_seconds = 0.0;
         let models = scene
@@ -189,7 +249,15 @@ impl ZhouIntegrator {
                 Medium::Homogeneous(_) => None,
             })
             .collect();
-        ZhouIntegrator { settings, lights, models, analytic: AnalyticIntegrator::new(), fit_seconds, lighting_seconds }
+        ZhouIntegrator {
+            settings,
+            lights,
+            models,
+            analytic: AnalyticIntegrator::new(),
+            local,
+            fit_seconds,
+            lighting_seconds: lighting_seconds + local_seconds,
+        }
     }
 
     /// Recompute the per-view source for a camera at `eye` (cheap: no fit,
@@ -220,7 +288,8 @@ impl ZhouIntegrator {
                 4 * (m.smooth.len() + m.source_sh.len() + m.view.len() + m.light_transmittance.len())
                     + m.rbfs.len() * std::mem::size_of::<Rbf>()
             })
-            .sum()
+            .sum::<usize>()
+            + self.local.as_ref().map_or(0, HegemanIntegrator::memory_bytes)
     }
 
     /// March a grid segment with the interpolated source, compositing front
@@ -228,6 +297,7 @@ impl ZhouIntegrator {
     fn grid_segment(
         &self,
         g: &GridMedium,
+        id: MediumId,
         model: &GridModel,
         ray: &Ray,
         t_end: f32,
@@ -279,6 +349,9 @@ impl ZhouIntegrator {
                     ) * w;
                 }
                 j += model.albedo * e * t * g.phase.eval(wo, wi);
+            }
+            if let Some(local) = &self.local {
+                j += model.albedo * local.in_scattered_at(id, &g.phase, x, wo);
             }
             let st_att = sigma_t * d_att.max(0.0);
             let source = sigma_t * j * d_src.max(0.0) + g.l_ve(x, d_src.max(0.0));
@@ -507,7 +580,7 @@ impl Integrator for ZhouIntegrator {
         let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
         trace_camera_ray(scene, ray, medium, surfaces, sampler, |m, id, ray, t_end, sampler| match m {
             Medium::Grid(g) => match &self.models[id.0 as usize] {
-                Some(model) => self.grid_segment(g, model, ray, t_end, sampler),
+                Some(model) => self.grid_segment(g, id, model, ray, t_end, sampler),
                 None => self.analytic.segment(scene, id, ray, t_end, sampler),
             },
             Medium::Homogeneous(_) => self.analytic.segment(scene, id, ray, t_end, sampler),

@@ -3,7 +3,7 @@
 
 use serde::Deserialize;
 
-use super::{Compensation, ZhouSettings};
+use super::{Compensation, LocalLights, ZhouSettings};
 use crate::integrator::common_settings::{positive, within};
 use crate::params::{rest, Located, Object};
 
@@ -27,6 +27,16 @@ enum TransmittanceField {
     Sh,
     /// Closed form per quadrature direction.
     Exact,
+}
+
+/// `local_lights`: how point and spot lights light the model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum LocalLightsField {
+    /// Transmittance from the RBF density at the centres, diffusion.
+    Rbf,
+    /// The calibrated `hegeman` light model.
+    Hegeman,
 }
 
 /// The fields of a `zhou` object; every one is optional.
@@ -62,6 +72,9 @@ struct ZhouFields {
     /// Read and write RBF fits in the cache folder (default true).
     #[serde(default)]
     cache: Option<bool>,
+    /// `"hegeman"` (default) or `"rbf"`: point and spot lights.
+    #[serde(default)]
+    local_lights: Option<LocalLightsField>,
 }
 
 /// `zhou`'s settings from its object (the `type` taken out).
@@ -83,6 +96,11 @@ pub(crate) fn parse(object: Object) -> Result<ZhouSettings, Located> {
         exact_transmittance: f.transmittance.map_or(d.exact_transmittance, |t| t == TransmittanceField::Exact),
         step_cells: f.step_cells.unwrap_or(d.step_cells),
         cache: f.cache.unwrap_or(d.cache),
+        local_lights: match f.local_lights {
+            None => d.local_lights,
+            Some(LocalLightsField::Rbf) => LocalLights::Rbf,
+            Some(LocalLightsField::Hegeman) => LocalLights::Hegeman,
+        },
     };
     within("rbf_count", settings.rbf_count, 1, 20_000)?;
     within("fit_iterations", settings.fit_iterations, 0, 10_000)?;
@@ -96,7 +114,7 @@ pub(crate) fn parse(object: Object) -> Result<ZhouSettings, Located> {
 pub(crate) fn key(s: &ZhouSettings) -> String {
     format!(
         "zhou(rbf_count={}, fit_iterations={}, resolution={}, sh_order={}, multiple_scattering={}, \
-         compensation={}, transmittance={}, step_cells={:?}, cache={})",
+         compensation={}, transmittance={}, step_cells={:?}, cache={}, local_lights={})",
         s.rbf_count,
         s.fit_iterations,
         s.resolution,
@@ -105,6 +123,7 @@ pub(crate) fn key(s: &ZhouSettings) -> String {
         s.compensation.name(),
         if s.exact_transmittance { "exact" } else { "sh" },
         s.step_cells,
-        s.cache
+        s.cache,
+        s.local_lights.name()
     )
 }
