@@ -2,7 +2,7 @@
 //! layers (definitions in the `aov` module documentation), estimated
 //! independently of the integrator from a random stream of its own.
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, Reflector};
 use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::MediumId;
@@ -27,13 +27,29 @@ pub struct Features {
 }
 
 /// Albedo of a surface model for the albedo layer: the diffuse
-/// reflectance, 1 for glass and metal (the denoiser's convention for
-/// specular surfaces), 0 for an index-matched boundary.
+/// reflectance (a plastic's base), 1 for glass and smooth metal (the
+/// denoiser's convention for specular surfaces), a rough metal's specular
+/// reflectance, the front side's for `twosided`, 0 for an index-matched
+/// boundary.
 pub fn surface_albedo(bsdf: &Bsdf) -> Rgb {
     match *bsdf {
         Bsdf::Diffuse { reflectance } => reflectance,
         Bsdf::Null => Rgb::ZERO,
         Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } => Rgb::ONE,
+        Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ONE,
+        Bsdf::RoughConductor(b) => b.specular_reflectance,
+        Bsdf::Plastic(b) => b.diffuse_reflectance,
+        Bsdf::TwoSided(b) => reflector_albedo(&b.front),
+    }
+}
+
+/// [`surface_albedo`] of one side of a `twosided` surface.
+fn reflector_albedo(r: &Reflector) -> Rgb {
+    match *r {
+        Reflector::Diffuse { reflectance } => reflectance,
+        Reflector::Conductor { .. } => Rgb::ONE,
+        Reflector::RoughConductor(b) => b.specular_reflectance,
+        Reflector::Plastic(b) => b.diffuse_reflectance,
     }
 }
 
