@@ -29,6 +29,16 @@ if [ ! -x /usr/bin/chromium ]; then
   fi
 fi
 
+# Python virtual environments (the denoiser's and the Python package's) need
+# Debian's python3-venv.
+if ! python3 -c "import ensurepip" >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    echo "installing python3-venv (the Python tests and the denoiser run in virtual environments)"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
+  fi
+fi
+
 # Denoising (`--denoise`, niebla.denoise) loads Intel Open Image Denoise at
 # run time; its CPU library comes from the PyPI wheel `pyoidn`, installed into
 # a virtual environment of its own (.venv-oidn, reused by later runs). The
@@ -36,7 +46,7 @@ fi
 oidn_venv=.venv-oidn
 oidn_lib() { ls "$oidn_venv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 2>/dev/null | head -n 1; }
 if [ -z "$(oidn_lib)" ]; then
-  { python3 -m venv "$oidn_venv" && "$oidn_venv/bin/python" -m pip install -q --no-deps pyoidn; } >/dev/null 2>&1 ||
+  { rm -rf "$oidn_venv" && python3 -m venv "$oidn_venv" && "$oidn_venv/bin/python" -m pip install -q --no-deps pyoidn; } >/dev/null 2>&1 ||
     echo "warning: could not install pyoidn (Intel Open Image Denoise); the denoising tests are skipped" >&2
 fi
 if [ -n "$(oidn_lib)" ]; then
