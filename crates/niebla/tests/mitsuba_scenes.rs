@@ -164,7 +164,6 @@ fn emitter_inside_medium_matches_mitsuba() {
 }
 
 #[test]
-#[ignore = "light sampling does not yet cross rough dielectrics: niebla renders this scene darker than Mitsuba (0.037 vs 0.080)"]
 fn spot_through_rough_dielectric_matches_mitsuba() {
     check("spot_rough_glass");
 }

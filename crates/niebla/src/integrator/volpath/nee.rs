@@ -23,11 +23,13 @@ use super::guiding::Guiding;
 #[derive(Clone, Copy)]
 pub(super) enum Scatter<'a> {
     Phase(&'a PhaseFunction),
-    /// Opaque surface with its outward shading normal (the BSDF's `n`), and
-    /// its shading and geometric normals turned to face `wo`; directions
-    /// below either facing normal get nothing (light sampling covers `wo`'s
-    /// side only, also for rough dielectrics, whose transmission the path
-    /// reaches by BSDF sampling alone).
+    /// Surface with its outward shading normal (the BSDF's `n`), and its
+    /// shading and geometric normals turned to face `wo`. Directions on
+    /// `wo`'s side of both facing normals are reflections; for a BSDF with a
+    /// rough transmission lobe ([`Bsdf::has_rough_transmission`]) directions
+    /// below both are transmissions (radiance mode: `f` carries `1 / etap^2`),
+    /// so light sampling reaches lights on either side. Directions between
+    /// the two normals (where shading and geometry disagree) get nothing.
     Surface(&'a Bsdf, Vec3, Vec3, Vec3),
 }
 
@@ -41,11 +43,13 @@ impl Scatter<'_> {
                 (Rgb::splat(p), phase.pdf(wo, wi))
             }
             Scatter::Surface(bsdf, ns, n, ng) => {
-                let cos = wi.dot(n);
-                if cos <= 0.0 || wi.dot(ng) <= 0.0 {
+                let (cos, cos_g) = (wi.dot(n), wi.dot(ng));
+                let reflected = cos > 0.0 && cos_g > 0.0;
+                let transmitted = cos < 0.0 && cos_g < 0.0 && bsdf.has_rough_transmission();
+                if !reflected && !transmitted {
                     return (Rgb::ZERO, 0.0);
                 }
-                (bsdf.eval(ns, wo, wi) * cos, bsdf.pdf(ns, wo, wi))
+                (bsdf.eval(ns, wo, wi) * cos.abs(), bsdf.pdf(ns, wo, wi))
             }
         }
     }
@@ -131,6 +135,10 @@ pub(super) struct NeeVertex<'a> {
     pub(super) scatter: Scatter<'a>,
     /// Medium the vertex lies in (the side of `wo` for surfaces).
     pub(super) medium: Option<MediumId>,
+    /// Medium on the other side of a surface, where shadow rays of
+    /// transmitted directions start (equal to `medium` for media vertices
+    /// and for surfaces that bound no medium).
+    pub(super) medium_behind: Option<MediumId>,
     /// Path throughput over the hero channel's pdf, up to the vertex.
     pub(super) beta: Rgb,
     /// Unidirectional path pdfs per channel over the hero's, up to the vertex.
@@ -184,7 +192,7 @@ fn sample_ld_light(
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment, guiding } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding } = *vertex;
     let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
@@ -202,9 +210,11 @@ fn sample_ld_light(
     if f_hat.is_black() {
         return Rgb::ZERO;
     }
-    let origin = match normal {
-        Some(n) => p + n * surface_epsilon(p),
-        None => p,
+    // The shadow ray leaves from the side of `wi`, in the medium there.
+    let (origin, medium) = match normal {
+        Some(n) if ls.wi.dot(n) < 0.0 => (p - n * surface_epsilon(p), medium_behind),
+        Some(n) => (p + n * surface_epsilon(p), medium),
+        None => (p, medium),
     };
     let Some((t_ray, mut r_l, mut r_u)) = shadow_transmittance(
         scene,

@@ -104,6 +104,7 @@ impl VolPathIntegrator {
                             wo,
                             scatter: Scatter::Phase(phase),
                             medium: Some(id),
+                            medium_behind: Some(id),
                             beta,
                             r_p: r_u,
                             segment: Some(segment),
@@ -232,6 +233,7 @@ impl VolPathIntegrator {
                     wo,
                     scatter: Scatter::Surface(&bsdf, ns, n, ng),
                     medium,
+                    medium_behind: scene.medium_after_crossing(&hit, -wo, medium),
                     beta,
                     r_p: r_u,
                     segment: None,
@@ -247,10 +249,9 @@ impl VolPathIntegrator {
             }
             beta *= bs.weight(ns);
             r_l = r_u / bs.pdf;
-            // Light sampling never proposes a direction through the surface,
-            // so a rough transmission hitting a light takes the full weight
-            // (as after a delta lobe).
-            specular_bounce = bs.is_specular || bs.is_transmission;
+            // Light sampling covers both sides of a non-specular surface
+            // (rough transmission included), so only delta lobes skip MIS.
+            specular_bounce = bs.is_specular;
             if bs.is_transmission {
                 eta_scale *= bs.eta * bs.eta;
             }
