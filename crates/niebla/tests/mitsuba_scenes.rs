@@ -169,7 +169,6 @@ fn spot_through_rough_dielectric_matches_mitsuba() {
 }
 
 #[test]
-#[ignore = "shadow rays do not yet pass thin dielectrics (Mitsuba: a null lobe): niebla renders this scene darker (0.059 vs 0.104)"]
 fn thin_dielectric_boundaries_match_mitsuba() {
     check("thin_boundaries");
 }

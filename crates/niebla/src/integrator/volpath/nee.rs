@@ -302,6 +302,12 @@ fn shadow_transmittance(
                 }
             }
         }
+        // A thin pane: a weight for light sampling; a path sampling the pane
+        // passes it with probability `1 - R'`, which its pdf gains.
+        if let Some(pane) = s.pane {
+            t_ray *= pane.weight;
+            r_u *= pane.pass_probability;
+        }
         if t_ray.is_black() || !t_ray.is_finite() {
             return ControlFlow::Break(());
         }
