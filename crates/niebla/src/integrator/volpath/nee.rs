@@ -315,3 +315,40 @@ fn shadow_transmittance(
     });
     reached.then_some((t_ray, r_l, r_u))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Microfacet, MicrofacetKind, RoughDielectric};
+
+    /// Light sampling at a rough dielectric reaches both sides (the
+    /// transmitted pair with `f |cos|` and the BSDF's own pdf), at a diffuse
+    /// surface only `wo`'s side; directions where the shading and geometric
+    /// normals disagree get nothing.
+    #[test]
+    fn surface_scatter_covers_the_transmission_side_of_rough_dielectrics_only() {
+        let glass = Bsdf::RoughDielectric(RoughDielectric {
+            microfacet: Microfacet::new(MicrofacetKind::Ggx, 0.3, 0.3),
+            eta: 1.5,
+            specular_reflectance: Rgb::ONE,
+            specular_transmittance: Rgb::ONE,
+        });
+        let diffuse = Bsdf::Diffuse { reflectance: Rgb::splat(0.5) };
+        let n = Vec3::Z;
+        let wo = Vec3::new(0.3, 0.0, 1.0).normalize();
+        let wi = Vec3::new(-0.2, 0.1, -1.0).normalize();
+        let (f, pdf) = Scatter::Surface(&glass, n, n, n).eval(wo, wi);
+        let expected = glass.eval(n, wo, wi) * wi.z.abs();
+        assert!(f[0] > 0.0 && (f[0] - expected[0]).abs() <= 1e-6 * expected[0], "{f:?} vs {expected:?}");
+        assert!(pdf > 0.0 && (pdf - glass.pdf(n, wo, wi)).abs() <= 1e-6 * pdf);
+        // From inside (wo below the outward normal): the facing normal is -n.
+        let (f_in, _) = Scatter::Surface(&glass, n, -n, -n).eval(-wo, -wi);
+        assert!(f_in[0] > 0.0);
+        assert_eq!(Scatter::Surface(&diffuse, n, n, n).eval(wo, wi), (Rgb::ZERO, 0.0));
+        // Shading normal says "through", geometry says "same side": refused.
+        let tilted = Vec3::new(0.0, 0.9, 0.2).normalize();
+        let wi_between = Vec3::new(0.0, -1.0, 0.05).normalize();
+        assert!(wi_between.dot(tilted) < 0.0 && wi_between.dot(n) > 0.0);
+        assert_eq!(Scatter::Surface(&glass, tilted, tilted, n).eval(wo, wi_between), (Rgb::ZERO, 0.0));
+    }
+}
