@@ -164,13 +164,11 @@ fn emitter_inside_medium_matches_mitsuba() {
 }
 
 #[test]
-#[ignore = "light sampling does not yet cross rough dielectrics: niebla renders this scene darker than Mitsuba (0.037 vs 0.080)"]
 fn spot_through_rough_dielectric_matches_mitsuba() {
     check("spot_rough_glass");
 }
 
 #[test]
-#[ignore = "shadow rays do not yet pass thin dielectrics (Mitsuba: a null lobe): niebla renders this scene darker (0.059 vs 0.104)"]
 fn thin_dielectric_boundaries_match_mitsuba() {
     check("thin_boundaries");
 }

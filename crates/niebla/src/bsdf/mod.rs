@@ -400,6 +400,15 @@ impl Bsdf {
     pub fn is_null(&self) -> bool {
         matches!(self, Bsdf::Null)
     }
+
+    /// True for surfaces that shadow rays cross instead of being blocked:
+    /// index-matched boundaries (`Null`) and thin dielectric panes, whose
+    /// straight-through transmission is a null lobe (as in Mitsuba 3), so
+    /// light reaches through them weighted by their transmittance.
+    #[inline]
+    pub fn passes_shadow_rays(&self) -> bool {
+        matches!(self, Bsdf::Null | Bsdf::ThinDielectric(_))
+    }
 }
 
 /// `wo` and `wi` in the local frame of `n` ([`Frame::from_z`]: `+z = n`).

@@ -29,6 +29,13 @@ impl ThinDielectric {
         r * 2.0 / (1.0 + r)
     }
 
+    /// Probability `1 - R'` that light at local incidence cosine `cos_o`
+    /// (either side) passes the sheet straight through.
+    #[inline]
+    pub fn pass_probability(&self, cos_o: f32) -> f32 {
+        1.0 - self.reflectance(cos_o)
+    }
+
     /// Choose reflection (`u_lobe < R'`) or transmission: `(wi, weight
     /// f |cos| / pdf, pdf, transmitted)` in the local frame.
     #[inline]

@@ -25,7 +25,7 @@ mod source;
 mod validate;
 
 pub use crate::world::{
-    offset_origin, surface_epsilon, walk_shadow_ray, Hit, PathRay, Scene, SceneObject, ShadowSegment,
+    offset_origin, surface_epsilon, walk_shadow_ray, Hit, PaneCrossing, PathRay, Scene, SceneObject, ShadowSegment,
     MAX_BOUNDARY_CROSSINGS, MAX_PATH_BOUNDARY_CROSSINGS,
 };
 pub use build::{

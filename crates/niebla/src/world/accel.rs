@@ -2,8 +2,9 @@
 //! hierarchy. Its leaves are the scene's objects (spheres, boxes,
 //! rectangles and mesh instances, each mesh with its own hierarchy in object
 //! space). Three trees: over every object (nearest hits of paths), over the
-//! opaque ones (any-hit queries of shadow rays) and over the index-matched
-//! medium boundaries (the pieces of a shadow ray between media).
+//! opaque ones (any-hit queries of shadow rays) and over the surfaces shadow
+//! rays cross (index-matched medium boundaries and thin dielectric panes,
+//! [`crate::bsdf::Bsdf::passes_shadow_rays`]: the pieces of a shadow ray).
 
 use std::sync::{Arc, OnceLock};
 
@@ -92,9 +93,10 @@ fn next_up(t: f32) -> f32 {
 pub struct SceneTrees {
     /// Every object.
     pub all: ObjectTree,
-    /// Objects whose surface is not `null` (they block shadow rays).
+    /// Objects that block shadow rays (neither `null` nor a thin dielectric).
     pub opaque: ObjectTree,
-    /// Objects with a `null` surface (index-matched medium boundaries).
+    /// Objects that shadow rays cross: `null` surfaces (index-matched medium
+    /// boundaries) and thin dielectric panes.
     pub boundaries: ObjectTree,
 }
 
@@ -103,8 +105,8 @@ impl SceneTrees {
     pub fn build(objects: &[SceneObject]) -> SceneTrees {
         SceneTrees {
             all: ObjectTree::build(objects, |_| true),
-            opaque: ObjectTree::build(objects, |o| !o.bsdf.is_null()),
-            boundaries: ObjectTree::build(objects, |o| o.bsdf.is_null()),
+            opaque: ObjectTree::build(objects, |o| !o.bsdf.passes_shadow_rays()),
+            boundaries: ObjectTree::build(objects, |o| o.bsdf.passes_shadow_rays()),
         }
     }
 }

@@ -9,6 +9,8 @@
 
 use std::ops::ControlFlow;
 
+use crate::bsdf::Bsdf;
+use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::MediumId;
 
@@ -89,14 +91,31 @@ pub struct ShadowSegment<'a> {
     pub ray: &'a Ray,
     /// End of the piece (ray parameter).
     pub t_end: f32,
+    /// The thin dielectric pane the piece ends at, which the ray passes
+    /// (`None` at an index-matched boundary or the ray's end). Every visitor
+    /// must apply its weight.
+    pub pane: Option<PaneCrossing>,
+}
+
+/// A thin dielectric pane crossed by a shadow ray (Mitsuba 3's
+/// `thindielectric`: its straight-through transmission is a null lobe).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PaneCrossing {
+    /// Probability `1 - R'` with which a path sampling the pane passes it
+    /// (`R' = 2R / (1 + R)`, the sheet's reflectance at the ray's incidence).
+    pub pass_probability: f32,
+    /// Factor on the light carried through: `specular_transmittance * (1 - R')`.
+    pub weight: Rgb,
 }
 
 /// Walk the shadow ray from `p` (inside `medium`) along unit `wi` over
-/// `distance` (may be infinite), crossing index-matched boundaries, and hand
-/// each piece to `visit` in order. An opaque surface blocks the ray unless it
-/// is object `ignore` (the sampled light's own surface, where the ray ends):
-/// an any-hit query over the opaque surfaces first, so a blocked ray visits
-/// nothing, then nearest hits among the medium boundaries alone.
+/// `distance` (may be infinite), crossing index-matched boundaries and thin
+/// dielectric panes, and hand each piece to `visit` in order (a piece ending
+/// at a pane carries the pane's [`PaneCrossing`]). An opaque surface blocks
+/// the ray unless it is object `ignore` (the sampled light's own surface,
+/// where the ray ends): an any-hit query over the opaque surfaces first, so
+/// a blocked ray visits nothing, then nearest hits among the crossed
+/// surfaces alone.
 /// Returns `true` when the ray reached its end, `false` when it was blocked,
 /// `visit` stopped it or it crossed more than [`MAX_BOUNDARY_CROSSINGS`]
 /// boundaries.
@@ -122,7 +141,15 @@ where
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
         let hit = scene.intersect_boundaries(&ray, t_min, remaining);
         let t_end = hit.map_or(remaining, |h| h.surface.t);
-        if visit(ShadowSegment { medium, ray: &ray, t_end }).is_break() {
+        let pane = hit.and_then(|h| match scene.object(&h).bsdf {
+            Bsdf::ThinDielectric(pane) => {
+                let cos = h.surface.shading_normal(-wi).dot(wi);
+                let pass_probability = pane.pass_probability(cos);
+                Some(PaneCrossing { pass_probability, weight: pane.specular_transmittance * pass_probability })
+            }
+            _ => None,
+        });
+        if visit(ShadowSegment { medium, ray: &ray, t_end, pane }).is_break() {
             return false;
         }
         let Some(hit) = hit else {
@@ -204,6 +231,41 @@ mod tests {
         let mut s = PixelSampler::from_key(1);
         let tr = scene.transmittance(Vec3::ZERO, start, Vec3::X, 2.5, TransmittanceMethod::Analytic, &mut s);
         assert!((tr[0] - (-0.75f32).exp()).abs() < 1e-5, "{tr:?}");
+    }
+
+    #[test]
+    fn shadow_rays_pass_thin_panes_weighted_by_their_transmittance() {
+        // A thin pane (index 1.5 in vacuum, transmission multiplier 0.5) at x = 1.
+        let json = r#"{
+          "version": 1,
+          "camera": {"type": "perspective", "position": [0, 0, 10], "target": [0, 0, 0], "fov_y": 40,
+                     "width": 4, "height": 4},
+          "shapes": [
+            {"type": "rectangle", "to_world": {"rotate_y": -90, "translate": [1, 0, 0]},
+             "bsdf": {"type": "thindielectric", "int_ior": 1.5, "ext_ior": 1.0, "specular_transmittance": 0.5}}
+          ]
+        }"#;
+        let desc = parse_scene_str(json, "<test>").unwrap();
+        let scene = build_scene(&desc, "<test>", std::path::Path::new(".")).unwrap().scene;
+        assert!(!scene.occluded(&Ray::new(Vec3::ZERO, Vec3::X), 0.0, 2.0, None));
+        // Normal incidence: R = ((1.5 - 1) / 2.5)^2 = 0.04, the sheet's R' = 2R / (1 + R).
+        let r = 0.08 / 1.04;
+        let mut panes = Vec::new();
+        assert!(walk_shadow_ray(&scene, Vec3::ZERO, None, Vec3::X, 2.0, None, |s| {
+            panes.push(s.pane);
+            ControlFlow::Continue(())
+        }));
+        assert_eq!(panes.len(), 2);
+        let pane = panes[0].expect("the first piece ends at the pane");
+        assert!(panes[1].is_none());
+        assert!((pane.pass_probability - (1.0 - r)).abs() < 1e-6, "{pane:?}");
+        assert!((pane.weight[0] - 0.5 * (1.0 - r)).abs() < 1e-6, "{pane:?}");
+        let mut s = PixelSampler::from_key(1);
+        let tr = scene.transmittance(Vec3::ZERO, None, Vec3::X, 2.0, TransmittanceMethod::Analytic, &mut s);
+        assert!((tr[1] - 0.5 * (1.0 - r)).abs() < 1e-6, "{tr:?}");
+        // Short of the pane nothing is crossed.
+        let tr = scene.transmittance(Vec3::ZERO, None, Vec3::X, 0.5, TransmittanceMethod::Analytic, &mut s);
+        assert_eq!(tr, Rgb::ONE);
     }
 
     #[test]

@@ -5,7 +5,7 @@ mod accel;
 mod boundary_walk;
 
 pub use accel::{ObjectTree, SceneAccel, SceneTrees};
-pub use boundary_walk::{walk_shadow_ray, PathRay, ShadowSegment, MAX_PATH_BOUNDARY_CROSSINGS};
+pub use boundary_walk::{walk_shadow_ray, PaneCrossing, PathRay, ShadowSegment, MAX_PATH_BOUNDARY_CROSSINGS};
 
 use std::ops::ControlFlow;
 
@@ -108,8 +108,8 @@ impl Scene {
         Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
     }
 
-    /// Nearest hit among the index-matched medium boundaries (`null`
-    /// surfaces) alone.
+    /// Nearest hit among the surfaces shadow rays cross (index-matched medium
+    /// boundaries and thin dielectric panes) alone.
     #[inline]
     pub fn intersect_boundaries(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let (i, h) = self.trees().boundaries.closest(&self.objects, ray, t_min, t_max)?;
@@ -130,7 +130,8 @@ impl Scene {
         }
     }
 
-    /// Whether an opaque surface (any object whose surface is not `null`)
+    /// Whether an opaque surface (any object that does not
+    /// [`pass shadow rays`](crate::bsdf::Bsdf::passes_shadow_rays))
     /// other than object `ignore` lies along `ray` with `t` in `(t_min, t_max)`:
     /// an any-hit query.
     #[inline]
@@ -229,9 +230,12 @@ impl Scene {
         let reached = walk_shadow_ray(self, p, medium, wi, distance, ignore, |s| {
             if let Some(id) = s.medium {
                 tr *= segment_transmittance(self.medium(id), s.ray, 0.0, s.t_end, method, sampler);
-                if tr.is_black() {
-                    return ControlFlow::Break(());
-                }
+            }
+            if let Some(pane) = s.pane {
+                tr *= pane.weight;
+            }
+            if tr.is_black() {
+                return ControlFlow::Break(());
             }
             ControlFlow::Continue(())
         });

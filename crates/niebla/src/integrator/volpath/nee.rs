@@ -23,11 +23,13 @@ use super::guiding::Guiding;
 #[derive(Clone, Copy)]
 pub(super) enum Scatter<'a> {
     Phase(&'a PhaseFunction),
-    /// Opaque surface with its outward shading normal (the BSDF's `n`), and
-    /// its shading and geometric normals turned to face `wo`; directions
-    /// below either facing normal get nothing (light sampling covers `wo`'s
-    /// side only, also for rough dielectrics, whose transmission the path
-    /// reaches by BSDF sampling alone).
+    /// Surface with its outward shading normal (the BSDF's `n`), and its
+    /// shading and geometric normals turned to face `wo`. Directions on
+    /// `wo`'s side of both facing normals are reflections; for a BSDF with a
+    /// rough transmission lobe ([`Bsdf::has_rough_transmission`]) directions
+    /// below both are transmissions (radiance mode: `f` carries `1 / etap^2`),
+    /// so light sampling reaches lights on either side. Directions between
+    /// the two normals (where shading and geometry disagree) get nothing.
     Surface(&'a Bsdf, Vec3, Vec3, Vec3),
 }
 
@@ -41,11 +43,13 @@ impl Scatter<'_> {
                 (Rgb::splat(p), phase.pdf(wo, wi))
             }
             Scatter::Surface(bsdf, ns, n, ng) => {
-                let cos = wi.dot(n);
-                if cos <= 0.0 || wi.dot(ng) <= 0.0 {
+                let (cos, cos_g) = (wi.dot(n), wi.dot(ng));
+                let reflected = cos > 0.0 && cos_g > 0.0;
+                let transmitted = cos < 0.0 && cos_g < 0.0 && bsdf.has_rough_transmission();
+                if !reflected && !transmitted {
                     return (Rgb::ZERO, 0.0);
                 }
-                (bsdf.eval(ns, wo, wi) * cos, bsdf.pdf(ns, wo, wi))
+                (bsdf.eval(ns, wo, wi) * cos.abs(), bsdf.pdf(ns, wo, wi))
             }
         }
     }
@@ -131,6 +135,10 @@ pub(super) struct NeeVertex<'a> {
     pub(super) scatter: Scatter<'a>,
     /// Medium the vertex lies in (the side of `wo` for surfaces).
     pub(super) medium: Option<MediumId>,
+    /// Medium on the other side of a surface, where shadow rays of
+    /// transmitted directions start (equal to `medium` for media vertices
+    /// and for surfaces that bound no medium).
+    pub(super) medium_behind: Option<MediumId>,
     /// Path throughput over the hero channel's pdf, up to the vertex.
     pub(super) beta: Rgb,
     /// Unidirectional path pdfs per channel over the hero's, up to the vertex.
@@ -184,7 +192,7 @@ fn sample_ld_light(
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, beta, r_p, segment, guiding } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding } = *vertex;
     let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
@@ -202,9 +210,11 @@ fn sample_ld_light(
     if f_hat.is_black() {
         return Rgb::ZERO;
     }
-    let origin = match normal {
-        Some(n) => p + n * surface_epsilon(p),
-        None => p,
+    // The shadow ray leaves from the side of `wi`, in the medium there.
+    let (origin, medium) = match normal {
+        Some(n) if ls.wi.dot(n) < 0.0 => (p - n * surface_epsilon(p), medium_behind),
+        Some(n) => (p + n * surface_epsilon(p), medium),
+        None => (p, medium),
     };
     let Some((t_ray, mut r_l, mut r_u)) = shadow_transmittance(
         scene,
@@ -292,10 +302,53 @@ fn shadow_transmittance(
                 }
             }
         }
+        // A thin pane: a weight for light sampling; a path sampling the pane
+        // passes it with probability `1 - R'`, which its pdf gains.
+        if let Some(pane) = s.pane {
+            t_ray *= pane.weight;
+            r_u *= pane.pass_probability;
+        }
         if t_ray.is_black() || !t_ray.is_finite() {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
     });
     reached.then_some((t_ray, r_l, r_u))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Microfacet, MicrofacetKind, RoughDielectric};
+
+    /// Light sampling at a rough dielectric reaches both sides (the
+    /// transmitted pair with `f |cos|` and the BSDF's own pdf), at a diffuse
+    /// surface only `wo`'s side; directions where the shading and geometric
+    /// normals disagree get nothing.
+    #[test]
+    fn surface_scatter_covers_the_transmission_side_of_rough_dielectrics_only() {
+        let glass = Bsdf::RoughDielectric(RoughDielectric {
+            microfacet: Microfacet::new(MicrofacetKind::Ggx, 0.3, 0.3),
+            eta: 1.5,
+            specular_reflectance: Rgb::ONE,
+            specular_transmittance: Rgb::ONE,
+        });
+        let diffuse = Bsdf::Diffuse { reflectance: Rgb::splat(0.5) };
+        let n = Vec3::Z;
+        let wo = Vec3::new(0.3, 0.0, 1.0).normalize();
+        let wi = Vec3::new(-0.2, 0.1, -1.0).normalize();
+        let (f, pdf) = Scatter::Surface(&glass, n, n, n).eval(wo, wi);
+        let expected = glass.eval(n, wo, wi) * wi.z.abs();
+        assert!(f[0] > 0.0 && (f[0] - expected[0]).abs() <= 1e-6 * expected[0], "{f:?} vs {expected:?}");
+        assert!(pdf > 0.0 && (pdf - glass.pdf(n, wo, wi)).abs() <= 1e-6 * pdf);
+        // From inside (wo below the outward normal): the facing normal is -n.
+        let (f_in, _) = Scatter::Surface(&glass, n, -n, -n).eval(-wo, -wi);
+        assert!(f_in[0] > 0.0);
+        assert_eq!(Scatter::Surface(&diffuse, n, n, n).eval(wo, wi), (Rgb::ZERO, 0.0));
+        // Shading normal says "through", geometry says "same side": refused.
+        let tilted = Vec3::new(0.0, 0.9, 0.2).normalize();
+        let wi_between = Vec3::new(0.0, -1.0, 0.05).normalize();
+        assert!(wi_between.dot(tilted) < 0.0 && wi_between.dot(n) > 0.0);
+        assert_eq!(Scatter::Surface(&glass, tilted, tilted, n).eval(wo, wi_between), (Rgb::ZERO, 0.0));
+    }
 }

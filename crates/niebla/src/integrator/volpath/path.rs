@@ -3,6 +3,7 @@
 //! the environment and Russian roulette.
 
 use crate::aov::{FirstVertex, PathClass, RadianceSum};
+use crate::bsdf::{reflect, Bsdf, BsdfSample};
 use crate::color::Rgb;
 use crate::math::Ray;
 use crate::math::Vec3;
@@ -112,6 +113,7 @@ impl VolPathIntegrator {
                             wo,
                             scatter: Scatter::Phase(phase),
                             medium: Some(id),
+                            medium_behind: Some(id),
                             beta,
                             r_p: r_u,
                             segment: Some(segment),
@@ -223,6 +225,37 @@ impl VolPathIntegrator {
                 return l;
             }
 
+            // A thin dielectric pane: reflect with probability R' (a specular
+            // bounce, below) or pass straight through like an index-matched
+            // boundary (Mitsuba 3's null transmission lobe: no bounce, the
+            // previous vertex and specular flag kept). Light sampling reaches
+            // through the pane with it as a weight, so relative to this path's
+            // pdf, which chose to pass with probability 1 - R', the
+            // light-sampling pdf drops by that factor (a null collision's update).
+            let mut pane_reflection = None;
+            if let Bsdf::ThinDielectric(pane) = object.bsdf {
+                let wo = -ray.d;
+                let ns = hit.surface.shading_normal(wo);
+                let cos = ns.dot(wo);
+                let pass = pane.pass_probability(cos);
+                if sampler.next_1d() < pass {
+                    beta *= pane.specular_transmittance;
+                    r_l /= pass;
+                    if !path.cross(scene, &hit) {
+                        return l;
+                    }
+                    continue;
+                }
+                let r = 1.0 - pass;
+                if cos == 0.0 || !(r > 0.0) {
+                    return l;
+                }
+                let f = pane.specular_reflectance * (r / cos.abs());
+                let wi = reflect(wo, ns);
+                pane_reflection =
+                    Some(BsdfSample { wi, f, pdf: r, is_specular: true, is_transmission: false, eta: 1.0 });
+            }
+
             // Opaque surface: next-event estimation, then BSDF sampling.
             if depth >= self.max_depth {
                 return l;
@@ -248,6 +281,7 @@ impl VolPathIntegrator {
                     wo,
                     scatter: Scatter::Surface(&bsdf, ns, n, ng),
                     medium,
+                    medium_behind: scene.medium_after_crossing(&hit, -wo, medium),
                     beta,
                     r_p: r_u,
                     segment: None,
@@ -256,7 +290,7 @@ impl VolPathIntegrator {
                 let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                 l.add(v, || PathClass::of(first, depth));
             }
-            let Some(bs) = sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler) else {
+            let Some(bs) = pane_reflection.or_else(|| sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler)) else {
                 return l;
             };
             if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
@@ -264,10 +298,9 @@ impl VolPathIntegrator {
             }
             beta *= bs.weight(ns);
             r_l = r_u / bs.pdf;
-            // Light sampling never proposes a direction through the surface,
-            // so a rough transmission hitting a light takes the full weight
-            // (as after a delta lobe).
-            specular_bounce = bs.is_specular || bs.is_transmission;
+            // Light sampling covers both sides of a non-specular surface
+            // (rough transmission included), so only delta lobes skip MIS.
+            specular_bounce = bs.is_specular;
             if bs.is_transmission {
                 eta_scale *= bs.eta * bs.eta;
             }
