@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use crate::color::{rgb_to_srgb8, Rgb};
-use crate::film::{write_atomically, write_checkpoint_with, CheckpointInfo, Image, OutputError, SampleSums};
+use crate::film::{write_checkpoint_with, CheckpointInfo, Image, OutputError, SampleSums};
 
 use super::{AovSet, AovSums};
 
@@ -128,18 +128,7 @@ pub fn write_rgba_png(image: &Image, alpha: &[f32], path: &Path, exposure: f32) 
         data.extend_from_slice(&rgb_to_srgb8(straight, exposure));
         data.push((a * 255.0).round() as u8);
     }
-    let mut bytes = Vec::new();
-    {
-        let encode = |e: png::EncodingError| OutputError::Encode { path: path.to_path_buf(), message: e.to_string() };
-        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
-        encoder.set_color(png::ColorType::Rgba);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        let mut writer = encoder.write_header().map_err(encode)?;
-        writer.write_image_data(&data).map_err(encode)?;
-        writer.finish().map_err(encode)?;
-    }
-    write_atomically(path, &bytes)
+    crate::film::write_srgb8_png(path, image.width, image.height, png::ColorType::Rgba, &data)
 }
 
 /// Writes the final images of a render with layers: EXR outputs get the

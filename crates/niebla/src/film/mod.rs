@@ -18,6 +18,7 @@ pub use checkpoint::{
     read_checkpoint, read_checkpoint_full, scene_hash, write_checkpoint, Checkpoint, CheckpointError, CheckpointInfo,
 };
 pub use exr_read::{read_exr, ExrImage, ExrReadError};
+pub(crate) use output::write_srgb8_png;
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
 pub use sums::{mean_of_sum, quantize_sample, SampleSums, FRACTION_BITS, SAMPLE_LIMIT};
 

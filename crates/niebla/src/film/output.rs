@@ -95,15 +95,27 @@ pub fn write_png(image: &Image, path: &Path, exposure: f32) -> Result<(), Output
     for p in &image.pixels {
         data.extend_from_slice(&rgb_to_srgb8(*p, exposure));
     }
+    write_srgb8_png(path, image.width, image.height, png::ColorType::Rgb, &data)
+}
+
+/// Encode 8-bit sRGB pixel bytes (`color`: RGB or RGBA, rows from the top)
+/// as a PNG tagged sRGB and write it atomically to `path`.
+pub(crate) fn write_srgb8_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: png::ColorType,
+    data: &[u8],
+) -> Result<(), OutputError> {
     let mut bytes = Vec::new();
     {
         let encode = |e: png::EncodingError| OutputError::Encode { path: path.to_path_buf(), message: e.to_string() };
-        let mut encoder = png::Encoder::new(&mut bytes, image.width, image.height);
-        encoder.set_color(png::ColorType::Rgb);
+        let mut encoder = png::Encoder::new(&mut bytes, width, height);
+        encoder.set_color(color);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = encoder.write_header().map_err(encode)?;
-        writer.write_image_data(&data).map_err(encode)?;
+        writer.write_image_data(data).map_err(encode)?;
         writer.finish().map_err(encode)?;
     }
     write_atomically(path, &bytes)
