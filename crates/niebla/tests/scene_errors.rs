@@ -818,6 +818,38 @@ const PHASE_FUNCTIONS: &[ErrorCase] = &[
         message: "mutually exclusive",
         also: &[],
     },
+    ErrorCase {
+        name: "tabulated with a file and an inline table",
+        from: r#""file": "mie.csv""#,
+        to: r#""file": "mie.csv", "mu": [-1, 1], "p": [1, 1]"#,
+        path: "media.cloud.phase.file",
+        message: "`file` and `mu`/`p` are mutually exclusive",
+        also: &[],
+    },
+    ErrorCase {
+        name: "inline table without values",
+        from: r#""file": "mie.csv""#,
+        to: r#""mu": [-1, 1]"#,
+        path: "media.cloud.phase.p",
+        message: "missing field `p`",
+        also: &[],
+    },
+    ErrorCase {
+        name: "inline table not ending at mu = 1",
+        from: r#""file": "mie.csv""#,
+        to: r#""mu": [-1, 0, 0.5], "p": [1, 2, 3]"#,
+        path: "media.cloud.phase.mu",
+        message: "phase table, row 3: the last node is mu = 0.5: expected 1",
+        also: &[],
+    },
+    ErrorCase {
+        name: "inline table with a negative value",
+        from: r#""file": "mie.csv""#,
+        to: r#""mu": [-1, 1], "p": [1, -1]"#,
+        path: "media.cloud.phase.mu",
+        message: "phase table, row 2: p = -1: expected a finite value >= 0",
+        also: &[],
+    },
 ];
 
 #[test]

@@ -145,7 +145,7 @@ impl Tabulated {
             }
         };
         let mu: Vec<f64> = theta_deg.iter().rev().map(|&t| cos_deg(t)).collect();
-        let mut values: Vec<f64> = p.iter().rev().copied().collect();
+        let values: Vec<f64> = p.iter().rev().copied().collect();
         for j in 1..n {
             if mu[j] <= mu[j - 1] {
                 let row = n - 1 - j;
@@ -159,6 +159,70 @@ impl Tabulated {
                 });
             }
         }
+        Tabulated::from_nodes(theta_deg.to_vec(), mu, values, p_name)
+    }
+
+    /// Build from nodes in cosine: `mu` strictly increasing from exactly -1
+    /// (backward) to exactly 1 (forward) and values `p >= 0` (1/sr, any
+    /// scale: renormalized), interpolated linearly in `mu` like Mitsuba 3's
+    /// `tabphase` (whose regularly spaced table is `mu_i = -1 + 2 i / (n - 1)`).
+    /// Errors name the 1-based node.
+    ///
+    /// ```
+    /// use niebla::phase::Tabulated;
+    /// // p = 1 + mu: normalization 4 pi, mean cosine 1/3.
+    /// let t = Tabulated::from_cosines(&[-1.0, 1.0], &[0.0, 2.0]).unwrap();
+    /// assert!((t.mean_cosine_f64() - 1.0 / 3.0).abs() < 1e-12);
+    /// ```
+    pub fn from_cosines(mu: &[f64], p: &[f64]) -> Result<Tabulated, PhaseError> {
+        let fault = |index: usize, what: String| PhaseError::Table { row: index + 1, what };
+        let n = mu.len();
+        if n != p.len() {
+            return Err(fault(
+                n.min(p.len()),
+                format!("mu has {n} values but p has {}: expected one p per cosine", p.len()),
+            ));
+        }
+        if n < 2 {
+            return Err(fault(n, format!("found {n} nodes: expected at least 2 (mu = -1 and 1)")));
+        }
+        for (i, (&m, &value)) in mu.iter().zip(p).enumerate() {
+            if !m.is_finite() || !(-1.0..=1.0).contains(&m) {
+                return Err(fault(i, format!("mu = {m}: expected a cosine in [-1, 1]")));
+            }
+            if !value.is_finite() || value < 0.0 {
+                return Err(fault(i, format!("p = {value}: expected a finite value >= 0 (1/sr)")));
+            }
+            if i > 0 && m <= mu[i - 1] {
+                return Err(fault(
+                    i,
+                    format!(
+                        "mu = {m} does not increase (previous node {}): expected strictly increasing cosines",
+                        mu[i - 1]
+                    ),
+                ));
+            }
+        }
+        if mu[0] != -1.0 {
+            return Err(fault(0, format!("the first node is mu = {}: expected -1 (mu must span -1..1)", mu[0])));
+        }
+        if mu[n - 1] != 1.0 {
+            return Err(fault(n - 1, format!("the last node is mu = {}: expected 1 (mu must span -1..1)", mu[n - 1])));
+        }
+        let theta_deg: Vec<f64> = mu.iter().rev().map(|&m| m.acos().to_degrees()).collect();
+        Tabulated::from_nodes(theta_deg, mu.to_vec(), p.to_vec(), "p")
+            .map_err(|f| PhaseError::Table { row: f.index.map_or(n, |i| i + 1), what: f.what })
+    }
+
+    /// Normalization, CDF and mean cosine of checked nodes (`mu` ascending,
+    /// `values` at the nodes, `theta_deg` the same nodes in degrees ascending).
+    fn from_nodes(
+        theta_deg: Vec<f64>,
+        mu: Vec<f64>,
+        mut values: Vec<f64>,
+        p_name: &str,
+    ) -> Result<Tabulated, RowFault> {
+        let n = mu.len();
 
         // Normalization: exact integral of the interpolant over the sphere.
         let interval_mass = |j: usize, v: &[f64]| std::f64::consts::PI * (mu[j + 1] - mu[j]) * (v[j] + v[j + 1]);
@@ -188,7 +252,7 @@ impl Tabulated {
         }
         cdf[n - 1] = 1.0;
 
-        Ok(Tabulated { theta_deg: theta_deg.to_vec(), mu, p: values, cdf, normalization, mean_cosine })
+        Ok(Tabulated { theta_deg, mu, p: values, cdf, normalization, mean_cosine })
     }
 
     /// The table angles in degrees, ascending.

@@ -431,6 +431,9 @@ fn build_phase(desc: &PhaseDesc, path: &str, source: &str, base_dir: &Path) -> R
                 .map_err(|e| SceneError::new(source, format!("{path}.file"), e.to_string()))?;
             PhaseFunction::tabulated(table)
         }
+        PhaseDesc::TabulatedInline { mu, p } => PhaseFunction::tabulated(
+            Tabulated::from_cosines(mu, p).map_err(|e| SceneError::new(source, format!("{path}.mu"), e.to_string()))?,
+        ),
         PhaseDesc::Fog => PhaseFunction::fog(),
         PhaseDesc::MieFog => PhaseFunction::mie_fog(),
     })

@@ -467,13 +467,42 @@ struct RawSchlick {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawTabulated {
-    file: String,
-    #[serde(default = "default_column")]
-    column: String,
+    #[serde(default)]
+    file: Option<String>,
+    #[serde(default)]
+    column: Option<String>,
+    #[serde(default)]
+    mu: Option<Vec<f64>>,
+    #[serde(default)]
+    p: Option<Vec<f64>>,
 }
 
-fn default_column() -> String {
-    "p_mie_poly".to_string()
+/// A `"tabulated"` phase function: a table file (`file`, optional
+/// `column`) or the table inline (`mu` and `p`), not both.
+fn tabulated_phase(raw: RawTabulated) -> Result<PhaseDesc, Located> {
+    match (raw.file, raw.mu, raw.p) {
+        (Some(file), None, None) => {
+            Ok(PhaseDesc::Tabulated { file, column: raw.column.unwrap_or_else(|| "p_mie_poly".to_string()) })
+        }
+        (None, Some(mu), Some(p)) => {
+            if raw.column.is_some() {
+                return Err(Located::new(
+                    "column",
+                    "`column` names a column of a table file: it needs `file`, not `mu`/`p`",
+                ));
+            }
+            Ok(PhaseDesc::TabulatedInline { mu, p })
+        }
+        (Some(_), _, _) => Err(Located::new(
+            "file",
+            "`file` and `mu`/`p` are mutually exclusive: give a table file or the table inline",
+        )),
+        (None, Some(_), None) => Err(Located::new("p", "missing field `p` (the phase values at the cosines `mu`)")),
+        (None, None, Some(_)) => Err(Located::new("mu", "missing field `mu` (the cosines of the values `p`)")),
+        (None, None, None) => {
+            Err(Located::new("file", "missing field `file` (a table file; or give the table inline as `mu` and `p`)"))
+        }
+    }
 }
 
 fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
@@ -512,7 +541,7 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
         "cornette_shanks" => PhaseDesc::CornetteShanks { g: rest::<RawG>(object)?.g },
         "tabulated" => {
             let raw: RawTabulated = rest(object)?;
-            PhaseDesc::Tabulated { file: raw.file, column: raw.column }
+            tabulated_phase(raw)?
         }
         "fog" => {
             no_fields(object)?;

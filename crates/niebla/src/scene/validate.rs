@@ -486,6 +486,10 @@ fn validate_phase(base: &str, phase: &PhaseDesc) -> Check {
             }
             Ok(())
         }
+        PhaseDesc::TabulatedInline { mu, p } => match crate::phase::Tabulated::from_cosines(mu, p) {
+            Ok(_) => Ok(()),
+            Err(e) => fail(format!("{base}.mu"), e.to_string()),
+        },
     }
 }
 

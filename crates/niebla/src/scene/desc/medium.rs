@@ -426,6 +426,16 @@ pub enum PhaseDesc {
         /// `"p_mie_poly"`.
         column: String,
     },
+    /// `"tabulated"` with the table written in the scene: `mu`, cosines of
+    /// the scattering angle strictly increasing from -1 (backward) to 1
+    /// (forward), and `p` (1/sr, any scale: renormalized), interpolated
+    /// linearly in `mu` (Mitsuba 3's `tabphase`).
+    TabulatedInline {
+        /// Node cosines, ascending from -1 to 1.
+        mu: Vec<f64>,
+        /// Phase values at the nodes, 1/sr (any scale).
+        p: Vec<f64>,
+    },
     /// `"fog"`: two-lobe HG fit of the Mie phase function of fog droplets.
     Fog,
     /// `"mie_fog"`: the built-in Mie table of fog droplets.

@@ -1,5 +1,5 @@
 //! `<medium>` (`homogeneous`, `heterogeneous`), its `<phase>` (`isotropic`,
-//! `hg`, `rayleigh`, `blendphase`) and `<volume>` (`constvolume`,
+//! `hg`, `rayleigh`, `blendphase`, `tabphase`) and `<volume>` (`constvolume`,
 //! `gridvolume`) into niebla media.
 //!
 //! Placement of a `gridvolume` (Mitsuba 3): its `to_world` maps the unit
@@ -229,7 +229,28 @@ fn convert_phase(c: &mut Converter, node: &Node) -> Result<Value, SceneError> {
             // Mitsuba: (1 - weight) * first + weight * second; niebla: w * HG(g1) + (1 - w) * HG(g2).
             json!({"type": "double_hg", "w": 1.0 - w, "g1": gs[0], "g2": gs[1]})
         }
-        _ => return Err(p.error("not supported (expected isotropic, hg, rayleigh or blendphase)")),
+        "tabphase" => {
+            // Mitsuba 3: values at cosines regularly spaced from -1 (first,
+            // backward) to 1 (last, forward), linear in between, normalized.
+            let text =
+                p.string("values")?.ok_or_else(|| p.error("missing property `values` (a list of phase values)"))?;
+            let mut values = Vec::new();
+            for token in text.split([',', ' ', '\t', '\n', '\r']).filter(|t| !t.is_empty()) {
+                let v: f64 = token.parse().map_err(|_| {
+                    p.error(format!("`values`: {token:?} is not a number (expected a comma-separated list)"))
+                })?;
+                values.push(v);
+            }
+            let n = values.len();
+            if n < 2 {
+                return Err(p.error(format!("`values` holds {n} numbers: expected at least 2")));
+            }
+            let mu: Vec<f64> =
+                (0..n).map(|i| if i + 1 == n { 1.0 } else { -1.0 + 2.0 * i as f64 / (n - 1) as f64 }).collect();
+            crate::phase::Tabulated::from_cosines(&mu, &values).map_err(|e| p.error(format!("`values`: {e}")))?;
+            json!({"type": "tabulated", "mu": mu, "p": values})
+        }
+        _ => return Err(p.error("not supported (expected isotropic, hg, rayleigh, blendphase or tabphase)")),
     };
     p.finish()?;
     Ok(out)

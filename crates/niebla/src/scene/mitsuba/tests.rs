@@ -201,3 +201,30 @@ fn truncated_and_mangled_scenes_are_errors_not_panics() {
         }
     }
 }
+
+/// `tabphase`: values at cosines regularly spaced from -1 to 1, cos = 1
+/// forward. p = 1 + mu (values 0, 1, 2) has mean cosine 1/3 exactly.
+#[test]
+fn tabphase_becomes_an_inline_table_in_mu() {
+    let s = import(
+        r#"<medium type="homogeneous" id="fog"><float name="sigma_t" value="1"/>
+             <phase type="tabphase"><string name="values" value="0, 1,2"/></phase></medium>
+           <shape type="cube"><bsdf type="null"/><ref name="interior" id="fog"/></shape>"#,
+    )
+    .unwrap();
+    let phase = &s.scene["media"]["fog"]["phase"];
+    assert_eq!(phase, &json!({"type": "tabulated", "mu": [-1.0, 0.0, 1.0], "p": [0.0, 1.0, 2.0]}));
+    let desc = crate::scene::parse_scene_str(&s.scene.to_string(), "t").unwrap();
+    let built = crate::scene::build_scene(&desc, "t", Path::new(".")).unwrap();
+    let g = built.scene.media[0].phase().mean_cosine();
+    assert!((g - 1.0 / 3.0).abs() < 1e-6, "mean cosine {g}");
+
+    let e = err(
+        r#"<medium type="homogeneous" id="a"><phase type="tabphase"><string name="values" value="1, x"/></phase></medium>"#,
+    );
+    assert!(e.contains("<phase type=\"tabphase\">: `values`: \"x\" is not a number"), "{e}");
+    let e = err(
+        r#"<medium type="homogeneous" id="b"><phase type="tabphase"><string name="values" value="1, -2"/></phase></medium>"#,
+    );
+    assert!(e.contains("p = -2: expected a finite value >= 0"), "{e}");
+}
