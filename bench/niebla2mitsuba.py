@@ -16,7 +16,8 @@ an error rather than a silent approximation:
   in a `.vol` unless `use_grid_bbox` is set). Coefficients are passed as
   `sigma_t` and `albedo` (Mitsuba's form). `has_spectral_extinction` is set
   from the data (false for gray media, as a Mitsuba user would);
-- phase: `isotropic`, `hg` (same sign convention: g > 0 forward);
+- phase: `isotropic`, `hg` (same sign convention: g > 0 forward), an inline
+  `tabulated` table at regularly spaced cosines -> `tabphase`;
 - shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere`, `rectangle` (both
   renderers use [-1,1]^2 in local xy with normal +z) with niebla's
   `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
@@ -109,6 +110,12 @@ def _phase(p):
         return {"type": "isotropic"}
     if p["type"] == "hg":
         return {"type": "hg", "g": float(p["g"])}
+    if p["type"] == "tabulated" and "mu" in p:
+        # Mitsuba's tabphase takes values at cosines regularly spaced from -1 to 1.
+        mu, values = np.asarray(p["mu"], float), p["p"]
+        if np.allclose(mu, np.linspace(-1.0, 1.0, len(mu)), rtol=0.0, atol=1e-12):
+            return {"type": "tabphase", "values": ", ".join(repr(float(v)) for v in values)}
+        raise Unsupported("tabulated phase function with irregular cosines (Mitsuba's tabphase is regular)")
     raise Unsupported(f"phase function {p['type']!r}")
 
 
