@@ -2,7 +2,8 @@
 # Sets up what bench/compare.py needs besides niebla itself:
 #  - bench/.venv: a Python virtual environment with mitsuba (3.x, PyPI) and numpy;
 #  - an LLVM shared library for Mitsuba's llvm_ad_rgb variant (Debian's libllvm19
-#    when apt-get is available and we are root; any LLVM >= 15 works; the
+#    when apt-get is available and we are root; LLVM 15 fails on fminimum, so
+#    19 or newer is required; the
 #    scripts in bench/ point Dr.Jit at the newest one through DRJIT_LIBLLVM_PATH).
 # Idempotent: does nothing that is already done.
 set -euo pipefail
@@ -19,18 +20,18 @@ if ! "$venv/bin/python" -c "import mitsuba, numpy" 2>/dev/null; then
     "$venv/bin/pip" install --quiet mitsuba numpy
 fi
 
-# Dr.Jit needs LLVM 15 or newer (older ones fail on instructions such as
-# fminimum); a machine may have an older one installed beside it.
+# Dr.Jit's code needs LLVM 19 or newer here (LLVM 15 aborts with "Cannot
+# select ... fminimum" on x86); a machine may have older ones installed beside it.
 newest_llvm() {
     ls -d /usr/lib/*-linux-gnu/libLLVM-*.so /usr/lib/llvm-*/lib/libLLVM-*.so 2>/dev/null \
-        | sed -n 's/.*libLLVM-\([0-9]*\)\.so$/\1 &/p' | awk '$1 >= 15' | sort -n | tail -n 1 | cut -d' ' -f2
+        | sed -n 's/.*libLLVM-\([0-9]*\)\.so$/\1 &/p' | awk '$1 >= 19' | sort -n | tail -n 1 | cut -d' ' -f2
 }
 if [ -z "${DRJIT_LIBLLVM_PATH:-}" ] && [ -z "$(newest_llvm)" ]; then
     if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
-        echo "installing libllvm19 (Mitsuba's LLVM backend needs LLVM >= 15)"
+        echo "installing libllvm19 (Mitsuba's LLVM backend needs LLVM >= 19)"
         apt-get update -qq && apt-get install -y -qq libllvm19 >/dev/null
     else
-        echo "warning: no LLVM >= 15 found; install one (e.g. apt-get install libllvm19) or set DRJIT_LIBLLVM_PATH" >&2
+        echo "warning: no LLVM >= 19 found; install one (e.g. apt-get install libllvm19) or set DRJIT_LIBLLVM_PATH" >&2
     fi
 fi
 export DRJIT_LIBLLVM_PATH="${DRJIT_LIBLLVM_PATH:-$(newest_llvm)}"
