@@ -29,7 +29,7 @@ SCENES = os.path.join(ROOT, "scenes", "mitsuba")
 OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
-         "spot_rough_glass", "thin_boundaries"]
+         "spot_rough_glass", "thin_boundaries", "tabphase_fog"]
 
 
 def write_data(mi):

@@ -172,3 +172,8 @@ fn spot_through_rough_dielectric_matches_mitsuba() {
 fn thin_dielectric_boundaries_match_mitsuba() {
     check("thin_boundaries");
 }
+
+#[test]
+fn tabulated_phase_function_matches_mitsuba() {
+    check("tabphase_fog");
+}
