@@ -1,15 +1,19 @@
 """Latency and frame rate of `niebla view` in headless Chromium (Playwright
 driving /usr/bin/chromium): for each scene, integrator and resolution,
- - latency: from sending a density-scale change (the slider's path) to the
-   first frame of the edited scene arriving in the page (its first pass,
-   precomputation included), median of 3;
+ - density latency: from sending a density-scale change (the slider's
+   path) to the first frame of the edited scene arriving in the page (its
+   first pass at full resolution, precomputation included), median of 3;
+ - camera latency: the same for a camera move sent as a finished edit
+   (full resolution), median of 3;
  - drag fps: interactive frames per second shown while the mouse orbits the
    camera for 3 s (frames at 1/2 of the resolution, 1 spp, the default).
 Figures depend on the machine's load; run back to back in one go.
 
-  .venv-py/bin/python bench/view_latency.py [NIEBLA_BIN]
+  .venv-py/bin/python bench/view_latency.py [NIEBLA_BIN] [--sizes 256 512]
+      [--integrators zhou hegeman single volpath] [--scenes smoke cloud]
 """
 
+import argparse
 import json
 import re
 import statistics
@@ -22,7 +26,6 @@ from pathlib import Path
 from playwright.sync_api import sync_playwright
 
 ROOT = Path(__file__).resolve().parents[1]
-NIEBLA = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "target/release/niebla")
 SCENES = {"smoke": "plume", "cloud": "cloud"}
 INTEGRATORS = ["zhou", "hegeman", "single", "volpath"]
 SIZES = [256, 512]
@@ -40,13 +43,20 @@ def measure(page, medium):
         return False
 
     assert wait("window.nieblaView.frames[0] !== null", 300), "no first frame"
-    latencies = []
-    for scale in [1.5, 0.75, 1.0]:
+    def latency(change):
         n = view("window.nieblaView.latencies.length")
-        view(f"(window.nieblaView.scene.media['{medium}'].scale = {scale}, window.nieblaView.edit(false))")
+        view(f"({change}, window.nieblaView.edit(false))")
         if not wait(f"window.nieblaView.latencies.length > {n}", 300):
-            return None, None
-        latencies.append(view("window.nieblaView.latencies.at(-1).ms"))
+            return None
+        return view("window.nieblaView.latencies.at(-1).ms")
+
+    latencies, camera = [], []
+    for scale in [1.5, 0.75, 1.0]:
+        latencies.append(latency(f"window.nieblaView.scene.media['{medium}'].scale = {scale}"))
+    for dx in [0.05, -0.1, 0.05]:
+        camera.append(latency(f"window.nieblaView.scene.camera.position[0] += {dx}"))
+    if None in latencies or None in camera:
+        return None, None, None
     box = page.locator("#canvas").bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     before = view("window.nieblaView.latencies.filter(l => l.interactive).length")
@@ -62,37 +72,45 @@ def measure(page, medium):
     elapsed = time.time() - start
     shown = view("window.nieblaView.frameCount[0]") - frames_before
     page.mouse.up()
-    return statistics.median(latencies), shown / elapsed
+    return statistics.median(latencies), statistics.median(camera), shown / elapsed
 
 
 def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("niebla", nargs="?", default=str(ROOT / "target/release/niebla"))
+    parser.add_argument("--sizes", nargs="+", type=int, default=SIZES)
+    parser.add_argument("--integrators", nargs="+", default=INTEGRATORS)
+    parser.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
+    args = parser.parse_args()
     rows = []
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path="/usr/bin/chromium", headless=True,
                                     args=["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox"])
-        for scene_name, medium in SCENES.items():
-            for integrator in INTEGRATORS:
-                for size in SIZES:
+        for scene_name in args.scenes:
+            medium = SCENES[scene_name]
+            for integrator in args.integrators:
+                for size in args.sizes:
                     scene = json.loads((ROOT / "scenes" / f"{scene_name}.json").read_text())
                     scene["camera"]["width"] = scene["camera"]["height"] = size
                     scene["render"]["integrator"] = {"type": integrator}
                     work = Path(tempfile.mkdtemp(prefix="niebla-view-bench-"))
                     path = work / f"{scene_name}.json"
                     path.write_text(json.dumps(scene))
-                    server = subprocess.Popen([NIEBLA, "view", str(path)], stdout=subprocess.PIPE, text=True)
+                    server = subprocess.Popen([args.niebla, "view", str(path)], stdout=subprocess.PIPE, text=True)
                     try:
                         url = re.search(r"http://\S+", server.stdout.readline()).group(0)
                         page = browser.new_page(viewport={"width": 1300, "height": 900})
                         page.goto(url)
-                        latency, fps = measure(page, medium)
+                        latency, camera, fps = measure(page, medium)
                         page.close()
                     finally:
                         server.terminate()
                         server.wait(10)
-                    rows.append((scene_name, integrator, size, latency, fps))
-                    lat = "n/a" if latency is None else f"{latency:.0f} ms"
+                    rows.append((scene_name, integrator, size, latency, camera, fps))
+                    ms = lambda v: "n/a" if v is None else f"{v:.0f} ms"
                     fps_text = "n/a" if fps is None else f"{fps:.1f}"
-                    print(f"{scene_name:6} {integrator:8} {size}x{size}: edit-to-frame {lat:>9}, drag {fps_text:>5} frames/s", flush=True)
+                    print(f"{scene_name:6} {integrator:8} {size}x{size}: density edit-to-frame {ms(latency):>9}, "
+                          f"camera edit-to-frame {ms(camera):>9}, drag {fps_text:>5} frames/s", flush=True)
         browser.close()
 
 

@@ -3,19 +3,36 @@
 //! progressive passes of `niebla::progressive` (1, 1, 2, 4, ... samples per
 //! pixel), publishing the mean image after every pass. An edit cancels the
 //! running pass (`RenderOptions`' cancel flag) and starts over.
+//!
+//! Each slot keeps the scene it built last and its integrator's
+//! precomputation ([`SlotCache`]): an edit of the camera, of `render` or of
+//! a medium's scalars (coefficients, density scale, phase, emission scale)
+//! is applied to them (`niebla::scene::rebuild_scene`,
+//! `PreparedIntegrator::update`) instead of loading grids and running the
+//! precomputation again, with the same image as a fresh build. With
+//! `NIEBLA_VIEW_TIMING` set, each job prints where its time went to stderr.
 
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Instant;
 
 use niebla::film::Image;
-use niebla::progressive::{resume_progressive_sums, Accumulator, Budget, ProgressiveOptions};
-use niebla::render::RenderError;
-use niebla::scene::{build_scene, parse_scene_str};
+use niebla::integrator::IntegratorSettings;
+use niebla::progressive::{resume_progressive_sums_prepared, Accumulator, Budget, ProgressiveOptions};
+use niebla::render::{PreparedIntegrator, RenderError};
+use niebla::scene::{build_scene, parse_scene_str, rebuild_scene, BuiltScene, CameraDesc, SceneDesc};
 use serde_json::Value;
 
 use crate::frame::{relative_error_estimate, Frame};
 use crate::session::{Job, Session, SlotInput};
+
+/// What a slot keeps between jobs: the description it built last (camera
+/// size as rendered), the built scene and the integrator prepared for it.
+pub struct SlotCache {
+    desc: SceneDesc,
+    built: BuiltScene,
+    prepared: Option<(IntegratorSettings, PreparedIntegrator)>,
+}
 
 /// The scene slot `index` renders for `job`: the edited scene itself (slot
 /// 0), or with `render.integrator` replaced by the comparison integrator
@@ -46,6 +63,8 @@ pub fn with_integrator(scene: &Value, integrator: &Value) -> Value {
 pub fn run_slot(session: Arc<Session>, index: usize) {
     let mut seen = 0;
     let mut done: Option<SlotInput> = None;
+    let mut cache: Option<SlotCache> = None;
+    let timing = std::env::var_os("NIEBLA_VIEW_TIMING").is_some();
     while let Some(job) = session.wait_job(seen) {
         seen = job.version;
         let slot = &session.slots[index];
@@ -60,7 +79,7 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
         done = None;
         let Some(scene) = &input.scene else { continue };
         slot.rendering_interactive.store(job.interactive, Ordering::SeqCst);
-        let result = render_job(&session, index, &job, scene);
+        let result = render_job(&session, index, &job, scene, &mut cache, timing);
         slot.rendering_interactive.store(false, Ordering::SeqCst);
         match result {
             Ok(()) if !slot.cancel.load(Ordering::SeqCst) => done = Some(input),
@@ -70,22 +89,79 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
     }
 }
 
+/// The scene of `desc` ready to render: `cache`'s scene brought up to
+/// date when the edit allows (`rebuild_scene`), else built anew; the
+/// prepared integrator updated or made. Returns how the scene was obtained
+/// (for the timing line).
+fn prepare(
+    session: &Session,
+    desc: SceneDesc,
+    cache: &mut Option<SlotCache>,
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<(&'static str, &'static str), String> {
+    let rebuilt = cache
+        .as_ref()
+        .and_then(|c| rebuild_scene(&c.built, &c.desc, &desc, &session.label, &session.base).map(|r| (r, c)));
+    let (built, edit, how) = match rebuilt {
+        Some((Ok((built, edit)), _)) => {
+            let how = if edit.any_medium() { "media" } else { "camera" };
+            (built, Some(edit), how)
+        }
+        Some((Err(e), _)) => return Err(e.to_string()),
+        None => {
+            *cache = None; // free the old grids before loading the new ones
+            (build_scene(&desc, &session.label, &session.base).map_err(|e| e.to_string())?, None, "built")
+        }
+    };
+    let settings = built.settings.integrator;
+    let old = cache.take().and_then(|c| c.prepared);
+    let (prepared, kept) = match (old, edit) {
+        (Some((old_settings, mut prepared)), Some(edit)) if old_settings == settings => {
+            prepared.update(&built.scene, &settings, &edit);
+            (prepared, "updated")
+        }
+        _ => {
+            if cancel.load(Ordering::SeqCst) {
+                // A newer edit came: leave the slow precomputation to it.
+                *cache = Some(SlotCache { desc, built, prepared: None });
+                return Ok((how, "skipped"));
+            }
+            (PreparedIntegrator::new(&built.scene, &settings), "new")
+        }
+    };
+    *cache = Some(SlotCache { desc, built, prepared: Some((settings, prepared)) });
+    Ok((how, kept))
+}
+
 /// Build and render one job in slot `index`, publishing every pass; an
 /// error message when the scene does not build (a cancelled render is no
 /// error).
-fn render_job(session: &Session, index: usize, job: &Job, scene: &Value) -> Result<(), String> {
+fn render_job(
+    session: &Session,
+    index: usize,
+    job: &Job,
+    scene: &Value,
+    cache: &mut Option<SlotCache>,
+    timing: bool,
+) -> Result<(), String> {
     let start = Instant::now();
     let text = serde_json::to_string(scene).map_err(|e| e.to_string())?;
-    let desc = parse_scene_str(&text, &session.label).map_err(|e| e.to_string())?;
-    let built = build_scene(&desc, &session.label, &session.base).map_err(|e| e.to_string())?;
-    let settings = built.settings;
-    let mut world = built.scene;
+    let mut desc = parse_scene_str(&text, &session.label).map_err(|e| e.to_string())?;
     if job.interactive {
         let divisor = job.preview_scale.clamp(1, 16);
-        world.camera.width = world.camera.width.div_ceil(divisor).max(1);
-        world.camera.height = world.camera.height.div_ceil(divisor).max(1);
+        let CameraDesc::Perspective(camera) = &mut desc.camera;
+        camera.width = camera.width.div_ceil(divisor).max(1);
+        camera.height = camera.height.div_ceil(divisor).max(1);
     }
+    let parsed = start.elapsed();
     let slot = &session.slots[index];
+    let (how, kept) = prepare(session, desc, cache, &slot.cancel)?;
+    let prepared_at = start.elapsed();
+    let Some(SlotCache { built, prepared: Some((_, prepared)), .. }) = cache.as_ref() else {
+        return Ok(()); // cancelled before the precomputation
+    };
+    let settings = built.settings;
+    let world = &built.scene;
     let budget = Budget::Samples(if job.interactive { 1 } else { job.max_spp.max(1) });
     let options = ProgressiveOptions {
         threads: session.threads,
@@ -95,7 +171,23 @@ fn render_job(session: &Session, index: usize, job: &Job, scene: &Value) -> Resu
     };
     let (width, height) = (world.camera.width, world.camera.height);
     let mut previous: Option<Image> = None;
-    let result = resume_progressive_sums(&world, &options, Accumulator::new(width, height), |acc, info| {
+    let mut first = true;
+    let accumulator = Accumulator::new(width, height);
+    let result = resume_progressive_sums_prepared(world, prepared, &options, accumulator, |acc, info| {
+        if timing && first {
+            first = false;
+            eprintln!(
+                "niebla view: slot {index} version {} ({}x{}{}): parse {:.1} ms, scene {how} + integrator {kept} \
+                 {:.1} ms, first pass {:.1} ms",
+                job.version,
+                width,
+                height,
+                if job.interactive { ", interactive" } else { "" },
+                parsed.as_secs_f64() * 1e3,
+                (prepared_at - parsed).as_secs_f64() * 1e3,
+                (start.elapsed() - prepared_at).as_secs_f64() * 1e3,
+            );
+        }
         let image = acc.image();
         let relative_error = previous.as_ref().and_then(|p| relative_error_estimate(p, &image));
         let elapsed = start.elapsed().as_secs_f64();

@@ -39,8 +39,13 @@ struct Viewer {
 
 impl Viewer {
     fn start(name: &str) -> Viewer {
+        Viewer::start_with(name, SCENE)
+    }
+
+    /// A viewer of `scene`, written to `fog.json` in a new folder.
+    fn start_with(name: &str, scene: &str) -> Viewer {
         let dir = temp_dir(name);
-        std::fs::write(dir.join("fog.json"), SCENE).unwrap();
+        std::fs::write(dir.join("fog.json"), scene).unwrap();
         let config = ViewConfig { scene: Some(dir.join("fog.json")), threads: Some(2), ..ViewConfig::default() };
         let server = ViewServer::start(&config).unwrap();
         let token = server.url().split("/t/").nth(1).unwrap().trim_end_matches('/').to_string();
@@ -339,6 +344,71 @@ fn the_transported_frame_is_the_render_rounded_to_half_floats() {
     assert!(nonzero > decoded.len() / 2, "the test scene is mostly black");
     let estimate: f64 = header(&headers, "x-niebla-relative-error").parse().unwrap();
     assert!(estimate > 0.0 && estimate < 1.0, "{estimate}");
+}
+
+/// A procedural cloud (grid medium) lit by a directional light and the sky.
+const CLOUD: &str = r#"{
+  "version": 1,
+  "camera": {"type": "perspective", "position": [0, 1.2, 4], "target": [0, 1, 0], "fov_y": 45, "width": 20, "height": 14},
+  "render": {"integrator": {"type": "volpath"}, "spp": 4, "seed": 2},
+  "media": {"cloud": {"type": "grid", "density": {"type": "procedural", "shape": "cloud", "seed": 3, "resolution": 16},
+                      "sigma_t": 6, "albedo": 0.9, "phase": {"type": "hg", "g": 0.4},
+                      "to_world": {"scale": 2, "translate": [-1, 0, -1]}}},
+  "ambient_medium": "cloud",
+  "lights": [{"type": "directional", "direction": [-0.6, -0.8, -0.3], "irradiance": [3, 2.8, 2.5]},
+             {"type": "constant", "radiance": [0.1, 0.15, 0.2]}]
+}"#;
+
+/// After a drag of the camera (interactive frames) and a change of the
+/// density scale, albedo and phase, which the render slot applies to the
+/// scene and precomputation it kept, the frame at 4 spp equals
+/// `niebla::render::render` of the edited scene built from scratch.
+#[test]
+fn frames_after_camera_and_medium_edits_equal_a_render_of_the_edited_scene() {
+    for integrator in [
+        json!({"type": "hegeman", "resolution": 8}),
+        json!({"type": "zhou", "resolution": 8, "rbf_count": 12, "fit_iterations": 4, "cache": false}),
+        json!({"type": "volpath", "max_depth": 16}),
+    ] {
+        let mut scene: Value = serde_json::from_str(CLOUD).unwrap();
+        scene["render"]["integrator"] = integrator.clone();
+        let viewer = Viewer::start_with("edits", &scene.to_string());
+        let (_, first) = viewer.post("api/scene", &json!({ "max_spp": 4 }));
+        viewer.frame_with_spp(4, first["version"].as_u64().unwrap());
+        for (i, x) in [0.3, 0.6, 0.9].into_iter().enumerate() {
+            scene["camera"]["position"] = json!([x, 1.3, 3.8]);
+            let (status, reply) = viewer.post("api/scene", &json!({ "scene": scene, "interactive": true }));
+            assert_eq!(status, 200, "{reply}");
+            if i == 2 {
+                viewer.frame_with_spp(1, reply["version"].as_u64().unwrap());
+            }
+        }
+        scene["media"]["cloud"]["scale"] = json!(1.6);
+        scene["media"]["cloud"]["albedo"] = json!([0.8, 0.85, 0.95]);
+        scene["media"]["cloud"]["phase"]["g"] = json!(-0.2);
+        let (status, reply) = viewer.post("api/scene", &json!({ "scene": scene, "interactive": false, "max_spp": 4 }));
+        assert_eq!(status, 200, "{reply}");
+        let (headers, body) = viewer.frame_with_spp(4, reply["version"].as_u64().unwrap());
+        assert_eq!(header(&headers, "x-niebla-width"), "20", "{integrator}");
+        std::fs::write(viewer.dir.join("edited.json"), scene.to_string()).unwrap();
+        let built = niebla::scene::load_scene(&viewer.dir.join("edited.json")).unwrap();
+        let options = niebla::render::RenderOptions {
+            spp: 4,
+            seed: 2,
+            first_sample: 0,
+            threads: Some(1),
+            sampler: built.settings.sampler,
+        };
+        let image =
+            niebla::render::render(&built.scene, &built.settings.integrator, &options, &|_, _| {}, None).unwrap();
+        let decoded = niebla_view::frame::decode_half(&body);
+        assert_eq!(decoded.len(), image.pixels.len() * 3);
+        for (i, value) in decoded.iter().enumerate() {
+            let exact = image.pixels[i / 3][i % 3];
+            let want = half::f16::from_f32(exact).to_f32();
+            assert_eq!(value.to_bits(), want.to_bits(), "{integrator}: value {i}: {value} vs {exact}");
+        }
+    }
 }
 
 #[test]

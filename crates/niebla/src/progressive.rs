@@ -265,10 +265,26 @@ pub fn resume_progressive(
 pub fn resume_progressive_sums(
     scene: &Scene,
     options: &ProgressiveOptions,
+    acc: Accumulator,
+    on_pass: impl FnMut(&Accumulator, PassInfo) -> bool,
+) -> Result<Accumulator, RenderError> {
+    let prepared = crate::render::PreparedIntegrator::new(scene, options.settings);
+    resume_progressive_sums_prepared(scene, &prepared, options, acc, on_pass)
+}
+
+/// [`resume_progressive_sums`] with the integrator's precomputation done
+/// by the caller: `prepared` must be `PreparedIntegrator::new(scene,
+/// options.settings)` or equal to it for rendering (brought up to date
+/// with [`crate::render::PreparedIntegrator::update`]); the result is then
+/// the same. A live viewer keeps it across edits.
+pub fn resume_progressive_sums_prepared(
+    scene: &Scene,
+    prepared: &crate::render::PreparedIntegrator,
+    options: &ProgressiveOptions,
     mut acc: Accumulator,
     mut on_pass: impl FnMut(&Accumulator, PassInfo) -> bool,
 ) -> Result<Accumulator, RenderError> {
-    let ProgressiveOptions { settings, seed, threads, sampler, budget, progress, cancel, aovs } = *options;
+    let ProgressiveOptions { settings: _, seed, threads, sampler, budget, progress, cancel, aovs } = *options;
     if !aovs.is_empty() && acc.aov.as_ref().is_none_or(|a| a.set != aovs) {
         let (w, h) = (acc.sums.width, acc.sums.height);
         assert!(acc.spp == 0, "resuming a render with layers needs the checkpoint's layer sums");
@@ -278,7 +294,6 @@ pub fn resume_progressive_sums(
     let mut k = 0u32;
     let mut seconds_per_spp = 0.0f64;
     let mut rendered = 0u64;
-    let prepared = crate::render::PreparedIntegrator::new(scene, settings);
     loop {
         let mut size = next_pass_size(acc.spp);
         match budget {

@@ -8,7 +8,7 @@ use crate::math::{Ray, Vec2, Vec3};
 /// increasing column. A camera sample passes through a uniformly random point
 /// of its pixel and counts in that pixel alone (box filter). `fov_y` is the
 /// full vertical field of view.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PerspectiveCamera {
     /// Eye position (world).
     pub position: Vec3,

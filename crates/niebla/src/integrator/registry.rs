@@ -355,6 +355,33 @@ impl PreparedIntegrator {
         }
     }
 
+    /// Bring an integrator prepared with `settings` for a scene up to date
+    /// with `scene`, that scene after `edit` ([`crate::scene::rebuild_scene`]),
+    /// reusing what the edit left valid: `zhou` keeps its fit (and, when
+    /// only the camera moved, its lighting: the view pass runs again),
+    /// `hegeman` keeps its line integrals (and everything when only the
+    /// camera moved); the others, whose preparation is cheap or depends on
+    /// the scene bounds (which include the camera), are prepared again.
+    /// Renders with the result are identical to those of
+    /// `PreparedIntegrator::new(scene, settings)`.
+    pub fn update(&mut self, scene: &Scene, settings: &IntegratorSettings, edit: &crate::scene::SceneEdit) {
+        match self {
+            PreparedIntegrator::Zhou(z) => {
+                if edit.any_medium() {
+                    z.update_media(scene, &edit.media);
+                } else if edit.camera {
+                    z.set_view(scene.camera.position);
+                }
+            }
+            PreparedIntegrator::Hegeman(h) => {
+                if edit.any_medium() {
+                    h.update_media(scene, &edit.media);
+                }
+            }
+            _ => *self = PreparedIntegrator::new(scene, settings),
+        }
+    }
+
     /// Render `options.spp` samples per pixel of `scene` (the scene the
     /// integrator was prepared for): the mean of [`Self::render_sums`].
     pub fn render(

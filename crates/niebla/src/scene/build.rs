@@ -237,38 +237,8 @@ pub fn build_scene_with_options(
         });
     }
 
-    // Camera.
-    let CameraDesc::Perspective(c) = &desc.camera;
-    let camera = PerspectiveCamera::look_at(
-        Vec3::from(c.position),
-        Vec3::from(c.target),
-        Vec3::from(c.up),
-        c.fov_y,
-        c.width,
-        c.height,
-    )
-    .ok_or_else(|| err("camera", "position, target and up do not define a view (parallel or equal)".into()))?;
-
-    // Bounds of everything positioned.
-    let mut lo = camera.position;
-    let mut hi = camera.position;
-    for o in &objects {
-        let (a, b) = o.shape.bounds();
-        lo = lo.min(a);
-        hi = hi.max(b);
-    }
-    for l in &lights {
-        if let Some(p) = l.point_position() {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    for m in &media {
-        if let crate::medium::Medium::Grid(g) = m {
-            lo = lo.min(g.world_bounds.0);
-            hi = hi.max(g.world_bounds.1);
-        }
-    }
+    let camera = build_camera(&desc.camera, source)?;
+    let bounds = scene_bounds(&camera, &objects, &lights, &media);
 
     let mut scene = Scene {
         camera,
@@ -278,27 +248,78 @@ pub fn build_scene_with_options(
         lights,
         ambient_medium,
         camera_medium: None,
-        bounds: (lo, hi),
+        bounds,
         accel: Default::default(),
         transparent_background: desc.film.transparent,
     };
     assign_enclosing_exteriors(&mut scene, &explicit_exterior);
     scene.camera_medium = scene.medium_at(scene.camera.position);
 
-    let settings = RenderSettings {
-        integrator: integrator_settings(&desc.render.integrator),
-        spp: desc.render.spp,
-        seed: desc.render.seed,
-        sampler: desc.render.sampler,
-        exposure: desc.render.exposure,
-        film: crate::scene::FilmSettings::from_desc(&desc.film),
-    };
+    let settings = render_settings(desc);
     Ok(BuiltScene {
         scene,
         settings,
         integrator_spec: desc.render.integrator.clone(),
         warnings: unused_media_warnings(desc, source),
     })
+}
+
+/// The camera of a scene description (errors at `camera`).
+pub(super) fn build_camera(desc: &CameraDesc, source: &str) -> Result<PerspectiveCamera, SceneError> {
+    let CameraDesc::Perspective(c) = desc;
+    PerspectiveCamera::look_at(
+        Vec3::from(c.position),
+        Vec3::from(c.target),
+        Vec3::from(c.up),
+        c.fov_y,
+        c.width,
+        c.height,
+    )
+    .ok_or_else(|| {
+        SceneError::new(source, "camera", "position, target and up do not define a view (parallel or equal)")
+    })
+}
+
+/// Bounds of everything positioned: the camera, the shapes, the lights with
+/// a position and the grid media's boxes ([`Scene::bounds`]).
+pub(super) fn scene_bounds(
+    camera: &PerspectiveCamera,
+    objects: &[SceneObject],
+    lights: &[Light],
+    media: &[crate::medium::Medium],
+) -> (Vec3, Vec3) {
+    let mut lo = camera.position;
+    let mut hi = camera.position;
+    for o in objects {
+        let (a, b) = o.shape.bounds();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    for l in lights {
+        if let Some(p) = l.point_position() {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    for m in media {
+        if let crate::medium::Medium::Grid(g) = m {
+            lo = lo.min(g.world_bounds.0);
+            hi = hi.max(g.world_bounds.1);
+        }
+    }
+    (lo, hi)
+}
+
+/// The render settings a description asks for (`render` and `film`).
+pub(super) fn render_settings(desc: &SceneDesc) -> RenderSettings {
+    RenderSettings {
+        integrator: integrator_settings(&desc.render.integrator),
+        spp: desc.render.spp,
+        seed: desc.render.seed,
+        sampler: desc.render.sampler,
+        exposure: desc.render.exposure,
+        film: crate::scene::FilmSettings::from_desc(&desc.film),
+    }
 }
 
 /// A warning for each medium that no shape names as `interior` or
@@ -409,7 +430,12 @@ pub fn build_transform(desc: &TransformDesc) -> Option<Transform> {
     }
 }
 
-fn build_phase(desc: &PhaseDesc, path: &str, source: &str, base_dir: &Path) -> Result<PhaseFunction, SceneError> {
+pub(super) fn build_phase(
+    desc: &PhaseDesc,
+    path: &str,
+    source: &str,
+    base_dir: &Path,
+) -> Result<PhaseFunction, SceneError> {
     let err = |e: crate::phase::PhaseError| SceneError::new(source, path, e.to_string());
     Ok(match desc {
         PhaseDesc::Isotropic => PhaseFunction::isotropic(),

@@ -21,6 +21,7 @@ mod error;
 pub mod mitsuba;
 mod parse;
 mod parse_surfaces;
+mod rebuild;
 mod source;
 mod validate;
 
@@ -35,6 +36,7 @@ pub use build::{
 pub use desc::*;
 pub use error::SceneError;
 pub use parse::{load_scene_file, parse_scene_str};
+pub use rebuild::{rebuild_scene, SceneEdit};
 pub use source::{read_scene_source, SceneSource};
 
 use crate::integrator::IntegratorSettings;

@@ -292,6 +292,26 @@ impl HegemanIntegrator {
         }
     }
 
+    /// Bring the model up to date after the coefficients, phase function or
+    /// emission of the grid media flagged in `changed` (indexed like
+    /// `scene.media`) were edited in `scene`, the scene it was built for
+    /// otherwise unchanged: the line integrals are of the density alone and
+    /// are kept; the blurred-phase and calibration tables and the per-node
+    /// factors are recomputed as [`HegemanIntegrator::new`] computes them,
+    /// so the result renders identically to a new precomputation.
+    pub fn update_media(&mut self, scene: &Scene, changed: &[bool]) {
+        let start = Instant::now();
+        for (index, (model, medium)) in self.models.iter_mut().zip(&scene.media).enumerate() {
+            let (Some(model), Medium::Grid(g), true) = (model, medium, changed.get(index) == Some(&true)) else {
+                continue;
+            };
+            model.blur = BlurredPhaseTable::new(g.phase.mean_cosine());
+            model.tables = calibration_tables(g, &self.settings);
+            model.update_factors(g, &self.lights, self.settings.multiple_scattering);
+        }
+        self.precompute_seconds = start.elapsed().as_secs_f64();
+    }
+
     /// Bytes held by the precomputation.
     pub fn memory_bytes(&self) -> usize {
         self.models

@@ -269,6 +269,39 @@ impl ZhouIntegrator {
         }
     }
 
+    /// Bring the precomputation up to date after the coefficients, phase
+    /// function or emission of the grid media flagged in `changed` (indexed
+    /// like `scene.media`) were edited in `scene`, the scene it was built
+    /// for otherwise unchanged (the camera may have moved): the density
+    /// lattice and its RBF fit depend on the density alone and are kept;
+    /// the lighting, the diffusion and the view pass run again as in
+    /// [`ZhouIntegrator::new`], so the result renders identically to a new
+    /// precomputation.
+    pub fn update_media(&mut self, scene: &Scene, changed: &[bool]) {
+        let start = Instant::now();
+        if let Some(local) = &mut self.local {
+            local.update_media(scene, changed);
+        }
+        let order = self.settings.sh_order as usize;
+        for (index, (model, medium)) in self.models.iter_mut().zip(&scene.media).enumerate() {
+            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, changed.get(index) == Some(&true))
+            else {
+                continue;
+            };
+            let lattice = model.lattice;
+            let rbfs = std::mem::take(&mut model.rbfs);
+            let smooth = std::mem::take(&mut model.smooth);
+            let fit = std::mem::replace(
+                &mut model.fit,
+                FitReport { relative_error: 0.0, history: Vec::new(), teleports_kept: 0 },
+            );
+            *model = light_model(scene, g, &self.settings, &self.lights, lattice, rbfs, smooth, fit);
+            model.set_view(scene.camera.position, order);
+        }
+        self.fit_seconds = 0.0;
+        self.lighting_seconds = start.elapsed().as_secs_f64();
+    }
+
     /// Relative L2 error `||D - D~|| / ||D||` of each grid medium's fit.
     pub fn fit_errors(&self) -> Vec<f64> {
         self.models.iter().flatten().map(|m| m.fit.relative_error).collect()
