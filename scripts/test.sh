@@ -86,7 +86,7 @@ NIEBLA_BIN="$PWD/target/release/niebla" "$venv/bin/python" -m pytest -q crates/n
 # The live viewer in headless Chromium (Playwright from PyPI driving Debian's
 # /usr/bin/chromium; the script prints why it skips when chromium is absent).
 if [ "$status" = 0 ]; then
-  "$venv/bin/python" -m pip install -q "playwright>=1.40,<2" pillow
+  "$venv/bin/python" -m pip install -q "playwright>=1.40,<2" pillow numpy
   viewer_status=0
   NIEBLA_BIN="$PWD/target/release/niebla" "$venv/bin/python" crates/niebla-view/tests/browser/test_viewer.py || viewer_status=$?
   if [ "$viewer_status" != 0 ] && [ "$viewer_status" != 77 ]; then
