@@ -261,3 +261,36 @@ fn volume_light_density_is_normalized_and_consistent() {
     let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
     assert!((mean - 1.0).abs() < 4.0 * se, "integral {mean} +- {se}");
 }
+
+/// The setting: parsed with its default, refused with its name when not a
+/// boolean, named in the stable key only when off; the distribution's memory
+/// is reported to `--max-memory` (16 bytes per majorant cell of an emissive
+/// grid) only when it is on.
+#[test]
+fn volume_light_sampling_setting_parses_keys_and_counts_memory() {
+    use niebla::integrator::{precompute_memory, registry};
+    let parse = |v: serde_json::Value| registry::parse(v.as_object().unwrap());
+    let on = parse(serde_json::json!({"type": "volpath", "max_depth": 64})).unwrap();
+    assert_eq!(on, volpath(true));
+    assert_eq!(on.key(), "volpath(max_depth=64)");
+    let off = parse(serde_json::json!({"type": "volpath", "max_depth": 64, "volume_light_sampling": false})).unwrap();
+    assert_eq!(off, volpath(false));
+    assert_eq!(off.key(), "volpath(max_depth=64, volume_light_sampling=false)");
+    let e = parse(serde_json::json!({"type": "volpath", "volume_light_sampling": "yes"})).unwrap_err();
+    assert!(e.path.contains("volume_light_sampling") || e.message.contains("volume_light_sampling"), "{e:?}");
+    assert!(e.message.contains("bool"), "{e:?}");
+
+    let scene = load(
+        r#"{"version": 1,
+        "camera": {"type": "perspective", "position": [0, 1, 5], "target": [0, 0.5, 0], "width": 8, "height": 8},
+        "media": {"fire": {"type": "grid", "sigma_t": 6, "albedo": 0.5,
+            "density": {"type": "procedural", "shape": "cloud", "seed": 2, "resolution": 16},
+            "emission": {"L_ve": 1}}},
+        "ambient_medium": "fire"}"#,
+    );
+    let niebla::medium::Medium::Grid(g) = &scene.media[0] else { panic!("a grid medium") };
+    let cells = g.majorant.res().iter().product::<usize>() as u64;
+    let m = precompute_memory(&on, &scene).expect("an estimate with light sampling on");
+    assert_eq!((m.bytes, m.field), (16 * cells, "volume_light_sampling"));
+    assert_eq!(precompute_memory(&off, &scene), None);
+}
