@@ -28,7 +28,7 @@ fuzz_target!(|data: &[u8]| {
     built.scene.camera.width = built.scene.camera.width.min(3);
     built.scene.camera.height = built.scene.camera.height.min(2);
     let mut settings = built.settings.integrator;
-    if let IntegratorSettings::VolPath { max_depth } = &mut settings {
+    if let IntegratorSettings::VolPath { max_depth, .. } = &mut settings {
         *max_depth = (*max_depth).min(8);
     }
     let options = RenderOptions { spp: 1, seed: 1, first_sample: 0, threads: Some(1) };

@@ -3,6 +3,7 @@
 mod adaptive_cmd;
 mod aov_flags;
 mod bench;
+mod bench_emission;
 mod bench_geometry;
 mod bench_interactive;
 mod bench_photons;
@@ -78,6 +79,9 @@ enum BenchCommand {
     /// Hierarchy build time and memory, closest-hit and any-hit rays/s on
     /// generated meshes of 10^4 to 10^7 triangles.
     Geometry(bench_geometry::GeometryBenchArgs),
+    /// Relative MSE x time of volpath with and without light sampling of
+    /// emissive media, on the pixels lit by the fire and those that see it.
+    Emission(bench_emission::EmissionBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -95,6 +99,7 @@ fn main() -> ExitCode {
         Command::Bench(BenchCommand::Interactive(args)) => bench_interactive::run(&args),
         Command::Bench(BenchCommand::Photons(args)) => bench_photons::run(&args),
         Command::Bench(BenchCommand::Geometry(args)) => bench_geometry::run(&args),
+        Command::Bench(BenchCommand::Emission(args)) => bench_emission::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -580,7 +580,10 @@ fn unknown_integrator_type_lists_every_integrator() {
 fn volpath_integrator_parses() {
     let text = edit(SINGLE, r#"{"type": "volpath", "max_depth": 64}"#);
     let desc = parse_scene_str(&text, FILE).unwrap();
-    assert_eq!(desc.render.integrator.settings, IntegratorSettings::VolPath { max_depth: 64 });
+    assert_eq!(
+        desc.render.integrator.settings,
+        IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }
+    );
 }
 
 /// Homogeneous media: coefficients, scale, emission and fields that only

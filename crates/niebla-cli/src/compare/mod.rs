@@ -163,7 +163,10 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
         None => {
             let settings = match scene_settings {
                 s @ IntegratorSettings::VolPath { .. } => s,
-                _ => IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH },
+                _ => IntegratorSettings::VolPath {
+                    max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
+                    volume_light_sampling: true,
+                },
             };
             let budget = match (args.reference_spp, args.reference_time) {
                 (Some(spp), _) => Budget::Samples(spp),

@@ -17,6 +17,7 @@ mod precompute_memory;
 pub mod registry;
 mod single;
 mod volpath;
+mod volume_lights;
 pub mod zhou;
 
 pub use analytic::airlight::{airlight_integral, airlight_table, AirlightTable};
@@ -33,6 +34,7 @@ pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use registry::{IntegratorSettings, PreparedIntegrator};
 pub use single::{SingleIntegrator, SingleSampling};
 pub use volpath::{VolPathIntegrator, DEFAULT_GUIDE_FRACTION};
+pub use volume_lights::{majorant_at, VolumeLightSample, VolumeLights};
 pub use zhou::{ZhouIntegrator, ZhouSettings};
 
 use crate::color::Rgb;

@@ -51,6 +51,9 @@ pub enum IntegratorSettings {
     VolPath {
         /// Largest number of scattering events on a path.
         max_depth: u32,
+        /// Whether next-event estimation samples emissive media as lights
+        /// (`volume_light_sampling`, default true).
+        volume_light_sampling: bool,
     },
     /// Closed-form single scattering (Sun et al. 2005) in homogeneous media
     /// from point and spot lights; surfaces lit directly.
@@ -114,7 +117,12 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         name: "volpath",
         summary: "Volumetric path tracing (multiple scattering, unbiased)",
         interactive: false,
-        parse: |o| volpath::settings::parse(o).map(|max_depth| IntegratorSettings::VolPath { max_depth }),
+        parse: |o| {
+            volpath::settings::parse(o).map(|(max_depth, volume_light_sampling)| IntegratorSettings::VolPath {
+                max_depth,
+                volume_light_sampling,
+            })
+        },
     },
     IntegratorEntry {
         name: "analytic",
@@ -173,7 +181,7 @@ pub fn entry(name: &str) -> Option<&'static IntegratorEntry> {
 /// use niebla::integrator::{registry, IntegratorSettings};
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
 /// let settings = registry::parse(object.as_object().unwrap()).unwrap();
-/// assert_eq!(settings, IntegratorSettings::VolPath { max_depth: 64 });
+/// assert_eq!(settings, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true });
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 0});
 /// let e = registry::parse(object.as_object().unwrap()).unwrap_err();
 /// assert_eq!((e.path.as_str(), e.message.as_str()), ("max_depth", "must be at least 1, got 0"));
@@ -208,9 +216,9 @@ pub fn parse(object: &Object) -> Result<IntegratorSettings, Located> {
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
 /// let object = object.as_object().unwrap();
 /// let same = registry::parse_with_overrides(object, Some("volpath"), &[]).unwrap();
-/// assert_eq!(same, IntegratorSettings::VolPath { max_depth: 64 });
+/// assert_eq!(same, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true });
 /// let deeper = registry::parse_with_overrides(object, None, &[("max_depth", 8.into())]).unwrap();
-/// assert_eq!(deeper, IntegratorSettings::VolPath { max_depth: 8 });
+/// assert_eq!(deeper, IntegratorSettings::VolPath { max_depth: 8, volume_light_sampling: true });
 /// let other = registry::parse_with_overrides(object, Some("single"), &[]).unwrap();
 /// assert_eq!(Some(other), registry::defaults("single"));
 /// ```
@@ -238,7 +246,7 @@ pub fn parse_with_overrides(
 ///
 /// ```
 /// use niebla::integrator::{registry, IntegratorSettings};
-/// assert_eq!(registry::defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024 }));
+/// assert_eq!(registry::defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true }));
 /// ```
 pub fn defaults(name: &str) -> Option<IntegratorSettings> {
     entry(name).map(|e| (e.parse)(Object::new()).expect("every integrator has valid defaults"))
@@ -284,7 +292,9 @@ impl IntegratorSettings {
             IntegratorSettings::Single { step, sampling, transmittance } => {
                 single::settings::key(*step, *sampling, *transmittance)
             }
-            IntegratorSettings::VolPath { max_depth } => volpath::settings::key(*max_depth),
+            IntegratorSettings::VolPath { max_depth, volume_light_sampling } => {
+                volpath::settings::key(*max_depth, *volume_light_sampling)
+            }
             IntegratorSettings::Analytic => "analytic".to_string(),
             IntegratorSettings::Hegeman(h) => hegeman::settings::key(h),
             IntegratorSettings::Zhou(z) => zhou::settings::key(z),
@@ -303,6 +313,14 @@ impl IntegratorSettings {
             IntegratorSettings::Photon(p) => Some(photon_map_memory(scene, p.photons, p.max_depth, "the photon map")),
             IntegratorSettings::Ppm(p) => {
                 Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
+            }
+            IntegratorSettings::VolPath { volume_light_sampling: true, .. } => {
+                let bytes = super::VolumeLights::memory_estimate(scene);
+                (bytes > 0).then(|| PrecomputeMemory {
+                    bytes,
+                    field: "volume_light_sampling",
+                    what: "the light distribution over the majorant cells of the emissive grid media".to_string(),
+                })
             }
             IntegratorSettings::Emission { .. }
             | IntegratorSettings::Single { .. }
@@ -344,9 +362,9 @@ impl PreparedIntegrator {
             IntegratorSettings::Single { step, sampling, transmittance } => {
                 PreparedIntegrator::Single(SingleIntegrator { step, sampling, transmittance })
             }
-            IntegratorSettings::VolPath { max_depth } => {
-                PreparedIntegrator::VolPath(Box::new(VolPathIntegrator::for_scene(scene, max_depth)))
-            }
+            IntegratorSettings::VolPath { max_depth, volume_light_sampling } => PreparedIntegrator::VolPath(Box::new(
+                VolPathIntegrator::for_scene_with(scene, max_depth, volume_light_sampling),
+            )),
             IntegratorSettings::Analytic => PreparedIntegrator::Analytic(AnalyticIntegrator::new()),
             IntegratorSettings::Hegeman(h) => PreparedIntegrator::Hegeman(Box::new(HegemanIntegrator::new(scene, h))),
             IntegratorSettings::Zhou(z) => PreparedIntegrator::Zhou(Box::new(ZhouIntegrator::new(scene, z))),
@@ -475,7 +493,10 @@ mod tests {
             defaults("emission"),
             Some(IntegratorSettings::Emission { step: None, transmittance: TransmittanceMethod::Analytic })
         );
-        assert_eq!(defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024 }));
+        assert_eq!(
+            defaults("volpath"),
+            Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true })
+        );
         assert_eq!(defaults("analytic"), Some(IntegratorSettings::Analytic));
         assert_eq!(defaults("hegeman"), Some(IntegratorSettings::Hegeman(HegemanSettings::default())));
         assert_eq!(defaults("zhou"), Some(IntegratorSettings::Zhou(ZhouSettings::default())));

@@ -21,7 +21,8 @@
 //! Files: `path` (the path loop), `nee` (next-event estimation and shadow
 //! rays), `equiangular_nee` (equiangular sampling on medium segments and its
 //! MIS), `guiding` and `light_guide` (directions toward lamps inside media),
-//! `channels` (channel grouping).
+//! `channels` (channel grouping), `volume_nee` (light sampling of emissive
+//! media, MIS-weighted against the collision estimator of their emission).
 
 mod channels;
 mod equiangular_nee;
@@ -30,6 +31,9 @@ mod light_guide;
 mod nee;
 mod path;
 pub(crate) mod settings;
+mod volume_nee;
+
+use std::sync::Arc;
 
 use crate::aov::{LayerSplit, RadianceSum};
 use crate::color::Rgb;
@@ -38,14 +42,14 @@ use crate::medium::MediumId;
 use crate::sampling::PixelSampler;
 use crate::world::Scene;
 
-use super::Integrator;
+use super::{Integrator, VolumeLights};
 use channels::{channel_groups, Channels};
 use guiding::Guiding;
 use light_guide::LightGuide;
 use nee::LightChoice;
 
 /// The volumetric path tracer.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct VolPathIntegrator {
     /// Largest number of scattering events (medium or surface) on a path.
     pub max_depth: u32,
@@ -59,12 +63,13 @@ pub struct VolPathIntegrator {
     pub guide_fraction: f32,
     /// What depends only on the scene, when computed once for the scene
     /// being rendered ([`VolPathIntegrator::for_scene`]); else found for
-    /// every camera sample.
+    /// every camera sample (then without light sampling of emissive media,
+    /// whose distribution is too costly to build per sample).
     scene_constants: Option<SceneConstants>,
 }
 
 /// What a render's paths share: it depends on the scene alone.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct SceneConstants {
     /// The channel groups traced by separate paths, `groups.0[..groups.1]`.
     groups: ([Channels; 3], usize),
@@ -72,11 +77,20 @@ struct SceneConstants {
     lights: LightChoice,
     /// The guide toward the lights inside media.
     guide: LightGuide,
+    /// The emissive media as lights, when sampled and some medium emits.
+    volume_lights: Option<Arc<VolumeLights>>,
 }
 
 impl SceneConstants {
-    fn new(scene: &Scene) -> SceneConstants {
-        SceneConstants { groups: channel_groups(scene), lights: LightChoice::new(scene), guide: LightGuide::new(scene) }
+    /// The constants; the volume light distribution only with `volume_lights`.
+    fn new(scene: &Scene, volume_lights: bool) -> SceneConstants {
+        let volume_lights = volume_lights.then(|| VolumeLights::new(scene)).filter(|v| !v.is_empty()).map(Arc::new);
+        SceneConstants {
+            groups: channel_groups(scene),
+            lights: LightChoice::new(scene),
+            guide: LightGuide::new(scene),
+            volume_lights,
+        }
     }
 }
 
@@ -94,10 +108,19 @@ impl VolPathIntegrator {
     }
 
     /// [`VolPathIntegrator::new`] with what depends on the scene alone
-    /// (channel groups, light choice, guide) computed once, for `scene`:
-    /// render only that scene (unchanged) with it.
+    /// (channel groups, light choice, guide, the light distribution over
+    /// emissive media) computed once, for `scene`: render only that scene
+    /// (unchanged) with it. Emissive media are sampled as lights.
     pub fn for_scene(scene: &Scene, max_depth: u32) -> VolPathIntegrator {
-        VolPathIntegrator { scene_constants: Some(SceneConstants::new(scene)), ..VolPathIntegrator::new(max_depth) }
+        VolPathIntegrator::for_scene_with(scene, max_depth, true)
+    }
+
+    /// [`VolPathIntegrator::for_scene`] with volume light sampling on or off.
+    pub fn for_scene_with(scene: &Scene, max_depth: u32, volume_light_sampling: bool) -> VolPathIntegrator {
+        VolPathIntegrator {
+            scene_constants: Some(SceneConstants::new(scene, volume_light_sampling)),
+            ..VolPathIntegrator::new(max_depth)
+        }
     }
 
     /// The same integrator with guiding probability `fraction` (0: off).
@@ -112,6 +135,8 @@ impl VolPathIntegrator {
 struct LightSampling<'a> {
     lights: LightChoice,
     guiding: Option<Guiding<'a>>,
+    /// The emissive media as lights, if sampled.
+    volume: Option<&'a VolumeLights>,
 }
 
 impl Integrator for VolPathIntegrator {
@@ -142,7 +167,7 @@ impl VolPathIntegrator {
     ) -> S {
         match &self.scene_constants {
             Some(constants) => self.radiance_with(constants, scene, ray, medium, sampler),
-            None => self.radiance_with(&SceneConstants::new(scene), scene, ray, medium, sampler),
+            None => self.radiance_with(&SceneConstants::new(scene, false), scene, ray, medium, sampler),
         }
     }
 
@@ -156,7 +181,8 @@ impl VolPathIntegrator {
         medium: Option<MediumId>,
         sampler: &mut PixelSampler,
     ) -> S {
-        let SceneConstants { groups: (groups, count), lights, ref guide } = *constants;
+        let SceneConstants { groups: (groups, count), lights, ref guide, ref volume_lights } = *constants;
+        let volume = volume_lights.as_deref();
         let guiding = (self.guide_fraction > 0.0 && lights.points > 0 && guide.is_active())
             .then_some(Guiding { guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
         let mut l = S::default();
@@ -165,7 +191,7 @@ impl VolPathIntegrator {
         let first_dimension = sampler.dimension();
         for &group in &groups[..count] {
             sampler.rewind_for_another_estimate(first_dimension);
-            l.merge(self.trace(scene, ray, medium, group, LightSampling { lights, guiding }, sampler));
+            l.merge(self.trace(scene, ray, medium, group, LightSampling { lights, guiding, volume }, sampler));
         }
         l
     }

@@ -216,7 +216,7 @@ fn sample_ld_light(
         Some(n) => (p + n * surface_epsilon(p), medium),
         None => (p, medium),
     };
-    let Some((t_ray, mut r_l, mut r_u)) = shadow_transmittance(
+    let Some((t_ray, mut r_l, mut r_u, _)) = shadow_transmittance(
         scene,
         origin,
         medium,
@@ -247,10 +247,12 @@ fn sample_ld_light(
 }
 
 /// Ratio tracking along a shadow ray with the null-scattering MIS weights of
-/// pbrt-v4: returns `(T_ray, r_l, r_u)` or `None` when the ray is blocked by
-/// an opaque surface or its estimate was terminated.
+/// pbrt-v4: returns `(T_ray, r_l, r_u, medium)` or `None` when the ray is
+/// blocked by an opaque surface or its estimate was terminated; `medium` is
+/// the medium of the last segment walked (the one at the ray's end, unless
+/// the end lies within a surface offset past a boundary).
 #[allow(clippy::too_many_arguments)]
-fn shadow_transmittance(
+pub(super) fn shadow_transmittance(
     scene: &Scene,
     p: Vec3,
     medium: Option<MediumId>,
@@ -260,11 +262,13 @@ fn shadow_transmittance(
     group: Channels,
     hero: usize,
     sampler: &mut PixelSampler,
-) -> Option<(Rgb, Rgb, Rgb)> {
+) -> Option<(Rgb, Rgb, Rgb, Option<MediumId>)> {
     let mut t_ray = Rgb::ONE;
     let mut r_l = Rgb::ONE;
     let mut r_u = Rgb::ONE;
+    let mut last = medium;
     let reached = walk_shadow_ray(scene, p, medium, wi, distance, ignore, |s| {
+        last = s.medium;
         if let Some(id) = s.medium {
             let m = scene.medium(id);
             if let Some(homogeneous) = m.as_homogeneous() {
@@ -313,7 +317,7 @@ fn shadow_transmittance(
         }
         ControlFlow::Continue(())
     });
-    reached.then_some((t_ray, r_l, r_u))
+    reached.then_some((t_ray, r_l, r_u, last))
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@ use super::channels::Channels;
 use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment};
 use super::guiding::{sample_bsdf, sample_phase};
 use super::nee::{sample_ld, NeeVertex, Scatter};
+use super::volume_nee::sample_volume_ld;
 use super::{LightSampling, VolPathIntegrator};
 
 /// How the previous vertex scattered: what light sampling there would have done.
@@ -24,6 +25,9 @@ struct PreviousVertex {
     p: Vec3,
     /// Surface normal (facing the outgoing direction) for surface vertices.
     normal: Option<Vec3>,
+    /// Whether the vertex sampled the emissive media as lights (so emission
+    /// found by free flight after it is MIS-weighted against that).
+    sampled_volume_lights: bool,
 }
 
 impl VolPathIntegrator {
@@ -38,7 +42,7 @@ impl VolPathIntegrator {
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> S {
-        let LightSampling { lights, guiding } = light_sampling;
+        let LightSampling { lights, guiding, volume } = light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -53,7 +57,7 @@ impl VolPathIntegrator {
         // Product of etap^2 over refractions: radiance scaling that Russian
         // roulette must not mistake for lost energy (pbrt-v4's etaScale).
         let mut eta_scale = 1.0f32;
-        let mut previous = PreviousVertex { p: ray.o, normal: None };
+        let mut previous = PreviousVertex { p: ray.o, normal: None, sampled_volume_lights: false };
         let mut path = PathRay::new(ray, medium, 0.0);
 
         loop {
@@ -82,8 +86,21 @@ impl VolPathIntegrator {
                         let pdf = c.sigma_maj[hero] * c.t_maj[hero];
                         let beta_e = beta * c.t_maj / pdf;
                         let r_e = r_u * c.sigma_maj * c.t_maj / pdf;
-                        if group.average(r_e) > 0.0 {
-                            l.add(beta_e * c.point.l_ve / group.average(r_e), || PathClass::of(first, depth));
+                        // The same point drawn by light sampling at the previous
+                        // vertex: density p_V |x - y|^2, reached by ratio tracking
+                        // (its majorant factors are in `r_l`, the last segment's
+                        // is `t_maj`; homogeneous media are crossed exactly).
+                        let r_le = match volume {
+                            Some(v) if previous.sampled_volume_lights => {
+                                let p_v = v.pdf(id, c.p);
+                                let last = if m.as_homogeneous().is_some() { Rgb::ONE } else { c.t_maj };
+                                r_l * last * (p_v * (c.p - previous.p).length_squared() / pdf)
+                            }
+                            _ => Rgb::ZERO,
+                        };
+                        let denominator = group.average(r_e + r_le);
+                        if denominator > 0.0 {
+                            l.add(beta_e * c.point.l_ve / denominator, || PathClass::of(first, depth));
                         }
                     }
                     if c.is_real(hero, sampler.next_1d()) {
@@ -121,6 +138,11 @@ impl VolPathIntegrator {
                         };
                         let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                         l.add(v, || PathClass::of(first, depth));
+                        let volume_here = volume.filter(|_| depth < self.max_depth);
+                        if let Some(volume_lights) = volume_here {
+                            let v = sample_volume_ld(scene, volume_lights, &vertex, group, hero, sampler);
+                            l.add(v, || PathClass::of(first, depth));
+                        }
                         let Some(ps) = sample_phase(phase, c.p, wo, guiding, sampler) else {
                             terminated = true;
                             return false;
@@ -138,7 +160,8 @@ impl VolPathIntegrator {
                             }
                             beta /= q;
                         }
-                        previous = PreviousVertex { p: c.p, normal: None };
+                        previous =
+                            PreviousVertex { p: c.p, normal: None, sampled_volume_lights: volume_here.is_some() };
                         specular_bounce = false;
                         scattered = Some((c.p, ps.wi));
                         return false;
@@ -289,6 +312,10 @@ impl VolPathIntegrator {
                 };
                 let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                 l.add(v, || PathClass::of(first, depth));
+                if let Some(volume_lights) = volume.filter(|_| depth < self.max_depth) {
+                    let v = sample_volume_ld(scene, volume_lights, &vertex, group, hero, sampler);
+                    l.add(v, || PathClass::of(first, depth));
+                }
             }
             let Some(bs) = pane_reflection.or_else(|| sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler)) else {
                 return l;
@@ -305,7 +332,11 @@ impl VolPathIntegrator {
                 eta_scale *= bs.eta * bs.eta;
             }
             let side = if hit.surface.n.dot(bs.wi) < 0.0 { -hit.surface.n } else { hit.surface.n };
-            previous = PreviousVertex { p, normal: Some(side) };
+            previous = PreviousVertex {
+                p,
+                normal: Some(side),
+                sampled_volume_lights: volume.is_some() && depth < self.max_depth && !bs.is_specular,
+            };
             path.leave_surface(scene, &hit, bs.wi, bs.is_transmission);
 
             // Russian roulette on the MIS-normalized throughput.

@@ -15,18 +15,30 @@ struct VolPathFields {
     /// Largest number of scattering events on a path (>= 1; default 1024).
     #[serde(default)]
     max_depth: Option<u32>,
+    /// Whether emissive media are sampled as lights (default true).
+    #[serde(default)]
+    volume_light_sampling: Option<bool>,
 }
 
-/// `volpath`'s `max_depth` from its object (the `type` taken out).
-pub(crate) fn parse(object: Object) -> Result<u32, Located> {
+/// `volpath`'s `max_depth` and `volume_light_sampling` from its object (the
+/// `type` taken out).
+pub(crate) fn parse(object: Object) -> Result<(u32, bool), Located> {
     let fields: VolPathFields = rest(object)?;
+    let volume_light_sampling = fields.volume_light_sampling.unwrap_or(true);
     match fields.max_depth {
         Some(0) => Err(Located::new("max_depth", "must be at least 1, got 0")),
-        depth => Ok(depth.unwrap_or(DEFAULT_MAX_DEPTH)),
+        depth => Ok((depth.unwrap_or(DEFAULT_MAX_DEPTH), volume_light_sampling)),
     }
 }
 
-/// The stable key of `volpath`'s settings, e.g. `volpath(max_depth=1024)`.
-pub(crate) fn key(max_depth: u32) -> String {
-    format!("volpath(max_depth={max_depth})")
+/// The stable key of `volpath`'s settings, e.g. `volpath(max_depth=1024)`;
+/// `, volume_light_sampling=false` is added only when it is off, so the
+/// default's key is the one it had before the setting existed (the expected
+/// image is the same either way).
+pub(crate) fn key(max_depth: u32, volume_light_sampling: bool) -> String {
+    if volume_light_sampling {
+        format!("volpath(max_depth={max_depth})")
+    } else {
+        format!("volpath(max_depth={max_depth}, volume_light_sampling=false)")
+    }
 }

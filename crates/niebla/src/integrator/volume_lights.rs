@@ -1,0 +1,362 @@
+//! Emissive media as light sources: a distribution over the points of a
+//! scene where media emit, for next-event estimation toward emission inside
+//! media (the "volume light" strategy; see `volpath`'s `volume_nee`).
+//!
+//! - A grid medium is covered by the cells of its majorant grid. Each cell
+//!   whose majorant is positive (free-flight sampling only collects emission
+//!   where it draws tentative collisions) gets a weight: its world volume
+//!   times an estimate of its emitted radiance per unit length `L_ve` (the
+//!   mean and the largest of a 3x3x3 lattice of evaluations), plus a small
+//!   floor so that every such cell keeps a positive probability whatever the
+//!   lattice missed. A cell is chosen with probability proportional to its
+//!   weight, then a uniform point in it.
+//! - A homogeneous medium bounded by closed shapes (it is the interior of
+//!   each, never an exterior, the ambient medium or bounded by an open
+//!   shape) is sampled uniformly in the bounding box of those shapes.
+//!   Media without a finite region are left to free-flight sampling.
+//!
+//! The density of a sampled point `y` is `pdf(y)` per unit volume (world):
+//! the medium's probability (by total weight) times the cell's probability
+//! over the cell's volume. A point seen from `x` then has density
+//! `pdf(y) |x - y|^2` in the solid angle times distance measure of free-flight
+//! sampling, which is what the multiple importance sampling against
+//! collisions compares.
+//!
+//! Media whose extinction is zero in every channel never collide, so
+//! free-flight sampling never collects their emission; they are left out so
+//! that light sampling keeps the image's meaning.
+
+use glam::Affine3A;
+
+use crate::color::Rgb;
+use crate::geometry::Shape;
+use crate::math::Vec3;
+use crate::medium::{GridMedium, Medium, MediumId};
+use crate::sampling::Distribution1D;
+use crate::world::Scene;
+
+/// Lattice points per axis at which a cell's emission is evaluated.
+const LATTICE: usize = 3;
+
+/// Weight floor of a cell with a positive majorant, relative to the largest
+/// cell weight of its medium.
+const CELL_FLOOR: f32 = 1e-3;
+
+/// Bytes per majorant cell of an emissive grid medium: the cell's
+/// probability (f32) and, for cells with a positive majorant, the cell index
+/// (u32) and the cumulative table's entries (two f32).
+const BYTES_PER_CELL: u64 = 16;
+
+/// The emissive media of a scene as light sources.
+#[derive(Clone, Debug, Default)]
+pub struct VolumeLights {
+    /// The sampled media, each with its region.
+    emitters: Vec<Emitter>,
+    /// Choice of an emitter, proportional to its total weight.
+    choice: Option<Distribution1D>,
+    /// Per medium (indexed by [`MediumId`]): its emitter's index, if sampled.
+    emitter_of: Vec<Option<u32>>,
+}
+
+/// One emissive medium and where its points are drawn.
+#[derive(Clone, Debug)]
+struct Emitter {
+    medium: MediumId,
+    region: Region,
+}
+
+/// Where an emitter's points are drawn.
+#[derive(Clone, Debug)]
+enum Region {
+    /// Uniform in an axis-aligned box (world).
+    Box { min: Vec3, extent: Vec3, inv_volume: f32 },
+    /// The cells of a grid medium's majorant grid.
+    Cells(Box<CellDistribution>),
+}
+
+/// A distribution over the cells of a majorant grid.
+#[derive(Clone, Debug)]
+struct CellDistribution {
+    world_to_grid: Affine3A,
+    grid_to_world: Affine3A,
+    /// The majorant grid's box in grid space.
+    lo: Vec3,
+    hi: Vec3,
+    res: [usize; 3],
+    /// Probability of each cell (`[z][y][x]`, x fastest), 0 where not sampled.
+    cell_pmf: Vec<f32>,
+    /// Linear indices of the cells with a positive probability.
+    cells: Vec<u32>,
+    /// Choice among `cells`.
+    dist: Distribution1D,
+    /// `1 / (world volume of one cell)`.
+    inv_cell_volume: f32,
+}
+
+/// A point drawn by [`VolumeLights::sample`].
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeLightSample {
+    /// World position.
+    pub p: Vec3,
+    /// The medium it was drawn in (light arrives from it only if the point
+    /// lies in that medium's region).
+    pub medium: MediumId,
+    /// Density of `p` per unit world volume (medium choice included).
+    pub pdf: f32,
+}
+
+impl VolumeLights {
+    /// The light distribution over the emissive media of `scene`.
+    pub fn new(scene: &Scene) -> VolumeLights {
+        let mut emitters = Vec::new();
+        let mut weights = Vec::new();
+        for (i, medium) in scene.media.iter().enumerate() {
+            let id = MediumId(i as u32);
+            if !medium.is_emissive() || !(medium.max_sigma_t() > 0.0) {
+                continue;
+            }
+            let found = match medium {
+                Medium::Homogeneous(h) => homogeneous_region(scene, id).map(|(min, max)| {
+                    let extent = max - min;
+                    let volume = extent.x * extent.y * extent.z;
+                    (Region::Box { min, extent, inv_volume: 1.0 / volume }, h.l_ve.average() * volume)
+                }),
+                Medium::Grid(g) => cell_distribution(g).map(|(cells, power)| (Region::Cells(Box::new(cells)), power)),
+            };
+            if let Some((region, power)) = found {
+                if power > 0.0 && power.is_finite() {
+                    emitters.push(Emitter { medium: id, region });
+                    weights.push(power);
+                }
+            }
+        }
+        let mut emitter_of = vec![None; scene.media.len()];
+        for (k, e) in emitters.iter().enumerate() {
+            emitter_of[e.medium.0 as usize] = Some(k as u32);
+        }
+        let choice = (!weights.is_empty()).then(|| Distribution1D::new(&weights));
+        VolumeLights { emitters, choice, emitter_of }
+    }
+
+    /// Upper estimate of the bytes [`VolumeLights::new`] allocates for `scene`.
+    pub fn memory_estimate(scene: &Scene) -> u64 {
+        scene
+            .media
+            .iter()
+            .map(|m| match m {
+                Medium::Grid(g) if m.is_emissive() => {
+                    g.majorant.res().iter().map(|&r| r as u64).product::<u64>() * BYTES_PER_CELL
+                }
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// Whether no medium is sampled.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.emitters.is_empty()
+    }
+
+    /// A point drawn from the distribution with uniform numbers `u` (medium
+    /// and cell choice) and `v` (position in the cell), or `None` without
+    /// emitters.
+    #[inline]
+    pub fn sample(&self, u: f32, v: [f32; 3]) -> Option<VolumeLightSample> {
+        let choice = self.choice.as_ref()?;
+        let (k, pmf, u) = choice.sample_discrete_remapped(u);
+        let emitter = &self.emitters[k];
+        let (p, pdf) = match &emitter.region {
+            Region::Box { min, extent, inv_volume } => (*min + *extent * Vec3::new(v[0], v[1], v[2]), *inv_volume),
+            Region::Cells(c) => {
+                let (j, cell_pmf) = c.dist.sample_discrete(u);
+                let index = c.cells[j] as usize;
+                let (x, rest) = (index % c.res[0], index / c.res[0]);
+                let (y, z) = (rest % c.res[1], rest / c.res[1]);
+                let size = (c.hi - c.lo) / Vec3::new(c.res[0] as f32, c.res[1] as f32, c.res[2] as f32);
+                let corner = c.lo + size * Vec3::new(x as f32, y as f32, z as f32);
+                let q = corner + size * Vec3::new(v[0], v[1], v[2]);
+                (c.grid_to_world.transform_point3(q), cell_pmf * c.inv_cell_volume)
+            }
+        };
+        Some(VolumeLightSample { p, medium: emitter.medium, pdf: pmf * pdf })
+    }
+
+    /// Density per unit world volume with which [`VolumeLights::sample`]
+    /// draws `p` as a point of `medium` (0 where it never does).
+    #[inline]
+    pub fn pdf(&self, medium: MediumId, p: Vec3) -> f32 {
+        let Some(Some(k)) = self.emitter_of.get(medium.0 as usize) else {
+            return 0.0;
+        };
+        let Some(choice) = &self.choice else {
+            return 0.0;
+        };
+        let emitter = &self.emitters[*k as usize];
+        let pmf = choice.pmf(*k as usize);
+        match &emitter.region {
+            Region::Box { min, extent, inv_volume } => {
+                let f = (p - *min) / *extent;
+                if f.cmpge(Vec3::ZERO).all() && f.cmple(Vec3::ONE).all() {
+                    pmf * inv_volume
+                } else {
+                    0.0
+                }
+            }
+            Region::Cells(c) => match c.cell_of(p) {
+                Some(index) => pmf * c.cell_pmf[index] * c.inv_cell_volume,
+                None => 0.0,
+            },
+        }
+    }
+}
+
+impl CellDistribution {
+    /// Linear index of the cell holding world point `p`, if inside the box.
+    #[inline]
+    fn cell_of(&self, p: Vec3) -> Option<usize> {
+        let q = self.world_to_grid.transform_point3(p);
+        let f = (q - self.lo) / (self.hi - self.lo);
+        let mut c = [0usize; 3];
+        for a in 0..3 {
+            let x = f[a] * self.res[a] as f32;
+            if !(x >= 0.0 && x <= self.res[a] as f32) {
+                return None;
+            }
+            c[a] = (x as usize).min(self.res[a] - 1);
+        }
+        Some((c[2] * self.res[1] + c[1]) * self.res[0] + c[0])
+    }
+}
+
+/// The box of a homogeneous medium's region: the union of the bounds of the
+/// closed shapes it is the interior of; `None` when it also lies outside a
+/// shape, fills the space around the shapes, or has an open boundary.
+fn homogeneous_region(scene: &Scene, id: MediumId) -> Option<(Vec3, Vec3)> {
+    if scene.ambient_medium == Some(id) {
+        return None;
+    }
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for object in &scene.objects {
+        if object.exterior == Some(id) {
+            return None;
+        }
+        if object.interior == Some(id) {
+            if matches!(object.shape, Shape::Rectangle(_)) || !(object.shape.volume() > 0.0) {
+                return None;
+            }
+            let (a, b) = object.shape.bounds();
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+    }
+    let extent = hi - lo;
+    (extent.cmpgt(Vec3::ZERO).all() && extent.is_finite()).then_some((lo, hi))
+}
+
+/// The cell distribution of a grid medium and its total weight (emitted
+/// radiance per unit length times world volume), or `None` when no cell emits.
+fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32)> {
+    let majorant = &g.majorant;
+    let res = majorant.res();
+    let (lo, hi) = majorant.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let grid_to_world = g.world_to_grid.inverse();
+    let size = (hi - lo) / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
+    let det = grid_to_world.matrix3.determinant().abs();
+    let cell_volume = size.x * size.y * size.z * det;
+    if !(cell_volume > 0.0) || !cell_volume.is_finite() {
+        return None;
+    }
+    let values = majorant.values();
+    let mut cells = Vec::new();
+    let mut weights = Vec::new();
+    for z in 0..res[2] {
+        for y in 0..res[1] {
+            for x in 0..res[0] {
+                let index = (z * res[1] + y) * res[0] + x;
+                if !(values[index] > 0.0) {
+                    continue;
+                }
+                let corner = lo + size * Vec3::new(x as f32, y as f32, z as f32);
+                let (mut sum, mut max) = (0.0f32, 0.0f32);
+                for k in 0..LATTICE * LATTICE * LATTICE {
+                    let f = Vec3::new(
+                        (k % LATTICE) as f32 + 0.5,
+                        ((k / LATTICE) % LATTICE) as f32 + 0.5,
+                        (k / (LATTICE * LATTICE)) as f32 + 0.5,
+                    ) / LATTICE as f32;
+                    let p = grid_to_world.transform_point3(corner + size * f);
+                    let e = emission_estimate(g, p);
+                    sum += e;
+                    max = max.max(e);
+                }
+                let mean = sum / (LATTICE * LATTICE * LATTICE) as f32;
+                cells.push(index as u32);
+                weights.push(0.5 * (mean + max) * cell_volume);
+            }
+        }
+    }
+    let largest = weights.iter().copied().fold(0.0f32, f32::max);
+    if !(largest > 0.0) || !largest.is_finite() {
+        return None;
+    }
+    for w in &mut weights {
+        *w = w.max(CELL_FLOOR * largest);
+    }
+    let dist = Distribution1D::new(&weights);
+    let mut cell_pmf = vec![0.0f32; values.len()];
+    for (j, &index) in cells.iter().enumerate() {
+        cell_pmf[index as usize] = dist.pmf(j);
+    }
+    let total = weights.iter().map(|&w| w as f64).sum::<f64>() as f32;
+    let c = CellDistribution {
+        world_to_grid: g.world_to_grid,
+        grid_to_world,
+        lo,
+        hi,
+        res,
+        cell_pmf,
+        cells,
+        dist,
+        inv_cell_volume: 1.0 / cell_volume,
+    };
+    Some((c, total))
+}
+
+/// Emitted radiance per unit length at `p` (channel mean, finite, >= 0).
+fn emission_estimate(g: &GridMedium, p: Vec3) -> f32 {
+    let e = g.l_ve(p, g.density_at(p)).average();
+    if e.is_finite() {
+        e.max(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// The RGB majorant `sigma_maj` that free-flight sampling uses at world
+/// point `p` of `medium` (per unit length): a homogeneous medium's
+/// extinction, a grid medium's extinction per density times the majorant of
+/// the cell holding `p` (0 outside the grid).
+#[inline]
+pub fn majorant_at(medium: &Medium, p: Vec3) -> Rgb {
+    match medium {
+        Medium::Homogeneous(h) => h.sigma_t(),
+        Medium::Grid(g) => {
+            let m = &g.majorant;
+            let res = m.res();
+            let (lo, hi) = m.bounds();
+            let q = g.world_to_grid.transform_point3(p);
+            let mut c = [0usize; 3];
+            for a in 0..3 {
+                let x = (q[a] - lo[a]) / (hi[a] - lo[a]) * res[a] as f32;
+                if !(x >= 0.0 && x <= res[a] as f32) {
+                    return Rgb::ZERO;
+                }
+                c[a] = (x as usize).min(res[a] - 1);
+            }
+            g.sigma_t() * m.value(c[0], c[1], c[2])
+        }
+    }
+}
