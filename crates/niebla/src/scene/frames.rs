@@ -350,6 +350,8 @@ pub(super) fn resolve_frame(
         for (path, _) in &lists {
             object_at(&mut still, path).remove("keyframes");
         }
+        // Errors of the still scene are reported as they are.
+        check(still.clone())?;
         for (path, list) in &lists {
             for (i, keyframe) in list.iter().enumerate() {
                 let mut trial = still.clone();
