@@ -191,6 +191,9 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     if let Some(range) = &args.frames {
         return crate::render_frames::run(args, range);
     }
+    if let Some(note) = args.scene.as_deref().and_then(still_render_note) {
+        eprintln!("note: {note}");
+    }
     let loaded =
         crate::load::load_limited_defined(args.scene.as_deref(), args.max_memory.limit(), &args.define.define)?;
     for note in &loaded.notes {
@@ -202,6 +205,24 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         println!("{line}");
     }
     Ok(())
+}
+
+/// For a scene file that changes with the frame (frame patterns in file
+/// names, keyframes) rendered without `--frames`: a note saying that it is
+/// rendered as written.
+fn still_render_note(scene: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(scene).ok()?;
+    let value: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let animated = niebla::scene::frames::animated_fields(&value);
+    if animated.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{}: {} change with the frame; without --frames the scene is rendered as written (file names literal, \
+         keyframes not applied); --frames N renders frame N",
+        scene.display(),
+        animated.join(", ")
+    ))
 }
 
 /// The output files: `output` if given (an .exr or .png), else

@@ -212,6 +212,10 @@ fn bad_ranges_and_patterns_are_refused_with_what_was_expected() {
     // Without --frames, names are used as written.
     let err = run_err(&dir, &["render", "seq.json", "-o", "still.exr"]);
     assert!(err.contains("media.smoke.density.file") && err.contains("smoke.####.vdb"), "{err}");
+    assert!(
+        err.contains("note: seq.json: media.smoke.density.file change with the frame; without --frames the scene is rendered as written"),
+        "{err}"
+    );
 }
 
 /// A turntable: the camera circles by keyframes (position, fov_y), a point
