@@ -93,6 +93,32 @@ pub enum CliError {
         /// Bytes left of the memory limit.
         left: u64,
     },
+    /// A file of a frame of a sequence does not exist (found before any
+    /// frame is rendered).
+    #[error(
+        "{scene}: frame {frame}: {field}: {} not found (the first missing file of frames {range}; nothing was rendered)",
+        file.display()
+    )]
+    FrameFileMissing {
+        /// The scene, as named in messages.
+        scene: String,
+        /// The frame number.
+        frame: u32,
+        /// The JSON path of the `file` field.
+        field: String,
+        /// The file as resolved against the scene's folder.
+        file: PathBuf,
+        /// The frames asked for, as given to `--frames`.
+        range: String,
+    },
+    /// Rendering frame `frame` of a sequence failed.
+    #[error("frame {frame}: {error}")]
+    Frame {
+        /// The frame number.
+        frame: u32,
+        /// What failed.
+        error: Box<CliError>,
+    },
     /// An output file name has an extension other than `.exr` or `.png`.
     #[error("{}: output must end in .exr or .png", .0.display())]
     OutputFormat(PathBuf),

@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use niebla::film::{render_memory, scene_hash};
 use niebla::integrator::IntegratorSettings;
 use niebla::limits::default_memory_limit;
+use niebla::scene::frames::FrameNumber;
 use niebla::scene::{
-    build_scene_with_options, parse_scene_str, read_scene_source, BuildOptions, BuiltScene, DEFAULT_SCENE,
+    build_scene_cached, parse_scene_str, read_scene_source, read_scene_source_frame, BuildOptions, BuiltScene,
+    SceneCache, SceneDesc, DEFAULT_SCENE,
 };
 
 use crate::error::CliError;
@@ -78,6 +80,51 @@ pub fn load_limited_defined(
             (desc, text, source, PathBuf::from("."), "niebla".to_string(), Vec::new())
         }
     };
+    let read = ReadScene { desc, text, source, base, stem, notes, value: serde_json::Value::Null };
+    build_read(read, max_memory, &SceneCache::default())
+}
+
+/// A scene file read and parsed, not yet built.
+pub struct ReadScene {
+    /// The description.
+    pub desc: SceneDesc,
+    /// The text hashed into checkpoints.
+    pub text: String,
+    /// The scene's name in messages.
+    pub source: String,
+    /// The folder relative file names resolve against.
+    pub base: PathBuf,
+    /// Output file stem.
+    pub stem: String,
+    /// Notes of the XML importer.
+    pub notes: Vec<String>,
+    /// The scene value read (for a frame: keyframes applied, file names put in).
+    pub value: serde_json::Value,
+}
+
+/// Reads frame `frame` of the sequence scene file `path` (see
+/// [`niebla::scene::frames`]).
+pub fn read_frame(path: &Path, defines: &[(String, String)], frame: FrameNumber) -> Result<ReadScene, CliError> {
+    if !path.exists() {
+        return Err(CliError::SceneNotFound(path.to_path_buf()));
+    }
+    let read = read_scene_source_frame(path, defines, Some(frame))
+        .map_err(|error| CliError::Scene { error, over_memory_limit: false })?;
+    Ok(ReadScene {
+        desc: read.desc,
+        text: read.text,
+        source: path.display().to_string(),
+        base: path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        stem: path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "niebla".into()),
+        notes: read.notes,
+        value: read.value,
+    })
+}
+
+/// Builds a scene read by [`read_frame`] (or the still scene) within
+/// `max_memory`, taking unchanged files from `cache`; prints its warnings.
+pub fn build_read(read: ReadScene, max_memory: u64, cache: &SceneCache) -> Result<LoadedScene, CliError> {
+    let ReadScene { desc, text, source, base, stem, notes, .. } = read;
     let niebla::scene::CameraDesc::Perspective(camera) = &desc.camera;
     let image_bytes = render_memory(camera.width, camera.height);
     if image_bytes > max_memory {
@@ -92,7 +139,7 @@ pub fn load_limited_defined(
     let options = BuildOptions { max_memory: max_memory - image_bytes };
     // The scene builder reports the memory limit in its message only (its
     // MemoryBudget's words), so that is where the hint's condition is read.
-    let built = build_scene_with_options(&desc, &source, &base, &options).map_err(|error| {
+    let built = build_scene_cached(&desc, &source, &base, &options, cache).map_err(|error| {
         let over_memory_limit = error.message.contains("memory limit");
         CliError::Scene { error, over_memory_limit }
     })?;

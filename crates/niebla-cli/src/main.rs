@@ -18,6 +18,7 @@ mod load;
 mod merge_cmd;
 mod preview_cmd;
 mod render_cmd;
+mod render_frames;
 mod view_cmd;
 
 use std::path::PathBuf;

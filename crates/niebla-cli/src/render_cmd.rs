@@ -109,6 +109,19 @@ pub struct RenderArgs {
     /// independent sampler (the argument needs independent passes).
     #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "aovs", "denoise", "transparent"])]
     pub adaptive: Option<f32>,
+    /// Render frames of a sequence: `N`, `FIRST-LAST` or `FIRST-LAST:STEP`
+    /// (frame numbers >= 0). Frame patterns in the scene's file names
+    /// (`smoke.####.vdb`, `{frame}`, `{frame:04}`) and keyframes of the
+    /// camera and lights take each frame's values; -o must name the outputs
+    /// with a frame pattern (`-o out.####.exr`). Every frame's files are
+    /// checked before the first renders; frames whose output exists are
+    /// skipped (see --overwrite); --time is a budget per frame.
+    #[arg(long, value_name = "RANGE", conflicts_with = "resume")]
+    pub frames: Option<String>,
+    /// With --frames: render frames whose output already exists again
+    /// (default: skip them; an output exists only once its frame is finished).
+    #[arg(long, requires = "frames")]
+    pub overwrite: bool,
 }
 
 /// Scattering-point sampling of `single`.
@@ -175,12 +188,76 @@ pub fn override_integrator(
 
 /// `niebla render`.
 pub fn run(args: &RenderArgs) -> Result<(), CliError> {
-    let max_memory = args.max_memory.limit();
-    let crate::load::LoadedScene { mut built, stem, hash, notes } =
-        crate::load::load_limited_defined(args.scene.as_deref(), max_memory, &args.define.define)?;
-    for note in &notes {
+    if let Some(range) = &args.frames {
+        return crate::render_frames::run(args, range);
+    }
+    if let Some(note) = args.scene.as_deref().and_then(still_render_note) {
         eprintln!("note: {note}");
     }
+    let loaded =
+        crate::load::load_limited_defined(args.scene.as_deref(), args.max_memory.limit(), &args.define.define)?;
+    for note in &loaded.notes {
+        eprintln!("note: {note}");
+    }
+    let outputs = output_paths(args.output.as_deref(), &loaded.stem)?;
+    let bar = if args.quiet.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
+    if let Some(line) = render_loaded(args, loaded, &outputs, bar, true)? {
+        println!("{line}");
+    }
+    Ok(())
+}
+
+/// For a scene file that changes with the frame (frame patterns in file
+/// names, keyframes) rendered without `--frames`: a note saying that it is
+/// rendered as written.
+fn still_render_note(scene: &Path) -> Option<String> {
+    let text = std::fs::read_to_string(scene).ok()?;
+    let value: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let animated = niebla::scene::frames::animated_fields(&value);
+    if animated.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "{}: {} change with the frame; without --frames the scene is rendered as written (file names literal, \
+         keyframes not applied); --frames N renders frame N",
+        scene.display(),
+        animated.join(", ")
+    ))
+}
+
+/// The output files: `output` if given (an .exr or .png), else
+/// `<stem>.exr` and `<stem>.png`; their folders must exist.
+pub fn output_paths(output: Option<&Path>, stem: &str) -> Result<Vec<PathBuf>, CliError> {
+    let outputs: Vec<PathBuf> = match output {
+        Some(p) => {
+            let ext = p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+            if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
+                return Err(CliError::OutputFormat(p.to_path_buf()));
+            }
+            vec![p.to_path_buf()]
+        }
+        None => vec![PathBuf::from(format!("{stem}.exr")), PathBuf::from(format!("{stem}.png"))],
+    };
+    for out in &outputs {
+        check_output_folder(out)?;
+    }
+    Ok(outputs)
+}
+
+/// Renders a loaded scene to `outputs` as the options ask, drawing progress
+/// on `bar` (cleared at the end); with `checkpoints`, the outputs are also
+/// written between passes (at most [`CHECKPOINT_INTERVAL`] apart). Returns
+/// the line that reports the render (`None` where the adaptive render
+/// printed its own).
+pub fn render_loaded(
+    args: &RenderArgs,
+    loaded: crate::load::LoadedScene,
+    outputs: &[PathBuf],
+    bar: ProgressBar,
+    checkpoints: bool,
+) -> Result<Option<String>, CliError> {
+    let max_memory = args.max_memory.limit();
+    let crate::load::LoadedScene { mut built, hash, .. } = loaded;
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
     let denoiser = crate::aov_flags::denoiser(args.denoise)?;
@@ -206,20 +283,6 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     };
     let threads = args.threads.get()?;
     let exposure = args.exposure.or(built.settings.exposure)?;
-    let outputs: Vec<PathBuf> = match &args.output {
-        Some(p) => {
-            let ext = p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-            if !matches!(ext.as_deref(), Some("exr") | Some("png")) {
-                return Err(CliError::OutputFormat(p.clone()));
-            }
-            vec![p.clone()]
-        }
-        None => vec![PathBuf::from(format!("{stem}.exr")), PathBuf::from(format!("{stem}.png"))],
-    };
-    for out in &outputs {
-        check_output_folder(out)?;
-    }
-
     let scene = &built.scene;
     let transparent = scene.transparent_background;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
@@ -227,7 +290,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     if let Some(threshold) = args.adaptive {
         let seed = args.seed.or(built.settings.seed);
         let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet: args.quiet.quiet };
-        return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, &outputs);
+        return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, outputs).map(|()| None);
     }
     let (start_acc, seed) = match &args.resume {
         None => (
@@ -241,11 +304,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     };
     if let (Some(path), Budget::Samples(target)) = (&args.resume, budget) {
         if start_acc.spp >= u64::from(target) {
-            println!("{}: already has {} spp (>= --spp {target}); nothing to render", path.display(), start_acc.spp);
-            return Ok(());
+            let line =
+                format!("{}: already has {} spp (>= --spp {target}); nothing to render", path.display(), start_acc.spp);
+            return Ok(Some(line));
         }
     }
-    let bar = if args.quiet.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
     let template = match budget {
         Budget::Samples(_) => {
             bar.set_length(pixels * spp as u64);
@@ -282,7 +345,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
             integrator: recorded_key(&integrator, sampler),
             ranges: vec![(acc.first_sample, acc.next_sample())],
         };
-        for out in &outputs {
+        for out in outputs {
             let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
             if let Some(layers) = acc.aov_sums() {
                 niebla::aov::write_aov_outputs(acc.sums(), layers, &checkpoint, transparent, out, exposure)
@@ -298,7 +361,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         samples_before_pass.store(info.spp * pixels, Ordering::Relaxed);
         spp_done = info.spp;
         bar.set_message(format!("({} spp)", info.spp));
-        if last_write.elapsed() < CHECKPOINT_INTERVAL {
+        if !checkpoints || last_write.elapsed() < CHECKPOINT_INTERVAL {
             return true;
         }
         if let Err(e) = write_outputs(acc) {
@@ -328,11 +391,11 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         write_outputs(&acc)?;
     }
     if let Some(denoiser) = &denoiser {
-        crate::aov_flags::write_denoised(denoiser, &acc, &outputs, exposure)?;
+        crate::aov_flags::write_denoised(denoiser, &acc, outputs, exposure)?;
     }
     bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
-    println!(
+    Ok(Some(format!(
         "rendered {}x{} at {} spp with {} in {:.2} s ({:.2} M samples/s) -> {}",
         scene.camera.width,
         scene.camera.height,
@@ -341,8 +404,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
         seconds,
         (pixels * spp_done) as f64 / seconds / 1e6,
         names.join(", ")
-    );
-    Ok(())
+    )))
 }
 
 /// Least time between two checkpoints written during a render.

@@ -169,13 +169,21 @@ impl PyScene {
     /// for its `<default>` parameters; what it accepts without effect is
     /// raised as `UserWarning`s). Relative paths in it resolve against the
     /// file's folder. Raises SceneError with the file, the JSON path (or XML
-    /// line) and the message the `niebla` command gives.
+    /// line) and the message the `niebla` command gives. With `frame`, the
+    /// scene of that frame of a sequence, as `niebla render --frames`
+    /// renders it: keyframed camera and lights at that frame, frame patterns
+    /// of file names (`smoke.####.vdb`, `{frame:04}`) replaced.
     #[staticmethod]
-    #[pyo3(signature = (path, defines = BTreeMap::new()))]
-    fn from_file(py: Python<'_>, path: PathBuf, defines: BTreeMap<String, String>) -> PyResult<PyScene> {
+    #[pyo3(signature = (path, defines = BTreeMap::new(), frame = None))]
+    fn from_file(
+        py: Python<'_>,
+        path: PathBuf,
+        defines: BTreeMap<String, String>,
+        frame: Option<u32>,
+    ) -> PyResult<PyScene> {
         let source = path.display().to_string();
         let defines: Vec<(String, String)> = defines.into_iter().collect();
-        let read = niebla::scene::read_scene_source(&path, &defines).map_err(|e| scene_error(py, &e))?;
+        let read = niebla::scene::read_scene_source_frame(&path, &defines, frame).map_err(|e| scene_error(py, &e))?;
         for note in &read.notes {
             let text = std::ffi::CString::new(note.replace('\0', " ")).expect("NUL bytes were replaced");
             PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &text, 1)?;

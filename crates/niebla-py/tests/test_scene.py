@@ -155,3 +155,26 @@ def test_a_medium_nothing_refers_to_is_warned_about(tiny_scene):
     assert len(record) == 1
     assert '"interior": "smoke"' in str(record[0].message)
     assert '"ambient_medium": "smoke"' in str(record[0].message)
+
+
+def test_from_file_frame_applies_keyframes_and_frame_patterns(tiny_scene, tmp_path):
+    desc = json.loads(json.dumps(tiny_scene))
+    camera = desc["camera"]
+    camera["keyframes"] = [{"frame": 1, "position": [0, 1, 4]}, {"frame": 5, "position": [4, 1, 0]}]
+    desc["render"]["spp"] = 1
+    file = tmp_path / "turn.json"
+    file.write_text(json.dumps(desc))
+    at3 = json.loads(niebla.Scene.from_file(file, frame=3).to_json())
+    assert at3["camera"]["position"] == [2.0, 1.0, 2.0]
+    assert "keyframes" not in at3["camera"]
+    # The frame's scene renders as the same scene written out.
+    alone = dict(desc, camera=dict(camera, position=[2.0, 1.0, 2.0]))
+    del alone["camera"]["keyframes"]
+    a = niebla.Scene.from_file(file, frame=3).render(spp=1, progress=False)
+    b = niebla.Scene.from_dict(alone, base_dir=tmp_path).render(spp=1, progress=False)
+    assert np.array_equal(a, b)
+    # A file name with a frame pattern names the frame's file.
+    desc["lights"] = [{"type": "envmap", "file": "sky.####.exr"}]
+    file.write_text(json.dumps(desc))
+    with pytest.raises(niebla.SceneError, match=r"lights\[0\]\.file.*sky\.0007\.exr"):
+        niebla.Scene.from_file(file, frame=7)

@@ -62,6 +62,45 @@ pub fn build_scene(desc: &SceneDesc, source: &str, base_dir: &Path) -> Result<Bu
     build_scene_with_options(desc, source, base_dir, &BuildOptions::default())
 }
 
+/// Files read by scene builds and kept for the next build: meshes (with
+/// their BVHs), image textures and environment maps, keyed by resolved path
+/// and the options that change the data. The frames of a sequence share one
+/// cache, so a file whose name has no frame pattern is read once; what a
+/// build does not use is dropped at its end. Each build charges its memory
+/// budget for what it uses as if it had read it, so limits do not depend on
+/// the cache. Grids are not cached.
+#[derive(Default)]
+pub struct SceneCache {
+    meshes: std::sync::Mutex<super::build_mesh::MeshLoader>,
+    textures: std::sync::Mutex<super::build_texture::TextureLoader>,
+    envmaps: std::sync::Mutex<EnvmapCache>,
+}
+
+/// What makes two environment lights share their map: the file, the scale
+/// and the rotation (bits of the floats).
+type EnvmapKey = (std::path::PathBuf, u32, [u32; 9]);
+
+/// The environment maps of [`SceneCache`].
+#[derive(Default)]
+struct EnvmapCache {
+    maps: std::collections::HashMap<EnvmapKey, std::sync::Arc<EnvironmentMap>>,
+    used: std::collections::HashSet<EnvmapKey>,
+}
+
+impl SceneCache {
+    /// Number of files held (meshes, textures, environment maps).
+    pub fn len(&self) -> usize {
+        self.meshes.lock().map_or(0, |m| m.len())
+            + self.textures.lock().map_or(0, |t| t.len())
+            + self.envmaps.lock().map_or(0, |e| e.maps.len())
+    }
+
+    /// Whether no file is held.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 /// [`build_scene`] within the limits of `options`.
 ///
 /// ```
@@ -82,6 +121,44 @@ pub fn build_scene_with_options(
     base_dir: &Path,
     options: &BuildOptions,
 ) -> Result<BuiltScene, SceneError> {
+    build_scene_cached(desc, source, base_dir, options, &SceneCache::default())
+}
+
+/// [`build_scene_with_options`] taking meshes, textures and environment
+/// maps from `cache` where an earlier build read them (the same file with
+/// the same options) and leaving there what this build read. The scene is
+/// the same as without the cache.
+pub fn build_scene_cached(
+    desc: &SceneDesc,
+    source: &str,
+    base_dir: &Path,
+    options: &BuildOptions,
+    cache: &SceneCache,
+) -> Result<BuiltScene, SceneError> {
+    let poisoned = || SceneError::new(source, "", "a previous scene build panicked");
+    let mut meshes = cache.meshes.lock().map_err(|_| poisoned())?;
+    let mut textures = cache.textures.lock().map_err(|_| poisoned())?;
+    let mut envmaps = cache.envmaps.lock().map_err(|_| poisoned())?;
+    let built = build_with_loaders(desc, source, base_dir, options, (&mut meshes, &mut textures, &mut envmaps));
+    meshes.finish_build();
+    textures.finish_build();
+    let used = std::mem::take(&mut envmaps.used);
+    envmaps.maps.retain(|key, _| used.contains(key));
+    built
+}
+
+/// The loaders of one build.
+type Loaders<'a> =
+    (&'a mut super::build_mesh::MeshLoader, &'a mut super::build_texture::TextureLoader, &'a mut EnvmapCache);
+
+/// The body of [`build_scene_cached`].
+fn build_with_loaders(
+    desc: &SceneDesc,
+    source: &str,
+    base_dir: &Path,
+    options: &BuildOptions,
+    (meshes, textures, envmaps): Loaders,
+) -> Result<BuiltScene, SceneError> {
     let err = |path: &str, message: String| SceneError::new(source, path, message);
     let mut budget = crate::limits::MemoryBudget::new(options.max_memory);
 
@@ -100,8 +177,6 @@ pub fn build_scene_with_options(
     };
 
     // Shapes.
-    let mut meshes = super::build_mesh::MeshLoader::default();
-    let mut textures = super::build_texture::TextureLoader::default();
     let mut objects = Vec::new();
     let mut explicit_exterior = Vec::new();
     for (i, s) in desc.shapes.iter().enumerate() {
@@ -140,7 +215,7 @@ pub fn build_scene_with_options(
             BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => Bsdf::conductor_from_reflectance(r.to_rgb()),
             other => {
                 let mut ctx = super::build_surfaces::TextureContext {
-                    loader: &mut textures,
+                    loader: &mut *textures,
                     source,
                     base_dir,
                     budget: &mut budget,
@@ -230,9 +305,19 @@ pub fn build_scene_with_options(
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular".into()))?;
                 let rotation = glam::Mat3::from(t.to_world.matrix3);
                 charge_envmap(&file, &mut budget).map_err(|message| err(&format!("{path}.file"), message))?;
-                let map = EnvironmentMap::from_exr(&file, e.scale, rotation)
-                    .map_err(|error| err(&format!("{path}.file"), error.to_string()))?;
-                Light::Environment(std::sync::Arc::new(map))
+                let key = (file.clone(), e.scale.to_bits(), rotation.to_cols_array().map(f32::to_bits));
+                let map = match envmaps.maps.get(&key) {
+                    Some(map) => map.clone(),
+                    None => {
+                        let map = EnvironmentMap::from_exr(&file, e.scale, rotation)
+                            .map_err(|error| err(&format!("{path}.file"), error.to_string()))?;
+                        let map = std::sync::Arc::new(map);
+                        envmaps.maps.insert(key.clone(), map.clone());
+                        map
+                    }
+                };
+                envmaps.used.insert(key);
+                Light::Environment(map)
             }
         });
     }

@@ -4,7 +4,7 @@
 //! closed, and sharing one mesh between shapes that read the same file with
 //! the same options (instances under different `to_world`).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -25,15 +25,32 @@ type MeshKey = (PathBuf, Option<String>, bool, bool);
 struct Loaded {
     mesh: Arc<TriangleMesh>,
     closedness: niebla_mesh::Closedness,
+    /// The bytes charged to the memory budget for it.
+    bytes: u64,
 }
 
-/// The meshes of one scene build, shared by key.
+/// The meshes of the scene builds sharing a [`super::SceneCache`], shared
+/// by key: within one build by every shape naming the same key, across
+/// builds (the frames of a sequence) while the next build still uses them.
 #[derive(Default)]
 pub(super) struct MeshLoader {
     cache: HashMap<MeshKey, Loaded>,
+    /// Keys used (and charged to the budget) by the build in progress.
+    used: HashSet<MeshKey>,
 }
 
 impl MeshLoader {
+    /// Number of files held.
+    pub(super) fn len(&self) -> usize {
+        self.cache.len()
+    }
+
+    /// Ends a build: files it did not use are dropped.
+    pub(super) fn finish_build(&mut self) {
+        let used = std::mem::take(&mut self.used);
+        self.cache.retain(|key, _| used.contains(key));
+    }
+
     /// The instance of mesh shape `desc` at JSON path `path` (placed by
     /// `transform`); `bounds_medium` when it has an `interior` or `exterior`.
     #[allow(clippy::too_many_arguments)]
@@ -52,17 +69,23 @@ impl MeshLoader {
             Some(file) => {
                 let full = base_dir.join(file);
                 let key = (full.clone(), desc.object.clone(), desc.flip_normals, desc.face_normals);
+                let field = format!("{path}.file");
                 match self.cache.get(&key) {
-                    Some(l) => l.clone(),
+                    Some(l) => {
+                        if self.used.insert(key) {
+                            budget.charge(l.bytes).map_err(|why| err(&field, format!("mesh {file:?} {why}")))?;
+                        }
+                        l.clone()
+                    }
                     None => {
-                        let field = format!("{path}.file");
                         let estimate =
                             niebla_mesh::estimate_mesh_bytes(&full).map_err(|e| err(&field, e.to_string()))?;
                         budget.charge(estimate).map_err(|why| err(&field, format!("mesh {file:?} {why}")))?;
                         let options =
                             niebla_mesh::MeshReadOptions { object: desc.object.clone(), ..Default::default() };
                         let data = niebla_mesh::read_mesh(&full, &options).map_err(|e| err(&field, e.to_string()))?;
-                        let l = load(data, desc).map_err(|m| err(&field, format!("{file}: {m}")))?;
+                        let l = load(data, desc, estimate).map_err(|m| err(&field, format!("{file}: {m}")))?;
+                        self.used.insert(key.clone());
                         self.cache.insert(key, l.clone());
                         l
                     }
@@ -80,7 +103,7 @@ impl MeshLoader {
                 budget.charge(bytes).map_err(|why| err(path, format!("inline mesh {why}")))?;
                 let data = MeshData::from_arrays(positions, indices, desc.normals.clone(), desc.uvs.clone())
                     .map_err(|e| inline_error(e, path, source))?;
-                load(data, desc).map_err(|m| err(path, m))?
+                load(data, desc, bytes).map_err(|m| err(path, m))?
             }
         };
         let c = loaded.closedness;
@@ -117,7 +140,7 @@ fn inline_error(e: niebla_mesh::MeshError, path: &str, source: &str) -> SceneErr
 }
 
 /// The renderer's mesh from checked mesh data, with the shape's options.
-fn load(mut data: MeshData, desc: &MeshDesc) -> Result<Loaded, String> {
+fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, String> {
     if desc.face_normals {
         data.normals = None;
     }
@@ -146,5 +169,5 @@ fn load(mut data: MeshData, desc: &MeshDesc) -> Result<Loaded, String> {
     if mesh.triangle_count() == 0 {
         return Err(format!("all {} triangles are degenerate (no area)", mesh.degenerate));
     }
-    Ok(Loaded { mesh: Arc::new(mesh), closedness })
+    Ok(Loaded { mesh: Arc::new(mesh), closedness, bytes })
 }

@@ -2,7 +2,7 @@
 //! (file, raw, wrap) within the memory budget, checkerboards from their
 //! colors.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -12,13 +12,31 @@ use crate::limits::MemoryBudget;
 use crate::math::Vec2;
 use crate::texture::{Bitmap, Texture, WrapMode};
 
-/// The image textures of one scene build, shared by file and options.
+/// What makes two image textures share their image.
+type ImageKey = (PathBuf, bool, WrapMode);
+
+/// The image textures of the scene builds sharing a [`super::SceneCache`],
+/// shared by file and options (within a build, and across builds while the
+/// next build still uses them).
 #[derive(Default)]
 pub(super) struct TextureLoader {
-    images: HashMap<(PathBuf, bool, WrapMode), Arc<Bitmap>>,
+    images: HashMap<ImageKey, Arc<Bitmap>>,
+    /// Keys used (and charged to the budget) by the build in progress.
+    used: HashSet<ImageKey>,
 }
 
 impl TextureLoader {
+    /// Number of files held.
+    pub(super) fn len(&self) -> usize {
+        self.images.len()
+    }
+
+    /// Ends a build: files it did not use are dropped.
+    pub(super) fn finish_build(&mut self) {
+        let used = std::mem::take(&mut self.used);
+        self.images.retain(|key, _| used.contains(key));
+    }
+
     /// The texture of `desc`, found at JSON path `path` (errors name
     /// `path.file` for image files).
     pub(super) fn texture(
@@ -36,16 +54,24 @@ impl TextureLoader {
             TextureDesc::Bitmap { file, wrap, raw, scale } => {
                 let full = base_dir.join(file);
                 let key = (full.clone(), *raw, *wrap);
+                let field = format!("{path}.file");
                 let image = match self.images.get(&key) {
-                    Some(image) => image.clone(),
+                    Some(image) => {
+                        if self.used.insert(key) {
+                            budget
+                                .charge(image.memory_bytes() as u64)
+                                .map_err(|why| SceneError::new(source, &field, format!("texture {file:?} {why}")))?;
+                        }
+                        image.clone()
+                    }
                     None => {
-                        let field = format!("{path}.file");
                         let image = Bitmap::read(&full, *raw, *wrap, budget.left())
                             .map_err(|e| SceneError::new(source, &field, e.to_string()))?;
                         budget
                             .charge(image.memory_bytes() as u64)
                             .map_err(|why| SceneError::new(source, &field, format!("texture {file:?} {why}")))?;
                         let image = Arc::new(image);
+                        self.used.insert(key.clone());
                         self.images.insert(key, image.clone());
                         image
                     }

@@ -18,6 +18,7 @@ mod build_surfaces;
 mod build_texture;
 pub mod desc;
 mod error;
+pub mod frames;
 pub mod mitsuba;
 mod parse;
 mod parse_surfaces;
@@ -30,14 +31,14 @@ pub use crate::world::{
     MAX_BOUNDARY_CROSSINGS, MAX_PATH_BOUNDARY_CROSSINGS,
 };
 pub use build::{
-    build_scene, build_scene_with_options, build_transform, integrator_settings, unused_media_warnings, BuildOptions,
-    BuiltScene,
+    build_scene, build_scene_cached, build_scene_with_options, build_transform, integrator_settings,
+    unused_media_warnings, BuildOptions, BuiltScene, SceneCache,
 };
 pub use desc::*;
 pub use error::SceneError;
-pub use parse::{load_scene_file, parse_scene_str};
+pub use parse::{load_scene_file, parse_scene_frame, parse_scene_str};
 pub use rebuild::{rebuild_scene, SceneEdit};
-pub use source::{read_scene_source, SceneSource};
+pub use source::{read_scene_source, read_scene_source_frame, SceneSource};
 
 use crate::integrator::IntegratorSettings;
 

@@ -44,7 +44,41 @@ use crate::params::{describe, read_object, rest, take, take_tag, unknown_type, L
 /// assert!(err.to_string().starts_with("fog.json: media.fog.sigam_s: unknown field `sigam_s`"));
 /// ```
 pub fn parse_scene_str(text: &str, source: &str) -> Result<SceneDesc, SceneError> {
-    let value: Value = serde_json::from_str(text).map_err(|e| json_syntax_error(text, source, &e))?;
+    parse_scene_value(text, source, None, false).map(|(desc, _)| desc)
+}
+
+/// Parses and validates the scene of `frame` of a sequence from JSON text
+/// (see [`super::frames`]): keyframed cameras and lights at that frame, the
+/// frame patterns of `file` fields replaced. With `None`, the same as
+/// [`parse_scene_str`]. Also returns the scene value the description was
+/// read from (keyframes removed, frame patterns replaced).
+///
+/// ```
+/// use niebla::scene::{parse_scene_frame, CameraDesc};
+/// let text = r#"{"version": 1, "camera": {"type": "perspective", "position": [0, 0, 5],
+///     "target": [0, 0, 0], "width": 8, "height": 8,
+///     "keyframes": [{"frame": 1, "position": [0, 0, 5]}, {"frame": 5, "position": [4, 0, 5]}]}}"#;
+/// let (desc, _) = parse_scene_frame(text, "turn.json", Some(2)).unwrap();
+/// let CameraDesc::Perspective(camera) = &desc.camera;
+/// assert_eq!(camera.position, [1.0, 0.0, 5.0]);
+/// ```
+pub fn parse_scene_frame(
+    text: &str,
+    source: &str,
+    frame: Option<super::frames::FrameNumber>,
+) -> Result<(SceneDesc, Value), SceneError> {
+    parse_scene_value(text, source, frame, true)
+}
+
+/// The steps of [`parse_scene_frame`]; the value returned is `Null` unless
+/// `keep_value`.
+fn parse_scene_value(
+    text: &str,
+    source: &str,
+    frame: Option<super::frames::FrameNumber>,
+    keep_value: bool,
+) -> Result<(SceneDesc, Value), SceneError> {
+    let mut value: Value = serde_json::from_str(text).map_err(|e| json_syntax_error(text, source, &e))?;
     check_top_level(&value, source)?;
     if let Some((path, key)) = find_duplicate_key(text) {
         return Err(SceneError::new(
@@ -53,6 +87,16 @@ pub fn parse_scene_str(text: &str, source: &str) -> Result<SceneDesc, SceneError
             format!("duplicate key `{key}`; each key may appear once per object"),
         ));
     }
+    super::frames::resolve_frame(&mut value, source, frame, &|v| desc_from_value(v, source).map(|_| ()))?;
+    if keep_value {
+        Ok((desc_from_value(value.clone(), source)?, value))
+    } else {
+        Ok((desc_from_value(value, source)?, Value::Null))
+    }
+}
+
+/// Deserializes and validates a scene value whose top level was checked.
+fn desc_from_value(value: Value, source: &str) -> Result<SceneDesc, SceneError> {
     let desc: SceneDesc = serde_path_to_error::deserialize(value).map_err(|e| {
         let located = Located::from_path_error(e);
         SceneError::new(source, located.path, located.message)
