@@ -125,6 +125,7 @@ mod minorant;
 mod procedural;
 mod rgb;
 mod sparse;
+mod sparse_accessor;
 mod sparse_builder;
 mod sparse_vec3;
 
@@ -139,5 +140,6 @@ pub use majorant::{DensityBoundGrid, MajorantGrid};
 pub use procedural::{procedural_density, ProceduralParams, ProceduralShape};
 pub use rgb::{DenseRgbGrid, DenseVolume};
 pub use sparse::{Leaf, SparseGrid, Tile, LEAF_DIM};
+pub use sparse_accessor::SparseAccessor;
 pub use sparse_builder::SparseGridBuilder;
 pub use sparse_vec3::SparseVec3Grid;
