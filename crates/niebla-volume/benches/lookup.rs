@@ -294,7 +294,7 @@ impl Blobs {
                 for bi in 0..blocks {
                     let origin = [bi * 8, bj * 8, bk * 8];
                     match self.block_state(origin) {
-                        Some(v) if v == 0.0 => continue,
+                        Some(0.0) => continue,
                         Some(v) => b.fill_tile(2, origin, v, true),
                         None => {
                             for k in 0..8 {
