@@ -112,8 +112,20 @@
 //!   bakes are single-threaded (no rayon in this crate) and skip voxels no
 //!   noise value can fill (bake times: `benches/lookup.rs`, figures in
 //!   ARCHITECTURE.md).
-//! - Readers load the whole file into memory; [`VdbFile`] decodes grids on
-//!   demand, so reading `density` and `temperature` reads the file once.
+//! - `.vol` and `.npy` readers load the whole file into memory. [`VdbFile`]
+//!   reads only the header and grid descriptors on [`VdbFile::open`] and
+//!   streams each grid's bytes from the file through a 1 MiB window when it
+//!   is decoded, so the peak memory of reading a grid is the grid itself
+//!   plus the window, not the file plus the grid ([`VdbFile::from_bytes`]
+//!   still parses a file held in memory).
+//! - Coherent sparse lookups go through a [`SparseAccessor`], which caches
+//!   the last 8^3 block, lower node and upper node visited (OpenVDB's
+//!   `ValueAccessor`) in `Cell`s: one per ray or thread, never shared;
+//!   values bit-identical to the uncached [`SparseGrid`] lookups.
+//! - Built and read grids release their vectors' spare capacity, so
+//!   [`SparseGrid::memory_bytes`] is within 1% of the leaves and tiles
+//!   ([`SparseGrid::payload_bytes`]) for grids of more than a few leaves
+//!   per internal node.
 
 mod affine;
 mod dda;
@@ -125,6 +137,7 @@ mod minorant;
 mod procedural;
 mod rgb;
 mod sparse;
+mod sparse_accessor;
 mod sparse_builder;
 mod sparse_vec3;
 
@@ -139,5 +152,6 @@ pub use majorant::{DensityBoundGrid, MajorantGrid};
 pub use procedural::{procedural_density, ProceduralParams, ProceduralShape};
 pub use rgb::{DenseRgbGrid, DenseVolume};
 pub use sparse::{Leaf, SparseGrid, Tile, LEAF_DIM};
+pub use sparse_accessor::SparseAccessor;
 pub use sparse_builder::SparseGridBuilder;
 pub use sparse_vec3::SparseVec3Grid;

@@ -162,6 +162,28 @@ pub struct SparseGrid {
     pub(crate) tiles: Vec<Tile>,
 }
 
+/// The voxel `floor(p)` and the fractional offset `p - floor(p)` of an
+/// index-space point (shared by the tree lookup and the cached accessor so
+/// that both compute bit-identical results).
+#[inline(always)]
+pub(crate) fn split_index_point(p: [f32; 3]) -> ([i32; 3], [f32; 3]) {
+    let base = p.map(|v| v.floor());
+    let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
+    (base.map(|v| v as i32), f)
+}
+
+/// Trilinear interpolation of 8 corner values ordered `(dx, dy, dz)` with
+/// `dz` fastest, at fractional offset `f`.
+#[inline(always)]
+pub(crate) fn trilinear(v: [f32; 8], f: [f32; 3]) -> f32 {
+    let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+    let c00 = lerp(v[0], v[4], f[0]);
+    let c01 = lerp(v[1], v[5], f[0]);
+    let c10 = lerp(v[2], v[6], f[0]);
+    let c11 = lerp(v[3], v[7], f[0]);
+    lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+}
+
 #[inline(always)]
 fn root_key(ijk: [i32; 3]) -> [i32; 3] {
     ijk.map(|v| v >> UPPER_TOTAL)
@@ -306,17 +328,8 @@ impl SparseGrid {
         if !(p.iter().all(|v| v.abs() < 1.0e9)) {
             return self.background;
         }
-        let base = p.map(|v| v.floor());
-        let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
-        let ijk = base.map(|v| v as i32);
-        let v = self.corners(ijk);
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        // corners are ordered (dx, dy, dz) with dz fastest.
-        let c00 = lerp(v[0], v[4], f[0]);
-        let c01 = lerp(v[1], v[5], f[0]);
-        let c10 = lerp(v[2], v[6], f[0]);
-        let c11 = lerp(v[3], v[7], f[0]);
-        lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+        let (ijk, f) = split_index_point(p);
+        trilinear(self.corners(ijk), f)
     }
 
     /// Trilinear interpolation at world-space point `p`.
@@ -353,6 +366,26 @@ impl SparseGrid {
             let d = [(c >> 2) as i32 & 1, (c >> 1) as i32 & 1, c as i32 & 1];
             self.value([ijk[0] + d[0], ijk[1] + d[1], ijk[2] + d[2]])
         })
+    }
+
+    /// Bytes of the stored leaves and kept tiles (`size_of::<Leaf>()` per
+    /// leaf: 512 values, the active mask and the origin; `size_of::<Tile>()`
+    /// per tile): the data itself, without the tree that finds it.
+    pub fn payload_bytes(&self) -> u64 {
+        (self.leaves.len() * std::mem::size_of::<Leaf>() + self.tiles.len() * std::mem::size_of::<Tile>()) as u64
+    }
+
+    /// Heap bytes the grid holds: [`SparseGrid::payload_bytes`] plus the
+    /// root map, the node tables and node origins, counted by allocated
+    /// capacity (what the allocator was asked for).
+    pub fn memory_bytes(&self) -> u64 {
+        use std::mem::size_of;
+        // hashbrown: one (key, value) slot plus one control byte per bucket.
+        let root = self.root.capacity() * (size_of::<([i32; 3], u32)>() + 1);
+        let tables = (self.uppers.capacity() + self.lowers.capacity()) * size_of::<u32>();
+        let origins = (self.upper_origins.capacity() + self.lower_origins.capacity()) * size_of::<[i32; 3]>();
+        let data = self.leaves.capacity() * size_of::<Leaf>() + self.tiles.capacity() * size_of::<Tile>();
+        (root + tables + origins + data + self.name.capacity() + self.map_type.capacity()) as u64
     }
 
     /// Number of active voxels (leaf voxels plus the volume of active tiles).

@@ -97,7 +97,20 @@ impl SparseGrid {
                 out.root.insert(key, new);
             }
         }
+        out.shrink_to_fit();
         out
+    }
+
+    /// Releases the spare capacity of every table (grids are built by
+    /// pushing, which leaves up to half of each vector unused).
+    pub(crate) fn shrink_to_fit(&mut self) {
+        self.root.shrink_to_fit();
+        self.uppers.shrink_to_fit();
+        self.upper_origins.shrink_to_fit();
+        self.lowers.shrink_to_fit();
+        self.lower_origins.shrink_to_fit();
+        self.leaves.shrink_to_fit();
+        self.tiles.shrink_to_fit();
     }
 
     fn copy_entry(&self, out: &mut SparseGrid, e: u32, depth: u8) -> u32 {

@@ -53,7 +53,7 @@ pub fn parse_npy(data: &[u8], path: &Path) -> Result<DenseVolume, VolumeError> {
     };
     let header_pos = r.pos();
     let header = r.bytes(header_len, "array header")?;
-    let header = String::from_utf8_lossy(header);
+    let header = String::from_utf8_lossy(header).into_owned();
     let corrupt = |what: String| VolumeError::Corrupt { path: path.to_path_buf(), offset: header_pos as u64, what };
 
     let descr = dict_value(&header, "descr").ok_or_else(|| corrupt(format!("no 'descr' in {header:?}")))?;

@@ -5,7 +5,7 @@
 
 use std::ops::ControlFlow;
 
-use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid};
+use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseAccessor, SparseGrid};
 
 use crate::math::Vec3;
 
@@ -65,6 +65,14 @@ impl GridLookup for DenseGrid {
 }
 
 impl GridLookup for SparseGrid {
+    #[inline]
+    fn lookup_grid(&self, p: Vec3) -> f32 {
+        self.lookup_index(p.to_array())
+    }
+}
+
+/// Cached reads of a sparse grid (same values as the grid's own lookup).
+impl GridLookup for SparseAccessor<'_> {
     #[inline]
     fn lookup_grid(&self, p: Vec3) -> f32 {
         self.lookup_index(p.to_array())

@@ -3,7 +3,9 @@
 //! of a ray and hands it to a [`GridRayVisitor`], whose generic method is
 //! monomorphized per storage type. Trackers, free-flight sampling and
 //! majorant profiles are written once against [`DensityAlongRay`] and reach
-//! the grid through here, so their inner loops carry no type branch.
+//! the grid through here, so their inner loops carry no type branch. Sparse
+//! grids are read through a [`niebla_volume::SparseAccessor`] made here per
+//! ray, which caches the last leaf visited (bit-identical values).
 
 use crate::math::Vec3;
 use crate::medium::{DensityGrid, GridMedium};
@@ -37,7 +39,10 @@ pub fn with_grid_along_ray<V: GridRayVisitor>(
             visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1 })
         }
         DensityGrid::Sparse(grid) => {
-            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1 })
+            // One cached accessor per ray: consecutive lookups along the ray
+            // mostly stay in one leaf and skip the tree descent.
+            let accessor = grid.accessor();
+            visitor.visit(&GridAlongRay { grid: &accessor, majorant, minorant, o, d, t0, t1 })
         }
     }
 }

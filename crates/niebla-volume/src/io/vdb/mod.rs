@@ -19,7 +19,7 @@ mod values;
 
 use std::path::{Path, PathBuf};
 
-use crate::io::bytes::{read_file, ByteReader};
+use crate::io::bytes::ByteReader;
 use crate::{SparseGrid, SparseVec3Grid, VolumeError};
 use values::{ScalarKind, ValueCodec};
 
@@ -126,25 +126,40 @@ const EXPECTED_VEC3: &str = "a Vec3 grid (vec3s or vec3d, full or half precision
 #[derive(Clone, Debug)]
 pub struct VdbFile {
     path: PathBuf,
-    data: Vec<u8>,
+    /// The file's bytes when parsed from memory; `None` when opened from
+    /// disk, where each grid is streamed from the file when it is read (so
+    /// that reading a grid does not hold the file next to the grid).
+    data: Option<Vec<u8>>,
     version: u32,
     library_version: (u32, u32),
     grids: Vec<VdbGridInfo>,
 }
 
 impl VdbFile {
-    /// Reads the file at `path` and its grid descriptors (grids are decoded
-    /// on demand by [`VdbFile::read_float_grid`]).
+    /// Reads the header and grid descriptors of the file at `path`; grids
+    /// are decoded on demand by [`VdbFile::read_float_grid`], streaming
+    /// their bytes from the file (peak memory: the decoded grid plus a
+    /// window of about 1 MiB), so the file must stay in place meanwhile.
     pub fn open(path: impl AsRef<Path>) -> Result<VdbFile, VolumeError> {
-        let path = path.as_ref();
-        VdbFile::from_bytes(read_file(path)?, path)
+        let path = path.as_ref().to_path_buf();
+        let (version, library_version, grids) = parse_header(ByteReader::open_stream(&path, 0, usize::MAX)?, &path)?;
+        Ok(VdbFile { path, data: None, version, library_version, grids })
     }
 
     /// Parses a file already in memory; `path` is used in error messages.
     pub fn from_bytes(data: Vec<u8>, path: impl Into<PathBuf>) -> Result<VdbFile, VolumeError> {
         let path = path.into();
-        let (version, library_version, grids) = parse_header(&data, &path)?;
-        Ok(VdbFile { path, data, version, library_version, grids })
+        let (version, library_version, grids) = parse_header(ByteReader::new(&data, 0, &path), &path)?;
+        Ok(VdbFile { path, data: Some(data), version, library_version, grids })
+    }
+
+    /// A cursor at byte `pos` of the file, readable up to byte `end`.
+    fn reader(&self, pos: u64, end: u64) -> Result<ByteReader<'_>, VolumeError> {
+        // Descriptor offsets were checked against the file size.
+        match &self.data {
+            Some(data) => Ok(ByteReader::new(&data[..end as usize], pos as usize, &self.path)),
+            None => ByteReader::open_stream(&self.path, pos as usize, end as usize),
+        }
     }
 
     /// The file's path.
@@ -233,8 +248,7 @@ impl VdbFile {
     /// `unknown`), `None` if the grid has no such entry or it is not a string.
     pub fn grid_string_metadata(&self, name: &str, key: &str) -> Result<Option<String>, VolumeError> {
         let info = self.grid(name)?;
-        let data = &self.data[..info.end_pos as usize];
-        let mut r = ByteReader::new(data, info.grid_pos as usize, &self.path);
+        let mut r = self.reader(info.grid_pos, info.end_pos)?;
         r.u32("grid compression flags")?;
         let count = r.u32("grid metadata")?;
         let mut found = None;
@@ -303,9 +317,7 @@ impl VdbFile {
     /// A reader positioned at the grid's tree, with its compression and
     /// transform.
     fn grid_reader(&self, info: &VdbGridInfo) -> Result<(ByteReader<'_>, u32, String, crate::Affine), VolumeError> {
-        // Descriptor offsets were checked against the file size.
-        let data = &self.data[..info.end_pos as usize];
-        let mut r = ByteReader::new(data, info.grid_pos as usize, &self.path);
+        let mut r = self.reader(info.grid_pos, info.end_pos)?;
         let pos = r.pos();
         let compression = r.u32("grid compression flags")?;
         if compression & !0x7 != 0 {
@@ -331,20 +343,21 @@ fn skip_metadata(r: &mut ByteReader, what: &str) -> Result<(), VolumeError> {
 
 type Header = (u32, (u32, u32), Vec<VdbGridInfo>);
 
-fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
-    let mut r = ByteReader::new(data, 0, path);
-    let magic = match data.get(..8) {
-        Some(b) => i64::from_le_bytes(b.try_into().expect("8 bytes")),
-        None => -1,
+/// Parses the header and grid descriptors with `r` at byte 0.
+fn parse_header(mut r: ByteReader, path: &Path) -> Result<Header, VolumeError> {
+    let n = r.remaining().min(8);
+    let head = r.bytes(n, "magic number")?;
+    let magic = match head.try_into() {
+        Ok(b) => i64::from_le_bytes(b),
+        Err(_) => -1,
     };
     if magic != MAGIC {
         return Err(VolumeError::WrongFormat {
             path: path.to_path_buf(),
             expected: "an OpenVDB",
-            found: format!("first bytes {:02x?}", &data[..data.len().min(8)]),
+            found: format!("first bytes {head:02x?}"),
         });
     }
-    r.skip(8, "magic number")?;
     let version = r.u32("file format version")?;
     if !(MIN_VERSION..=MAX_VERSION).contains(&version) {
         return Err(
@@ -375,10 +388,10 @@ fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
                 format!("grid {unique_name:?} has offsets {grid_pos}..{end_pos} (descriptor ends at {here})"),
             ));
         }
-        if end_pos as u64 > data.len() as u64 {
+        if end_pos as u64 > r.len() as u64 {
             return Err(VolumeError::Truncated {
                 path: path.to_path_buf(),
-                offset: data.len() as u64,
+                offset: r.len() as u64,
                 what: format!("grid {unique_name:?}, which should end at byte {end_pos}"),
             });
         }
@@ -396,7 +409,7 @@ fn parse_header(data: &[u8], path: &Path) -> Result<Header, VolumeError> {
             grid_pos: grid_pos as u64,
             end_pos: end_pos as u64,
         });
-        r = ByteReader::new(data, end_pos as usize, path);
+        r.seek(end_pos as usize);
     }
     Ok((version, library_version, grids))
 }

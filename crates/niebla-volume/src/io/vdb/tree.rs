@@ -125,6 +125,9 @@ pub(crate) fn read_tree(
             }
         }
     }
+    for grid in grids.iter_mut() {
+        grid.shrink_to_fit();
+    }
     Ok(())
 }
 
