@@ -37,7 +37,7 @@ use crate::color::Rgb;
 use crate::light::Light;
 use crate::math::{Ray, Vec3};
 use crate::sampling::{hash_u64, PixelSampler};
-use crate::tracking::{pass_through_weight, sample_t_maj, CollisionEvent};
+use crate::tracking::{medium_range, pass_through_weight, sample_t_maj, CollisionEvent};
 use crate::world::{surface_epsilon, PathRay, Scene};
 
 use super::beams::Beam;
@@ -322,6 +322,10 @@ impl Tracer<'_> {
                 if store_beam {
                     let length = match collision_t {
                         Some(t) => Some(t),
+                        // No surface ahead: a grid's beam ends where its box does.
+                        None if !stopped_at_null && !t_end.is_finite() => {
+                            medium_range(m, &ray, 0.0, t_end).map(|(_, b)| b)
+                        }
                         None if !stopped_at_null => Some(t_end),
                         None => None,
                     };
