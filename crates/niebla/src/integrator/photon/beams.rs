@@ -327,7 +327,7 @@ mod tests {
                 out.push((i as u32, t));
             }
         }
-        out.sort_by(|a, b| a.0.cmp(&b.0));
+        out.sort_by_key(|a| a.0);
         out
     }
 
@@ -350,7 +350,7 @@ mod tests {
                 assert!(c.u < r && c.sin_theta > 0.0);
                 found.push((index as u32, c.t));
             });
-            found.sort_by(|a, b| a.0.cmp(&b.0));
+            found.sort_by_key(|a| a.0);
             assert_eq!(found.len(), expected.len());
             for (a, b) in found.iter().zip(&expected) {
                 assert_eq!(a.0, b.0);
