@@ -42,7 +42,7 @@ pub fn run(
     if first_sample != 0 {
         return Err(CliError::invalid_option("--adaptive", "renders from sample 0 (no --first-sample)"));
     }
-    if matches!(integrator, IntegratorSettings::Photon(_) | IntegratorSettings::Ppm(_)) {
+    if matches!(integrator, IntegratorSettings::Photon(_) | IntegratorSettings::Ppm(_) | IntegratorSettings::Ppb(_)) {
         return Err(CliError::invalid_option(
             "--adaptive",
             format!("the {} integrator has no per-pixel sample sums", integrator.name()),

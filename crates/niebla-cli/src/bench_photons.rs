@@ -1,6 +1,6 @@
 //! `niebla bench photons`: figures, not tests. On each scene: photons traced
 //! per second, kd-tree gather queries per second (fixed radius and k
-//! nearest), and the time `photon`, `ppm` and `volpath` take to reach a
+//! nearest), and the time `photon`, `ppm`, `ppb` and `volpath` take to reach a
 //! relative MSE of 1e-2 against a high-spp `volpath` reference (renders at
 //! doubling sample or pass counts, log-log interpolation between the two
 //! bracketing renders, as `niebla bench single` does).
@@ -14,7 +14,8 @@ use clap::Args;
 use crate::bench::{time_to_reach, timed};
 use niebla::film::Image;
 use niebla::integrator::photon::{
-    auto_radius, photon_stream, trace_photons, PhotonSettings, PhotonTree, PpmSettings, TraceSettings, VolumeQuery,
+    auto_radius, photon_stream, trace_photons, PhotonSettings, PhotonTree, PpbSettings, PpmSettings, TraceSettings,
+    VolumeQuery,
 };
 use niebla::integrator::IntegratorSettings;
 use niebla::scene::Scene;
@@ -44,10 +45,17 @@ pub struct PhotonBenchArgs {
     /// Photons per `ppm` pass (when the scene file does not name `ppm`).
     #[arg(long, default_value_t = 20_000)]
     pub ppm_photons: u32,
+    /// Photons per `ppb` pass (when the scene file does not name `ppb`).
+    #[arg(long, default_value_t = PpbSettings::DEFAULT_PHOTONS)]
+    pub ppb_photons: u32,
     /// Photons of the `photon` integrator's map (when the scene file does
     /// not name `photon`).
     #[arg(long, default_value_t = 200_000)]
     pub photons: u32,
+    /// Only these rows of the convergence table, comma separated (volpath,
+    /// photon, ppm, "ppm beam", ppb); all by default.
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
@@ -166,7 +174,16 @@ fn photon_settings(
     }
 }
 
-/// Time of `photon`, `ppm` (point and beam queries) and `volpath` to the
+/// `ppb` settings: the scene file's own when it names `ppb`, else the
+/// defaults with `--ppb-photons` photons per pass.
+fn ppb_settings(scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> IntegratorSettings {
+    match scene_integrator {
+        IntegratorSettings::Ppb(ppb) => IntegratorSettings::Ppb(*ppb),
+        _ => IntegratorSettings::Ppb(PpbSettings { photons: args.ppb_photons, ..PpbSettings::default() }),
+    }
+}
+
+/// Time of `photon`, `ppm` (point and beam queries), `ppb` and `volpath` to the
 /// target error. Each sweep renders at 1, 2, 4, ... spp (passes), each a
 /// separate timed render with seed 7, until the error is below the target or
 /// the next render would exceed `--sweep-seconds`. Errors are against the
@@ -177,21 +194,30 @@ fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &Phot
     let (reference, noise) = reference(scene, args)?;
     let volpath =
         IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH, volume_light_sampling: true };
-    println!("{:<12} {:>7} {:>10} {:>12} {:>12}", "integrator", "spp", "time s", "rel MSE", "- ref noise");
+    println!(
+        "{:<12} {:>7} {:>10} {:>12} {:>12} {:>10}",
+        "integrator", "spp", "time s", "rel MSE", "- ref noise", "mean/ref"
+    );
+    let reference_mean = reference.mean().average() as f64;
     let mut summary = Vec::new();
     for (name, settings) in [
         ("volpath", volpath),
         ("photon", photon_settings(scene_integrator, args, None)),
         ("ppm", photon_settings(scene_integrator, args, Some(VolumeQuery::March))),
         ("ppm beam", photon_settings(scene_integrator, args, Some(VolumeQuery::Beam))),
+        ("ppb", ppb_settings(scene_integrator, args)),
     ] {
+        if !args.only.is_empty() && !args.only.iter().any(|o| o == name) {
+            continue;
+        }
         let mut points: Vec<(f64, f64)> = Vec::new();
         let mut spp = 1u32;
         loop {
             let (image, seconds) = timed(scene, &settings, spp, 7, args.threads.threads)?;
             let measured = image.relative_mse(&reference);
             let error = (measured - noise).max(measured * 1e-3);
-            println!("{name:<12} {spp:>7} {seconds:>10.3} {measured:>12.3e} {error:>12.3e}");
+            let mean_ratio = image.mean().average() as f64 / reference_mean;
+            println!("{name:<12} {spp:>7} {seconds:>10.3} {measured:>12.3e} {error:>12.3e} {mean_ratio:>10.4}");
             points.push((seconds, error));
             let next_too_long = seconds * 2.0 > args.sweep_seconds;
             if error < args.target || next_too_long || spp >= args.max_spp {

@@ -106,7 +106,7 @@ fn relative_error(sum: [i128; 3], square: [i128; 3], n: u64, floor: f64) -> f64 
 }
 
 /// Render `scene` adaptively (see the module documentation). `threshold`
-/// must lie in (0, 1); `photon` and `ppm` are not supported (no per-pixel
+/// must lie in (0, 1); `photon`, `ppm` and `ppb` are not supported (no per-pixel
 /// sample sums of their own).
 pub fn render_adaptive(
     scene: &Scene,

@@ -78,6 +78,14 @@ pub enum RenderError {
     /// The cancel flag was raised.
     #[error("render cancelled")]
     Cancelled,
+    /// The integrator cannot render this scene.
+    #[error("{integrator} cannot render this scene: {reason}")]
+    Unsupported {
+        /// The integrator's name.
+        integrator: &'static str,
+        /// What in the scene it does not support, and what to use instead.
+        reason: String,
+    },
 }
 
 /// Progress of a render: called after each tile with (pixel samples done, total).

@@ -28,7 +28,7 @@ fn all_integrators() -> Vec<(String, IntegratorSettings)> {
     // Cheaper than the defaults where an integrator has a costly setup
     // (photon maps, lattices); tried first, the defaults if they do not parse.
     let cheap = |name: &str| match name {
-        "photon" | "ppm" => r#", "photons": 2000"#,
+        "photon" | "ppm" | "ppb" => r#", "photons": 2000"#,
         "hegeman" => r#", "resolution": 8"#,
         _ => "",
     };

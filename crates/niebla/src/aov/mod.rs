@@ -186,15 +186,15 @@ impl AovSet {
 }
 
 /// Why a set of layers cannot be rendered with an integrator (`None`: it can).
-/// The split layers need `volpath`; `photon` and `ppm` render per pass with
-/// their own photon maps and write no layers.
+/// The split layers need `volpath`; `photon`, `ppm` and `ppb` render per
+/// pass with their own photon maps and write no layers.
 pub fn unsupported_reason(set: AovSet, integrator: &crate::integrator::IntegratorSettings) -> Option<String> {
     use crate::integrator::IntegratorSettings as S;
     if set.is_empty() {
         return None;
     }
     match integrator {
-        S::Photon(_) | S::Ppm(_) => {
+        S::Photon(_) | S::Ppm(_) | S::Ppb(_) => {
             Some(format!("the {} integrator writes no layers (alpha or AOVs)", integrator.name()))
         }
         S::VolPath { .. } => None,

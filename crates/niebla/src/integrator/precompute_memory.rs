@@ -3,7 +3,7 @@
 //! lattice resolution is refused with the field to lower instead of running
 //! out of memory.
 
-use super::photon::{photon_stream, trace_photons, Photon, TraceSettings};
+use super::photon::{photon_stream, trace_beams_with, trace_photons, Beam, Emitters, Photon, TraceSettings};
 use super::{HegemanSettings, IntegratorSettings, ZhouSettings};
 use crate::medium::Medium;
 use crate::world::Scene;
@@ -110,6 +110,32 @@ pub(crate) fn photon_map_memory(scene: &Scene, photons: u32, max_depth: u32, wha
         field: "photons",
         what: format!(
             "{what}: {photons} photons, about {stored_per_photon:.1} stored per photon (measured on {pilot})"
+        ),
+    }
+}
+
+/// `ppb`: one pass's beams and surface photons for `photons` emitted,
+/// scaled from a pilot run; beams counted three times (the beams, the BVH's
+/// pieces and nodes), photons twice.
+pub(crate) fn beam_map_memory(scene: &Scene, photons: u32, max_depth: u32) -> PrecomputeMemory {
+    let pilot = PILOT_PHOTONS.min(photons.max(1));
+    let traced = trace_beams_with(
+        scene,
+        &Emitters::new(scene),
+        &TraceSettings { photons: pilot as u64, max_depth, store_direct: false },
+        photon_stream(0x5eed, 0),
+    );
+    let beams_per_photon = traced.beams.len() as f64 / pilot as f64;
+    let surface_per_photon = traced.surface.len() as f64 / pilot as f64;
+    let bytes = photons as f64
+        * (beams_per_photon * (3 * std::mem::size_of::<Beam>()) as f64
+            + surface_per_photon * (2 * std::mem::size_of::<Photon>()) as f64);
+    PrecomputeMemory {
+        bytes: bytes.min(u64::MAX as f64) as u64,
+        field: "photons",
+        what: format!(
+            "each pass's beams: {photons} photons, about {beams_per_photon:.1} beams and {surface_per_photon:.1} \
+             surface photons per photon (measured on {pilot})"
         ),
     }
 }

@@ -16,7 +16,7 @@ use std::sync::atomic::AtomicBool;
 
 use serde_json::Value;
 
-use super::precompute_memory::{hegeman_memory, photon_map_memory, zhou_memory};
+use super::precompute_memory::{beam_map_memory, hegeman_memory, photon_map_memory, zhou_memory};
 use super::{
     analytic, emission_absorption, hegeman, photon, single, volpath, zhou, AnalyticIntegrator, EmissionIntegrator,
     HegemanIntegrator, PrecomputeMemory, SingleIntegrator, SingleSampling, VolPathIntegrator, ZhouIntegrator,
@@ -72,6 +72,10 @@ pub enum IntegratorSettings {
     /// Progressive photon mapping (Knaus and Zwicker 2011): one photon map
     /// and a smaller radius per sample index; converges to `volpath`.
     Ppm(photon::PpmSettings),
+    /// Progressive photon beams (Jarosz et al. 2011): beams of photon free
+    /// flights, the beam x beam 1D estimate and a shrinking radius per
+    /// sample index; converges to `volpath`.
+    Ppb(photon::PpbSettings),
 }
 
 /// One integrator as the user selects it: its name (the `type` in a scene
@@ -153,6 +157,12 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         summary: "Progressive photon mapping (converges to volpath)",
         interactive: false,
         parse: |o| photon::settings::parse_ppm(o).map(IntegratorSettings::Ppm),
+    },
+    IntegratorEntry {
+        name: "ppb",
+        summary: "Progressive photon beams (beam x beam 1D estimate; converges to volpath)",
+        interactive: false,
+        parse: |o| photon::settings::parse_ppb(o).map(IntegratorSettings::Ppb),
     },
 ];
 
@@ -270,6 +280,7 @@ impl IntegratorSettings {
             IntegratorSettings::Zhou(_) => "zhou",
             IntegratorSettings::Photon(_) => "photon",
             IntegratorSettings::Ppm(_) => "ppm",
+            IntegratorSettings::Ppb(_) => "ppb",
         }
     }
 
@@ -300,6 +311,7 @@ impl IntegratorSettings {
             IntegratorSettings::Zhou(z) => zhou::settings::key(z),
             IntegratorSettings::Photon(p) => photon::settings::photon_key(p),
             IntegratorSettings::Ppm(p) => photon::settings::ppm_key(p),
+            IntegratorSettings::Ppb(p) => photon::settings::ppb_key(p),
         }
     }
 
@@ -311,6 +323,7 @@ impl IntegratorSettings {
             IntegratorSettings::Hegeman(h) => Some(hegeman_memory(h, scene)),
             IntegratorSettings::Zhou(z) => Some(zhou_memory(z, scene)),
             IntegratorSettings::Photon(p) => Some(photon_map_memory(scene, p.photons, p.max_depth, "the photon map")),
+            IntegratorSettings::Ppb(p) => Some(beam_map_memory(scene, p.photons, p.max_depth)),
             IntegratorSettings::Ppm(p) => {
                 Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
             }
@@ -350,6 +363,8 @@ pub enum PreparedIntegrator {
     Photon(photon::PhotonSettings),
     /// `ppm` (a photon map per pass).
     Ppm(photon::PpmSettings),
+    /// `ppb` (beams per pass).
+    Ppb(photon::PpbSettings),
 }
 
 impl PreparedIntegrator {
@@ -370,6 +385,7 @@ impl PreparedIntegrator {
             IntegratorSettings::Zhou(z) => PreparedIntegrator::Zhou(Box::new(ZhouIntegrator::new(scene, z))),
             IntegratorSettings::Photon(p) => PreparedIntegrator::Photon(p),
             IntegratorSettings::Ppm(p) => PreparedIntegrator::Ppm(p),
+            IntegratorSettings::Ppb(p) => PreparedIntegrator::Ppb(p),
         }
     }
 
@@ -430,6 +446,7 @@ impl PreparedIntegrator {
             PreparedIntegrator::Zhou(i) => render_sums_with(scene, i.as_ref(), options, progress, cancel),
             PreparedIntegrator::Photon(p) => photon::render_photon(scene, p, options, progress, cancel),
             PreparedIntegrator::Ppm(p) => photon::render_ppm(scene, p, options, progress, cancel),
+            PreparedIntegrator::Ppb(p) => photon::render_ppb(scene, p, options, progress, cancel),
         }
     }
 
@@ -466,8 +483,8 @@ impl PreparedIntegrator {
             PreparedIntegrator::Analytic(i) => with(scene, i, options, set, active, progress, cancel),
             PreparedIntegrator::Hegeman(i) => with(scene, i.as_ref(), options, set, active, progress, cancel),
             PreparedIntegrator::Zhou(i) => with(scene, i.as_ref(), options, set, active, progress, cancel),
-            PreparedIntegrator::Photon(_) | PreparedIntegrator::Ppm(_) => {
-                panic!("photon and ppm write no layers (aov::unsupported_reason says so)")
+            PreparedIntegrator::Photon(_) | PreparedIntegrator::Ppm(_) | PreparedIntegrator::Ppb(_) => {
+                panic!("photon, ppm and ppb write no layers (aov::unsupported_reason says so)")
             }
         }
     }
@@ -502,6 +519,7 @@ mod tests {
         assert_eq!(defaults("zhou"), Some(IntegratorSettings::Zhou(ZhouSettings::default())));
         assert_eq!(defaults("photon"), Some(IntegratorSettings::Photon(PhotonSettings::photon())));
         assert_eq!(defaults("ppm"), Some(IntegratorSettings::Ppm(PpmSettings::default())));
+        assert_eq!(defaults("ppb"), Some(IntegratorSettings::Ppb(crate::integrator::photon::PpbSettings::default())));
         assert_eq!(defaults("bidirectional"), None);
     }
 
@@ -513,7 +531,7 @@ mod tests {
             assert_eq!(settings.name(), name);
             assert!(keys.insert(settings.key()), "{name}: key {} repeated", settings.key());
         }
-        assert_eq!(NAMES.len(), 8);
+        assert_eq!(NAMES.len(), 9);
     }
 
     #[test]

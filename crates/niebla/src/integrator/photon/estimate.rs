@@ -97,17 +97,31 @@ impl CameraRayVisitor for PhotonVisitor<'_, '_> {
         medium: Option<MediumId>,
         sampler: &mut PixelSampler,
     ) -> Rgb {
-        let p = hit.surface.p;
-        let ns = hit.surface.shading_normal(wo);
-        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
-        let method = self.integrator.single.transmittance;
-        let bsdf = scene.surface_bsdf(hit);
-        direct_surface_radiance(scene, &hit.surface, wo, &bsdf, medium, method, sampler)
-            + self.integrator.surface_estimate(p, ns, n, wo, &bsdf, &mut self.heap)
+        self.integrator.surface_radiance(scene, hit, wo, medium, sampler, &mut self.heap)
     }
 }
 
 impl PhotonIntegrator<'_> {
+    /// Radiance leaving the opaque surface `hit` toward `wo`: direct light
+    /// by shadow rays plus the surface map's estimate.
+    pub(crate) fn surface_radiance(
+        &self,
+        scene: &Scene,
+        hit: &Hit,
+        wo: Vec3,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+        heap: &mut BinaryHeap<Neighbor>,
+    ) -> Rgb {
+        let p = hit.surface.p;
+        let ns = hit.surface.shading_normal(wo);
+        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
+        let method = self.single.transmittance;
+        let bsdf = scene.surface_bsdf(hit);
+        direct_surface_radiance(scene, &hit.surface, wo, &bsdf, medium, method, sampler)
+            + self.surface_estimate(p, ns, n, wo, &bsdf, heap)
+    }
+
     /// Multiple scattering over `[0, t_end)` of `ray` in medium `id`,
     /// attenuated to the ray's origin.
     fn volume_segment(

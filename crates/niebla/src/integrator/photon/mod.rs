@@ -27,18 +27,27 @@
 //! `(seed, s, i)` and maps are concatenated in a fixed order, so both
 //! integrators give the same image for any thread count.
 //!
+//! `ppb` (progressive photon beams, Jarosz et al. 2011) stores the free
+//! flights of the same photons as beams and queries them with the beam x
+//! beam 1D estimate along camera rays ([`render_ppb`]; `beams.rs`, `ppb.rs`).
+//!
 //! Light emitted by media (`L_ve`) is seen along camera rays by the
 //! single-scattering code and scattered by photons emitted from the media
 //! ([`Emitters`]).
 
+mod beams;
 mod emitters;
 mod estimate;
 mod kdtree;
 mod maps;
 mod passes;
+mod ppb;
 pub(crate) mod settings;
 mod stored;
 mod trace;
+
+pub use beams::{beams_supported, Beam, BeamMap, Crossing};
+pub use ppb::{beam_estimate, ppb_radius_factor, render_ppb, BeamIntegrator, PpbSettings};
 
 pub use emitters::Emitters;
 pub use estimate::{Kernel, PhotonIntegrator};
@@ -46,7 +55,9 @@ pub use kdtree::{Neighbor, PhotonTree};
 pub use maps::{auto_radius, PhotonMaps};
 pub use passes::{ppm_radius_factor, render_photon, render_ppm};
 pub use stored::{pack_normal, unpack_normal, Photon};
-pub use trace::{photon_stream, trace_photons, trace_photons_with, TraceSettings, TraceStats, TracedPhotons};
+pub use trace::{
+    photon_stream, trace_beams_with, trace_photons, trace_photons_with, TraceSettings, TraceStats, TracedPhotons,
+};
 
 use super::SingleSampling;
 use crate::tracking::MarchStep;

@@ -66,7 +66,7 @@ fn ln_gamma(x: f64) -> f64 {
 }
 
 /// Run `f` on a pool of `threads` threads (or the current pool).
-fn with_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T, RenderError> {
+pub(super) fn with_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T, RenderError> {
     match threads {
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -84,7 +84,7 @@ fn single_of(settings: &PhotonSettings) -> SingleIntegrator {
 }
 
 /// Radius of a map from the settings or, when `None`, measured on it.
-fn radius_or_auto(radius: Option<f32>, measured: impl FnOnce() -> f32) -> f32 {
+pub(super) fn radius_or_auto(radius: Option<f32>, measured: impl FnOnce() -> f32) -> f32 {
     radius.filter(|r| *r > 0.0 && r.is_finite()).unwrap_or_else(measured)
 }
 

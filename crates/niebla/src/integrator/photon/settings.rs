@@ -1,10 +1,10 @@
-//! Settings of the `photon` and `ppm` integrators (`"type": "photon"`,
-//! `"type": "ppm"`): their fields in a scene file, their defaults and
+//! Settings of the `photon`, `ppm` and `ppb` integrators (`"type": "photon"`,
+//! `"type": "ppm"`, `"type": "ppb"`): their fields in a scene file, their defaults and
 //! checks, and their stable keys.
 
 use serde::Deserialize;
 
-use super::{PhotonGather, PhotonSettings, PpmSettings, VolumeQuery};
+use super::{PhotonGather, PhotonSettings, PpbSettings, PpmSettings, VolumeQuery};
 use crate::integrator::common_settings::{at_least_one, march_key, march_step, positive, sampling_key, SamplingField};
 use crate::params::{rest, Located, Object};
 
@@ -144,4 +144,70 @@ pub(crate) fn photon_key(s: &PhotonSettings) -> String {
 /// The stable key of `ppm`'s settings.
 pub(crate) fn ppm_key(s: &PpmSettings) -> String {
     format!("ppm({}, alpha={:?})", pass_key(&s.photon), s.alpha)
+}
+
+/// The fields of a `ppb` object; every one is optional.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PpbFields {
+    /// Photons emitted per pass (>= 1).
+    #[serde(default)]
+    photons: Option<u32>,
+    /// Initial beam radius in scene units (> 0).
+    #[serde(default)]
+    radius: Option<f32>,
+    /// Initial surface gather radius in scene units (> 0).
+    #[serde(default)]
+    surface_radius: Option<f32>,
+    /// Radius reduction in (0, 1) (default 2/3).
+    #[serde(default)]
+    alpha: Option<f32>,
+    /// Largest number of scattering events on a photon path (>= 1).
+    #[serde(default)]
+    max_depth: Option<u32>,
+    /// Single-scattering sampling along camera rays (default `mis`).
+    #[serde(default)]
+    sampling: Option<SamplingField>,
+}
+
+/// `ppb`'s settings from its object (the `type` taken out).
+pub(crate) fn parse_ppb(object: Object) -> Result<PpbSettings, Located> {
+    let f: PpbFields = rest(object)?;
+    at_least_one("photons", f.photons)?;
+    at_least_one("max_depth", f.max_depth)?;
+    for (path, value) in [("radius", f.radius), ("surface_radius", f.surface_radius)] {
+        if let Some(r) = value {
+            positive(path, r)?;
+        }
+    }
+    if let Some(alpha) = f.alpha {
+        if !(alpha > 0.0 && alpha < 1.0) {
+            return Err(Located::new("alpha", format!("must be in (0, 1), got {alpha}")));
+        }
+    }
+    let d = PpbSettings::default();
+    Ok(PpbSettings {
+        photons: f.photons.unwrap_or(d.photons),
+        radius: f.radius,
+        surface_radius: f.surface_radius,
+        alpha: f.alpha.unwrap_or(d.alpha),
+        max_depth: f.max_depth.unwrap_or(d.max_depth),
+        sampling: f.sampling.unwrap_or(SamplingField::Mis).sampling(),
+        store_direct: false,
+    })
+}
+
+/// The stable key of `ppb`'s settings.
+pub(crate) fn ppb_key(s: &PpbSettings) -> String {
+    let radius = |r: Option<f32>| r.map_or("auto".to_string(), |r| format!("{r:?}"));
+    format!(
+        "ppb(photons={}, radius={}, surface_radius={}, alpha={:?}, sampling={}, max_depth={}, store_direct={})",
+        s.photons,
+        radius(s.radius),
+        radius(s.surface_radius),
+        s.alpha,
+        sampling_key(s.sampling),
+        s.max_depth,
+        s.store_direct
+    )
 }

@@ -37,9 +37,10 @@ use crate::color::Rgb;
 use crate::light::Light;
 use crate::math::{Ray, Vec3};
 use crate::sampling::{hash_u64, PixelSampler};
-use crate::tracking::{pass_through_weight, sample_t_maj, CollisionEvent};
+use crate::tracking::{medium_range, pass_through_weight, sample_t_maj, CollisionEvent};
 use crate::world::{surface_epsilon, PathRay, Scene};
 
+use super::beams::Beam;
 use super::emitters::{Emitters, Source};
 use super::stored::Photon;
 
@@ -110,6 +111,9 @@ pub struct TracedPhotons {
     pub volume: Vec<Photon>,
     /// Photons stored at diffuse surfaces.
     pub surface: Vec<Photon>,
+    /// Photon beams (free flights in media; only from [`trace_beams_with`],
+    /// which stores no volume photons).
+    pub beams: Vec<Beam>,
     /// Energy bookkeeping.
     pub stats: TraceStats,
 }
@@ -130,12 +134,27 @@ pub fn trace_photons(scene: &Scene, settings: &TraceSettings, stream: u64) -> Tr
 
 /// [`trace_photons`] with the photon sources built beforehand.
 pub fn trace_photons_with(scene: &Scene, emitters: &Emitters, settings: &TraceSettings, stream: u64) -> TracedPhotons {
+    trace_with(scene, emitters, settings, stream, false)
+}
+
+/// Trace photons as [`trace_photons_with`] does (the same paths for the same
+/// stream) but store photon beams instead of volume photons: every free
+/// flight through a medium that a volume photon's storage rule would count
+/// (not direct unless `store_direct`) becomes a [`Beam`] from its start to
+/// the collision or surface that ended it, carrying the power at its start.
+/// Flights that leave the scene without a collision store nothing. Surface
+/// photons are stored as before.
+pub fn trace_beams_with(scene: &Scene, emitters: &Emitters, settings: &TraceSettings, stream: u64) -> TracedPhotons {
+    trace_with(scene, emitters, settings, stream, true)
+}
+
+fn trace_with(scene: &Scene, emitters: &Emitters, settings: &TraceSettings, stream: u64, beams: bool) -> TracedPhotons {
     use rayon::prelude::*;
     if emitters.is_empty() {
         return TracedPhotons::default();
     }
     let n = settings.photons.max(1);
-    let tracer = Tracer { scene, settings, emitters, scale: 1.0 / n as f32 };
+    let tracer = Tracer { scene, settings, emitters, scale: 1.0 / n as f32, beams };
     let chunks: Vec<TracedPhotons> = (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|chunk| {
@@ -150,11 +169,13 @@ pub fn trace_photons_with(scene: &Scene, emitters: &Emitters, settings: &TraceSe
     let mut all = TracedPhotons {
         volume: Vec::with_capacity(chunks.iter().map(|c| c.volume.len()).sum()),
         surface: Vec::with_capacity(chunks.iter().map(|c| c.surface.len()).sum()),
+        beams: Vec::with_capacity(chunks.iter().map(|c| c.beams.len()).sum()),
         stats: TraceStats::default(),
     };
     for c in chunks {
         all.volume.extend_from_slice(&c.volume);
         all.surface.extend_from_slice(&c.surface);
+        all.beams.extend_from_slice(&c.beams);
         all.stats.merge(&c.stats);
     }
     all
@@ -166,6 +187,8 @@ struct Tracer<'a> {
     emitters: &'a Emitters,
     /// `1 / photons`.
     scale: f32,
+    /// Store beams (and no volume photons).
+    beams: bool,
 }
 
 impl Tracer<'_> {
@@ -234,15 +257,25 @@ impl Tracer<'_> {
                 let mut scattered: Option<(Vec3, Vec3)> = None;
                 let mut ended = false;
                 let mut cut = false;
+                // The flight's power at its start, for its beam.
+                let start_power = beta / r_u.average();
+                let store_beam = self.beams && (!direct || store_direct) && start_power.is_finite();
+                // Where a real collision ended the flight (ray parameter).
+                let mut collision_t: Option<f32> = None;
+                // Tracking stopped at a null collision (a zero weight): the
+                // flight's end is unknown and its beam is not stored.
+                let mut stopped_at_null = false;
                 let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
                     match c.event(hero, sampler.next_1d()) {
                         CollisionEvent::Absorb => {
                             // Absorption: the photon ends.
+                            collision_t = Some(c.t);
                             ended = true;
                             false
                         }
                         CollisionEvent::Scatter => {
                             // Real scattering: store, then sample the phase function.
+                            collision_t = Some(c.t);
                             let w = c.scatter_weight(hero);
                             beta *= w;
                             r_u *= w;
@@ -253,7 +286,7 @@ impl Tracer<'_> {
                             }
                             out.stats.volume_events += 1;
                             add(&mut out.stats.volume_event_power, power);
-                            if !direct || store_direct {
+                            if (!direct || store_direct) && !self.beams {
                                 out.volume.push(Photon::in_medium(c.p, -ray.d, power, id.0));
                             }
                             if depth >= max_depth {
@@ -275,14 +308,38 @@ impl Tracer<'_> {
                             // Null collision: continue with the null-scattering weights.
                             let Some(w) = c.null_weights(hero) else {
                                 ended = true;
+                                stopped_at_null = true;
                                 return false;
                             };
                             beta *= w.throughput;
                             r_u *= w.throughput;
-                            !(beta.is_black() || r_u.is_black())
+                            let go_on = !(beta.is_black() || r_u.is_black());
+                            stopped_at_null = !go_on;
+                            go_on
                         }
                     }
                 });
+                if store_beam {
+                    let length = match collision_t {
+                        Some(t) => Some(t),
+                        // No surface ahead: a grid's beam ends where its box does.
+                        None if !stopped_at_null && !t_end.is_finite() => {
+                            medium_range(m, &ray, 0.0, t_end).map(|(_, b)| b)
+                        }
+                        None if !stopped_at_null => Some(t_end),
+                        None => None,
+                    };
+                    if let Some(length) = length.filter(|l| l.is_finite() && *l > 0.0) {
+                        out.beams.push(Beam {
+                            o: ray.o,
+                            d: ray.d,
+                            length,
+                            power: start_power,
+                            medium: id.0,
+                            hero: hero as u8,
+                        });
+                    }
+                }
                 if ended || cut || beta.is_black() || r_u.is_black() || !beta.is_finite() {
                     return;
                 }
