@@ -104,7 +104,11 @@ fn prepare(
         .and_then(|c| rebuild_scene(&c.built, &c.desc, &desc, &session.label, &session.base).map(|r| (r, c)));
     let (built, edit, how) = match rebuilt {
         Some((Ok((built, edit)), _)) => {
-            let how = if edit.any_medium() { "media" } else { "camera" };
+            let how = match (edit.any_light(), edit.any_medium()) {
+                (true, _) => "lights",
+                (false, true) => "media",
+                (false, false) => "camera",
+            };
             (built, Some(edit), how)
         }
         Some((Err(e), _)) => return Err(e.to_string()),

@@ -359,15 +359,17 @@ impl PreparedIntegrator {
     /// with `scene`, that scene after `edit` ([`crate::scene::rebuild_scene`]),
     /// reusing what the edit left valid: `zhou` keeps its fit (and, when
     /// only the camera moved, its lighting: the view pass runs again),
-    /// `hegeman` keeps its line integrals (and everything when only the
-    /// camera moved); the others, whose preparation is cheap or depends on
+    /// `hegeman` keeps its line integrals except those of lights that moved
+    /// (and everything when only the camera moved); the others, whose preparation is cheap or depends on
     /// the scene bounds (which include the camera), are prepared again.
     /// Renders with the result are identical to those of
     /// `PreparedIntegrator::new(scene, settings)`.
     pub fn update(&mut self, scene: &Scene, settings: &IntegratorSettings, edit: &crate::scene::SceneEdit) {
         match self {
             PreparedIntegrator::Zhou(z) => {
-                if edit.any_medium() {
+                if edit.any_light() {
+                    z.update_lights(scene, &edit.media);
+                } else if edit.any_medium() {
                     z.update_media(scene, &edit.media);
                 } else if edit.camera {
                     z.set_view(scene.camera.position);
@@ -376,6 +378,9 @@ impl PreparedIntegrator {
             PreparedIntegrator::Hegeman(h) => {
                 if edit.any_medium() {
                     h.update_media(scene, &edit.media);
+                }
+                if edit.any_light() {
+                    h.update_lights(scene);
                 }
             }
             _ => *self = PreparedIntegrator::new(scene, settings),

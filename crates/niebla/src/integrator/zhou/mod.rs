@@ -282,10 +282,38 @@ impl ZhouIntegrator {
         if let Some(local) = &mut self.local {
             local.update_media(scene, changed);
         }
+        self.relight(scene, |index| changed.get(index) == Some(&true));
+        self.lighting_seconds = start.elapsed().as_secs_f64();
+    }
+
+    /// Bring the precomputation up to date after the lights of `scene` were
+    /// edited (intensity, color, position, direction; the same lights of
+    /// the same kinds), the scene it was built for otherwise unchanged (the
+    /// camera may have moved, and the scalars of the media flagged in
+    /// `changed_media`, as in [`ZhouIntegrator::update_media`]): the fits
+    /// are kept; the local-light model is updated ([`HegemanIntegrator::update_lights`]) and the lighting, the
+    /// diffusion and the view pass of every grid medium run again, so the
+    /// result renders identically to a new precomputation.
+    pub fn update_lights(&mut self, scene: &Scene, changed_media: &[bool]) {
+        let start = Instant::now();
+        self.lights = ModelLight::from_scene(&scene.lights);
+        if self.settings.local_lights == LocalLights::Hegeman {
+            self.lights.retain(|l| matches!(l, ModelLight::Directional { .. }));
+        }
+        if let Some(local) = &mut self.local {
+            local.update_media(scene, changed_media);
+            local.update_lights(scene);
+        }
+        self.relight(scene, |_| true);
+        self.lighting_seconds = start.elapsed().as_secs_f64();
+    }
+
+    /// Run the lighting, diffusion and view pass again for the grid media
+    /// whose index `redo` accepts, keeping their lattices and fits.
+    fn relight(&mut self, scene: &Scene, redo: impl Fn(usize) -> bool) {
         let order = self.settings.sh_order as usize;
         for (index, (model, medium)) in self.models.iter_mut().zip(&scene.media).enumerate() {
-            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, changed.get(index) == Some(&true))
-            else {
+            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, redo(index)) else {
                 continue;
             };
             let lattice = model.lattice;
@@ -299,7 +327,6 @@ impl ZhouIntegrator {
             model.set_view(scene.camera.position, order);
         }
         self.fit_seconds = 0.0;
-        self.lighting_seconds = start.elapsed().as_secs_f64();
     }
 
     /// Relative L2 error `||D - D~|| / ||D||` of each grid medium's fit.
