@@ -121,7 +121,11 @@ fn prepare(
     let old = cache.take().and_then(|c| c.prepared);
     let (prepared, kept) = match (old, edit) {
         (Some((old_settings, mut prepared)), Some(edit)) if old_settings == settings => {
-            prepared.update(&built.scene, &settings, &edit);
+            if !prepared.update_cancellable(&built.scene, &settings, &edit, Some(cancel)) {
+                // A newer edit stopped it: drop the half-updated integrator.
+                *cache = Some(SlotCache { desc, built, prepared: None });
+                return Ok((how, "cancelled"));
+            }
             (prepared, "updated")
         }
         _ => {
@@ -130,7 +134,13 @@ fn prepare(
                 *cache = Some(SlotCache { desc, built, prepared: None });
                 return Ok((how, "skipped"));
             }
-            (PreparedIntegrator::new(&built.scene, &settings), "new")
+            match PreparedIntegrator::new_cancellable(&built.scene, &settings, cancel) {
+                Some(prepared) => (prepared, "new"),
+                None => {
+                    *cache = Some(SlotCache { desc, built, prepared: None });
+                    return Ok((how, "cancelled"));
+                }
+            }
         }
     };
     *cache = Some(SlotCache { desc, built, prepared: Some((settings, prepared)) });

@@ -190,3 +190,33 @@ fn edits_beyond_camera_render_and_medium_scalars_need_a_full_build() {
     assert!(change.render && !change.camera && !change.any_medium() && !change.any_light());
     assert_eq!(rebuilt.settings.seed, 9);
 }
+
+#[test]
+fn a_cancelled_zhou_precomputation_gives_no_integrator() {
+    use std::sync::atomic::AtomicBool;
+    let base = Path::new(".");
+    let integrator = &integrators()[0];
+    assert_eq!(integrator["type"], "zhou");
+    let desc = desc_with(integrator);
+    let built = build_scene(&desc, "cloud.json", base).unwrap();
+    let settings = registry::parse(integrator.as_object().unwrap()).unwrap();
+    let cancelled = AtomicBool::new(true);
+    // The fit (no cache) stops at its first iteration.
+    assert!(PreparedIntegrator::new_cancellable(&built.scene, &settings, &cancelled).is_none());
+    let running = AtomicBool::new(false);
+    let prepared = PreparedIntegrator::new_cancellable(&built.scene, &settings, &running).expect("not cancelled");
+    assert!(sums(&built.scene, &prepared) == sums(&built.scene, &PreparedIntegrator::new(&built.scene, &settings)));
+    // Lighting and diffusion stop after a medium or a light edit; a camera
+    // move (the view pass only) runs to the end.
+    type Edit = fn(&mut SceneDesc);
+    let edits: [(&str, Edit, bool); 3] =
+        [("medium", edit_medium, false), ("light", light_power, false), ("camera", move_camera, true)];
+    for (name, edit, finishes) in edits {
+        let mut edited = desc.clone();
+        edit(&mut edited);
+        let (rebuilt, change) = rebuild_scene(&built, &desc, &edited, "cloud.json", base).unwrap().unwrap();
+        let mut updated = PreparedIntegrator::new(&built.scene, &settings);
+        let done = updated.update_cancellable(&rebuilt.scene, &settings, &change, Some(&cancelled));
+        assert_eq!(done, finishes, "{name}");
+    }
+}

@@ -365,12 +365,38 @@ impl PreparedIntegrator {
     /// Renders with the result are identical to those of
     /// `PreparedIntegrator::new(scene, settings)`.
     pub fn update(&mut self, scene: &Scene, settings: &IntegratorSettings, edit: &crate::scene::SceneEdit) {
+        let done = self.update_cancellable(scene, settings, edit, None);
+        debug_assert!(done, "no cancel flag");
+    }
+
+    /// [`Self::new`], giving up (`None`, no partial result) when `cancel`
+    /// is set during `zhou`'s fit, lighting or diffusion (the other
+    /// integrators' preparations run to the end).
+    pub fn new_cancellable(scene: &Scene, settings: &IntegratorSettings, cancel: &AtomicBool) -> Option<Self> {
+        match *settings {
+            IntegratorSettings::Zhou(z) => {
+                ZhouIntegrator::new_cancellable(scene, z, Some(cancel)).map(|z| PreparedIntegrator::Zhou(Box::new(z)))
+            }
+            _ => Some(PreparedIntegrator::new(scene, settings)),
+        }
+    }
+
+    /// [`Self::update`], giving up when `cancel` is set during `zhou`'s
+    /// lighting or diffusion: `false` then, and the integrator is half
+    /// updated and must be dropped (never rendered with).
+    pub fn update_cancellable(
+        &mut self,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        edit: &crate::scene::SceneEdit,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         match self {
             PreparedIntegrator::Zhou(z) => {
                 if edit.any_light() {
-                    z.update_lights(scene, &edit.media);
+                    return z.update_lights(scene, &edit.media, cancel);
                 } else if edit.any_medium() {
-                    z.update_media(scene, &edit.media);
+                    return z.update_media(scene, &edit.media, cancel);
                 } else if edit.camera {
                     z.set_view(scene.camera.position);
                 }
@@ -385,6 +411,7 @@ impl PreparedIntegrator {
             }
             _ => *self = PreparedIntegrator::new(scene, settings),
         }
+        true
     }
 
     /// Render `options.spp` samples per pixel of `scene` (the scene the
