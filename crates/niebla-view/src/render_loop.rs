@@ -104,7 +104,11 @@ fn prepare(
         .and_then(|c| rebuild_scene(&c.built, &c.desc, &desc, &session.label, &session.base).map(|r| (r, c)));
     let (built, edit, how) = match rebuilt {
         Some((Ok((built, edit)), _)) => {
-            let how = if edit.any_medium() { "media" } else { "camera" };
+            let how = match (edit.any_light(), edit.any_medium()) {
+                (true, _) => "lights",
+                (false, true) => "media",
+                (false, false) => "camera",
+            };
             (built, Some(edit), how)
         }
         Some((Err(e), _)) => return Err(e.to_string()),
@@ -117,7 +121,11 @@ fn prepare(
     let old = cache.take().and_then(|c| c.prepared);
     let (prepared, kept) = match (old, edit) {
         (Some((old_settings, mut prepared)), Some(edit)) if old_settings == settings => {
-            prepared.update(&built.scene, &settings, &edit);
+            if !prepared.update_cancellable(&built.scene, &settings, &edit, Some(cancel)) {
+                // A newer edit stopped it: drop the half-updated integrator.
+                *cache = Some(SlotCache { desc, built, prepared: None });
+                return Ok((how, "cancelled"));
+            }
             (prepared, "updated")
         }
         _ => {
@@ -126,7 +134,13 @@ fn prepare(
                 *cache = Some(SlotCache { desc, built, prepared: None });
                 return Ok((how, "skipped"));
             }
-            (PreparedIntegrator::new(&built.scene, &settings), "new")
+            match PreparedIntegrator::new_cancellable(&built.scene, &settings, cancel) {
+                Some(prepared) => (prepared, "new"),
+                None => {
+                    *cache = Some(SlotCache { desc, built, prepared: None });
+                    return Ok((how, "cancelled"));
+                }
+            }
         }
     };
     *cache = Some(SlotCache { desc, built, prepared: Some((settings, prepared)) });

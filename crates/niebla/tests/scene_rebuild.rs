@@ -2,7 +2,8 @@
 //! after an edit) against a fresh `build_scene` and
 //! `PreparedIntegrator::new` of the edited description: the exact
 //! fixed-point sample sums must be equal, bit for bit, for camera edits,
-//! medium-scalar edits and both, with every integrator whose preparation
+//! medium-scalar edits, light edits (power and color; position and
+//! direction) and all of them together, with every integrator whose preparation
 //! is reused (`zhou`, `hegeman`) and two that are prepared again.
 
 use std::path::Path;
@@ -10,7 +11,8 @@ use std::path::Path;
 use niebla::integrator::registry;
 use niebla::render::{PreparedIntegrator, RenderOptions};
 use niebla::scene::{
-    build_scene, parse_scene_str, rebuild_scene, CameraDesc, CoefficientsDesc, ColorDesc, MediumDesc, SceneDesc,
+    build_scene, parse_scene_str, rebuild_scene, CameraDesc, CoefficientsDesc, ColorDesc, LightDesc, MediumDesc,
+    SceneDesc,
 };
 
 /// A procedural cloud lit by a directional light, a constant environment
@@ -64,6 +66,30 @@ fn edit_medium(desc: &mut SceneDesc) {
     g.phase = niebla::scene::PhaseDesc::HenyeyGreenstein { g: -0.2 };
 }
 
+/// New colors and powers of the directional, constant and point lights.
+fn light_power(desc: &mut SceneDesc) {
+    for light in &mut desc.lights {
+        match light {
+            LightDesc::Directional(d) => d.irradiance = ColorDesc::Rgb([1.5, 2.0, 3.0]),
+            LightDesc::Constant(c) => c.radiance = ColorDesc::Gray(0.3),
+            LightDesc::Point(p) => p.intensity = ColorDesc::Rgb([9.0, 5.0, 2.0]),
+            _ => unreachable!("the scene's lights"),
+        }
+    }
+}
+
+/// The directional light turned and the point light moved (still inside
+/// the cloud's box).
+fn light_move(desc: &mut SceneDesc) {
+    for light in &mut desc.lights {
+        match light {
+            LightDesc::Directional(d) => d.direction = [0.5, -0.7, 0.4],
+            LightDesc::Point(p) => p.position = [-0.4, 0.8, 0.5],
+            _ => {}
+        }
+    }
+}
+
 /// The sums of 2 spp (seed 5) of `scene` rendered with `prepared`.
 fn sums(scene: &niebla::world::Scene, prepared: &PreparedIntegrator) -> niebla::film::SampleSums {
     let options = RenderOptions { spp: 2, seed: 5, first_sample: 0, threads: Some(2), sampler: Default::default() };
@@ -74,13 +100,23 @@ fn sums(scene: &niebla::world::Scene, prepared: &PreparedIntegrator) -> niebla::
 fn an_updated_scene_and_integrator_render_as_a_fresh_build() {
     let base = Path::new(".");
     type Edit = fn(&mut SceneDesc);
-    let edits: [(&str, Edit); 3] = [
-        ("camera", move_camera),
-        ("medium", edit_medium),
-        ("both", |d| {
-            move_camera(d);
-            edit_medium(d);
-        }),
+    // Name, edit, and the flags SceneEdit must set: [camera, medium], lights.
+    let edits: [(&str, Edit, [bool; 2], [bool; 3]); 5] = [
+        ("camera", move_camera, [true, false], [false; 3]),
+        ("medium", edit_medium, [false, true], [false; 3]),
+        ("light power", light_power, [false, false], [true, true, true]),
+        ("light move", light_move, [false, false], [true, false, true]),
+        (
+            "all",
+            |d| {
+                move_camera(d);
+                edit_medium(d);
+                light_power(d);
+                light_move(d);
+            },
+            [true, true],
+            [true, true, true],
+        ),
     ];
     for integrator in integrators() {
         let desc = desc_with(&integrator);
@@ -88,14 +124,15 @@ fn an_updated_scene_and_integrator_render_as_a_fresh_build() {
         let settings = registry::parse(integrator.as_object().unwrap()).unwrap();
         let prepared = PreparedIntegrator::new(&built.scene, &settings);
         let before = sums(&built.scene, &prepared);
-        for (name, edit) in edits {
+        for (name, edit, [camera, medium], lights) in edits {
             let mut edited = desc.clone();
             edit(&mut edited);
             let (rebuilt, change) = rebuild_scene(&built, &desc, &edited, "cloud.json", base)
                 .unwrap_or_else(|| panic!("{name}: an edit rebuild_scene takes"))
                 .unwrap();
-            assert_eq!(change.camera, name != "medium", "{name}");
-            assert_eq!(change.media, vec![name != "camera"], "{name}");
+            assert_eq!(change.camera, camera, "{name}");
+            assert_eq!(change.media, vec![medium], "{name}");
+            assert_eq!(change.lights, lights, "{name}");
             let mut updated = PreparedIntegrator::new(&built.scene, &settings);
             updated.update(&rebuilt.scene, &settings, &change);
             let fresh = build_scene(&edited, "cloud.json", base).unwrap();
@@ -135,13 +172,51 @@ fn edits_beyond_camera_render_and_medium_scalars_need_a_full_build() {
     let mut renamed = desc.clone();
     let cloud = renamed.media.remove("cloud").unwrap();
     renamed.media.insert("other".into(), cloud);
-    for (name, edited) in [("to_world", density), ("lights", lights), ("shapes", shapes), ("renamed", renamed)] {
+    // A light of another kind in the same place.
+    let mut kind = desc.clone();
+    kind.lights[2] = LightDesc::Directional(niebla::scene::DirectionalLightDesc {
+        direction: [0.0, -1.0, 0.0],
+        irradiance: ColorDesc::Gray(1.0),
+    });
+    for (name, edited) in
+        [("to_world", density), ("lights", lights), ("shapes", shapes), ("renamed", renamed), ("light kind", kind)]
+    {
         assert!(rebuild_scene(&built, &desc, &edited, "cloud.json", base).is_none(), "{name}");
     }
     // The render block alone changes no part of the scene.
     let mut render = desc.clone();
     render.render.seed = 9;
     let (rebuilt, change) = rebuild_scene(&built, &desc, &render, "cloud.json", base).unwrap().unwrap();
-    assert!(change.render && !change.camera && !change.any_medium());
+    assert!(change.render && !change.camera && !change.any_medium() && !change.any_light());
     assert_eq!(rebuilt.settings.seed, 9);
+}
+
+#[test]
+fn a_cancelled_zhou_precomputation_gives_no_integrator() {
+    use std::sync::atomic::AtomicBool;
+    let base = Path::new(".");
+    let integrator = &integrators()[0];
+    assert_eq!(integrator["type"], "zhou");
+    let desc = desc_with(integrator);
+    let built = build_scene(&desc, "cloud.json", base).unwrap();
+    let settings = registry::parse(integrator.as_object().unwrap()).unwrap();
+    let cancelled = AtomicBool::new(true);
+    // The fit (no cache) stops at its first iteration.
+    assert!(PreparedIntegrator::new_cancellable(&built.scene, &settings, &cancelled).is_none());
+    let running = AtomicBool::new(false);
+    let prepared = PreparedIntegrator::new_cancellable(&built.scene, &settings, &running).expect("not cancelled");
+    assert!(sums(&built.scene, &prepared) == sums(&built.scene, &PreparedIntegrator::new(&built.scene, &settings)));
+    // Lighting and diffusion stop after a medium or a light edit; a camera
+    // move (the view pass only) runs to the end.
+    type Edit = fn(&mut SceneDesc);
+    let edits: [(&str, Edit, bool); 3] =
+        [("medium", edit_medium, false), ("light", light_power, false), ("camera", move_camera, true)];
+    for (name, edit, finishes) in edits {
+        let mut edited = desc.clone();
+        edit(&mut edited);
+        let (rebuilt, change) = rebuild_scene(&built, &desc, &edited, "cloud.json", base).unwrap().unwrap();
+        let mut updated = PreparedIntegrator::new(&built.scene, &settings);
+        let done = updated.update_cancellable(&rebuilt.scene, &settings, &change, Some(&cancelled));
+        assert_eq!(done, finishes, "{name}");
+    }
 }

@@ -393,16 +393,44 @@ impl PreparedIntegrator {
     /// with `scene`, that scene after `edit` ([`crate::scene::rebuild_scene`]),
     /// reusing what the edit left valid: `zhou` keeps its fit (and, when
     /// only the camera moved, its lighting: the view pass runs again),
-    /// `hegeman` keeps its line integrals (and everything when only the
-    /// camera moved); the others, whose preparation is cheap or depends on
+    /// `hegeman` keeps its line integrals except those of lights that moved
+    /// (and everything when only the camera moved); the others, whose preparation is cheap or depends on
     /// the scene bounds (which include the camera), are prepared again.
     /// Renders with the result are identical to those of
     /// `PreparedIntegrator::new(scene, settings)`.
     pub fn update(&mut self, scene: &Scene, settings: &IntegratorSettings, edit: &crate::scene::SceneEdit) {
+        let done = self.update_cancellable(scene, settings, edit, None);
+        debug_assert!(done, "no cancel flag");
+    }
+
+    /// [`Self::new`], giving up (`None`, no partial result) when `cancel`
+    /// is set during `zhou`'s fit, lighting or diffusion (the other
+    /// integrators' preparations run to the end).
+    pub fn new_cancellable(scene: &Scene, settings: &IntegratorSettings, cancel: &AtomicBool) -> Option<Self> {
+        match *settings {
+            IntegratorSettings::Zhou(z) => {
+                ZhouIntegrator::new_cancellable(scene, z, Some(cancel)).map(|z| PreparedIntegrator::Zhou(Box::new(z)))
+            }
+            _ => Some(PreparedIntegrator::new(scene, settings)),
+        }
+    }
+
+    /// [`Self::update`], giving up when `cancel` is set during `zhou`'s
+    /// lighting or diffusion: `false` then, and the integrator is half
+    /// updated and must be dropped (never rendered with).
+    pub fn update_cancellable(
+        &mut self,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        edit: &crate::scene::SceneEdit,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         match self {
             PreparedIntegrator::Zhou(z) => {
-                if edit.any_medium() {
-                    z.update_media(scene, &edit.media);
+                if edit.any_light() {
+                    return z.update_lights(scene, &edit.media, cancel);
+                } else if edit.any_medium() {
+                    return z.update_media(scene, &edit.media, cancel);
                 } else if edit.camera {
                     z.set_view(scene.camera.position);
                 }
@@ -411,9 +439,13 @@ impl PreparedIntegrator {
                 if edit.any_medium() {
                     h.update_media(scene, &edit.media);
                 }
+                if edit.any_light() {
+                    h.update_lights(scene);
+                }
             }
             _ => *self = PreparedIntegrator::new(scene, settings),
         }
+        true
     }
 
     /// Render `options.spp` samples per pixel of `scene` (the scene the

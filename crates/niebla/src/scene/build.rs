@@ -237,33 +237,9 @@ fn build_with_loaders(
     for (i, l) in desc.lights.iter().enumerate() {
         let path = format!("lights[{i}]");
         lights.push(match l {
-            LightDesc::Point(p) => {
-                Light::Point(PointLight { position: Vec3::from(p.position), intensity: p.intensity.to_rgb() })
+            LightDesc::Point(_) | LightDesc::Spot(_) | LightDesc::Directional(_) | LightDesc::Constant(_) => {
+                build_simple_light(l, &path, source)?.expect("a light without a shape or file")
             }
-            LightDesc::Spot(s) => {
-                let position = Vec3::from(s.position);
-                let axis = match s.aim {
-                    SpotAimDesc::Target(t) => Vec3::from(t) - position,
-                    SpotAimDesc::Direction(d) => Vec3::from(d),
-                };
-                let axis = axis
-                    .try_normalize()
-                    .ok_or_else(|| err(&path, "spot light target equals its position (no direction)".into()))?;
-                Light::Spot(SpotLight {
-                    position,
-                    frame: Frame::from_z(axis),
-                    intensity: s.intensity.to_rgb(),
-                    cutoff_angle: s.cutoff_angle.to_radians(),
-                    beam_width: s.beam_width.to_radians(),
-                })
-            }
-            LightDesc::Directional(d) => Light::Directional(DirectionalLight {
-                direction: Vec3::from(d.direction)
-                    .try_normalize()
-                    .ok_or_else(|| err(&format!("{path}.direction"), "must be a non-zero vector".into()))?,
-                irradiance: d.irradiance.to_rgb(),
-            }),
-            LightDesc::Constant(c) => Light::Constant(ConstantLight { radiance: c.radiance.to_rgb() }),
             LightDesc::Area(a) => {
                 let shape_path = format!("{path}.shape");
                 let area_shape = match &a.shape.geometry {
@@ -347,6 +323,42 @@ fn build_with_loaders(
         integrator_spec: desc.render.integrator.clone(),
         warnings: unused_media_warnings(desc, source),
     })
+}
+
+/// A point, spot, directional or constant light (errors at `path`); `None`
+/// for an area light or an environment map, which need shapes or files.
+pub(super) fn build_simple_light(l: &LightDesc, path: &str, source: &str) -> Result<Option<Light>, SceneError> {
+    let err = |path: &str, message: String| SceneError::new(source, path, message);
+    Ok(Some(match l {
+        LightDesc::Point(p) => {
+            Light::Point(PointLight { position: Vec3::from(p.position), intensity: p.intensity.to_rgb() })
+        }
+        LightDesc::Spot(s) => {
+            let position = Vec3::from(s.position);
+            let axis = match s.aim {
+                SpotAimDesc::Target(t) => Vec3::from(t) - position,
+                SpotAimDesc::Direction(d) => Vec3::from(d),
+            };
+            let axis = axis
+                .try_normalize()
+                .ok_or_else(|| err(path, "spot light target equals its position (no direction)".into()))?;
+            Light::Spot(SpotLight {
+                position,
+                frame: Frame::from_z(axis),
+                intensity: s.intensity.to_rgb(),
+                cutoff_angle: s.cutoff_angle.to_radians(),
+                beam_width: s.beam_width.to_radians(),
+            })
+        }
+        LightDesc::Directional(d) => Light::Directional(DirectionalLight {
+            direction: Vec3::from(d.direction)
+                .try_normalize()
+                .ok_or_else(|| err(&format!("{path}.direction"), "must be a non-zero vector".into()))?,
+            irradiance: d.irradiance.to_rgb(),
+        }),
+        LightDesc::Constant(c) => Light::Constant(ConstantLight { radiance: c.radiance.to_rgb() }),
+        LightDesc::Area(_) | LightDesc::Envmap(_) => return Ok(None),
+    }))
 }
 
 /// The camera of a scene description (errors at `camera`).

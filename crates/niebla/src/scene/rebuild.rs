@@ -3,9 +3,11 @@
 //! times a second, and loading grids (files, procedural noise) and their
 //! majorants again each time is what makes an edit slow.
 //!
-//! [`rebuild_scene`] accepts edits of the camera, of `render` and of the
+//! [`rebuild_scene`] accepts edits of the camera, of `render`, of the
 //! scalar fields of media (coefficients, `scale`, phase function, emission
-//! color and scale); anything else needs [`super::build_scene`]. The result
+//! color and scale) and of point, spot, directional and constant lights
+//! that keep their kind (intensity, color, position, direction, cone);
+//! anything else needs [`super::build_scene`]. The result
 //! is equal, field for field, to building the edited description from
 //! scratch: density grids and their majorant grids are in density units
 //! (the coefficients multiply them at render time), so they do not change
@@ -15,7 +17,7 @@
 
 use std::path::Path;
 
-use super::build::{build_camera, build_phase, render_settings, scene_bounds};
+use super::build::{build_camera, build_phase, build_simple_light, render_settings, scene_bounds};
 use super::desc::*;
 use super::{unused_media_warnings, BuiltScene, SceneError};
 use crate::color::Rgb;
@@ -29,6 +31,9 @@ pub struct SceneEdit {
     /// Per medium (indexed like [`crate::world::Scene::media`]): its
     /// coefficients, phase function or emission scalars differ.
     pub media: Vec<bool>,
+    /// Per light (indexed like [`crate::world::Scene::lights`]): its
+    /// intensity, color, position or direction differs (the kind is the same).
+    pub lights: Vec<bool>,
     /// The `render` block differs (integrator, samples, seed, sampler, exposure).
     pub render: bool,
 }
@@ -39,9 +44,14 @@ impl SceneEdit {
         self.media.iter().any(|&m| m)
     }
 
+    /// Whether some light changed.
+    pub fn any_light(&self) -> bool {
+        self.lights.iter().any(|&l| l)
+    }
+
     /// Whether nothing but the camera (and possibly `render`) changed.
     pub fn camera_only(&self) -> bool {
-        !self.any_medium()
+        !self.any_medium() && !self.any_light()
     }
 }
 
@@ -83,9 +93,21 @@ fn copy_scalars(new: &mut MediumDesc, old: &MediumDesc) -> bool {
     }
 }
 
+/// The kind of a light [`rebuild_scene`] rebuilds in place (one without a
+/// shape or a file); `None` for area lights and environment maps.
+fn simple_light_kind(l: &LightDesc) -> Option<u8> {
+    match l {
+        LightDesc::Point(_) => Some(0),
+        LightDesc::Spot(_) => Some(1),
+        LightDesc::Directional(_) => Some(2),
+        LightDesc::Constant(_) => Some(3),
+        LightDesc::Area(_) | LightDesc::Envmap(_) => None,
+    }
+}
+
 /// `old`, built from `old_desc`, rebuilt for `desc` when the two differ
-/// only in the camera, `render` and the scalar fields of media (see the
-/// module); `None` when something else differs (build `desc` from scratch
+/// only in the camera, `render`, the scalar fields of media and lights
+/// without shapes or files that keep their kind (see the module); `None` when something else differs (build `desc` from scratch
 /// then). Phase tables are read again (`base_dir` resolves them); grids are
 /// reused. Errors are the builder's, at the same JSON paths.
 ///
@@ -122,6 +144,14 @@ pub fn rebuild_scene(
             return None;
         }
     }
+    if probe.lights.len() != old_desc.lights.len() {
+        return None;
+    }
+    for (light, old_light) in probe.lights.iter_mut().zip(&old_desc.lights) {
+        if simple_light_kind(light).is_some() && simple_light_kind(light) == simple_light_kind(old_light) {
+            *light = old_light.clone();
+        }
+    }
     if probe != *old_desc || old.scene.media.len() != desc.media.len() {
         return None;
     }
@@ -136,8 +166,20 @@ fn rebuild(
     base_dir: &Path,
 ) -> Result<(BuiltScene, SceneEdit), SceneError> {
     let mut scene = old.scene.clone();
-    let mut edit =
-        SceneEdit { camera: desc.camera != old_desc.camera, media: Vec::new(), render: desc.render != old_desc.render };
+    let mut edit = SceneEdit {
+        camera: desc.camera != old_desc.camera,
+        media: Vec::new(),
+        lights: Vec::new(),
+        render: desc.render != old_desc.render,
+    };
+    for (index, (l, old_l)) in desc.lights.iter().zip(&old_desc.lights).enumerate() {
+        let changed = l != old_l;
+        edit.lights.push(changed);
+        if changed {
+            scene.lights[index] = build_simple_light(l, &format!("lights[{index}]"), source)?
+                .expect("rebuild_scene checked that only shapeless, fileless lights changed");
+        }
+    }
     // Media are in name order (BTreeMap) in both descriptions and the scene.
     for (index, ((name, m), old_m)) in desc.media.iter().zip(old_desc.media.values()).enumerate() {
         let changed = m != old_m;
@@ -181,6 +223,8 @@ fn rebuild(
     }
     if edit.camera {
         scene.camera = build_camera(&desc.camera, source)?;
+    }
+    if edit.camera || edit.any_light() {
         scene.bounds = scene_bounds(&scene.camera, &scene.objects, &scene.lights, &scene.media);
         scene.camera_medium = scene.medium_at(scene.camera.position);
     }

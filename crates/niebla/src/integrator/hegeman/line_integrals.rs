@@ -17,7 +17,7 @@ use crate::math::{Ray, Vec3};
 use crate::medium::GridMedium;
 
 /// Where light comes from, as seen by the precomputation.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightSource {
     /// A point (point and spot lights).
     Point(Vec3),

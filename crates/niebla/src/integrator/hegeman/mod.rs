@@ -218,6 +218,9 @@ pub struct HegemanIntegrator {
     lights: Vec<ModelLight>,
     models: Vec<Option<GridModel>>,
     analytic: AnalyticIntegrator,
+    /// Whether only point, spot and area lights are modelled
+    /// ([`HegemanIntegrator::local_lights_only`]).
+    local_only: bool,
     /// Seconds spent in the precomputation.
     pub precompute_seconds: f64,
 }
@@ -226,15 +229,13 @@ impl HegemanIntegrator {
     /// Precompute for `scene`: the line-integral lattices (per grid medium
     /// and light) and the per-node factors.
     pub fn new(scene: &Scene, settings: HegemanSettings) -> HegemanIntegrator {
-        HegemanIntegrator::with_lights(scene, settings, model_lights(scene))
+        HegemanIntegrator::with_lights(scene, settings, model_lights(scene), false)
     }
 
     /// The model of the scene's point, spot and area lights only (for the
     /// `zhou` integrator's local lights).
     pub fn local_lights_only(scene: &Scene, settings: HegemanSettings) -> HegemanIntegrator {
-        let mut lights = model_lights(scene);
-        lights.retain(|l| matches!(l.source, LightSource::Point(_)));
-        HegemanIntegrator::with_lights(scene, settings, lights)
+        HegemanIntegrator::with_lights(scene, settings, local_model_lights(scene), true)
     }
 
     /// Whether any light lights the model.
@@ -252,7 +253,12 @@ impl HegemanIntegrator {
         }
     }
 
-    fn with_lights(scene: &Scene, settings: HegemanSettings, lights: Vec<ModelLight>) -> HegemanIntegrator {
+    fn with_lights(
+        scene: &Scene,
+        settings: HegemanSettings,
+        lights: Vec<ModelLight>,
+        local_only: bool,
+    ) -> HegemanIntegrator {
         let start = Instant::now();
         let resolution = settings.resolution.max(2) as usize;
         let models = scene
@@ -288,8 +294,37 @@ impl HegemanIntegrator {
             lights,
             models,
             analytic: AnalyticIntegrator::new(),
+            local_only,
             precompute_seconds: start.elapsed().as_secs_f64(),
         }
+    }
+
+    /// Bring the model up to date after the lights of `scene` were edited
+    /// (intensity, color, position, direction; the same lights of the same
+    /// kinds), the scene it was built for otherwise unchanged: a light's
+    /// line-integral lattice depends only on the density and the light's
+    /// position or direction, so lattices whose light did not move are
+    /// kept and the others integrated again; the per-node factors are
+    /// recomputed, so the result renders identically to a new precomputation.
+    pub fn update_lights(&mut self, scene: &Scene) {
+        let start = Instant::now();
+        let lights = if self.local_only { local_model_lights(scene) } else { model_lights(scene) };
+        let resolution = self.settings.resolution.max(2) as usize;
+        for (model, medium) in self.models.iter_mut().zip(&scene.media) {
+            let (Some(model), Medium::Grid(g)) = (model, medium) else { continue };
+            let old = std::mem::take(&mut model.volumes);
+            let mut old = old.into_iter();
+            model.volumes = lights
+                .iter()
+                .map(|l| match old.next() {
+                    Some(v) if v.source == l.source => v,
+                    _ => LineIntegralLattice::new(g, l.source, resolution),
+                })
+                .collect();
+            model.update_factors(g, &lights, self.settings.multiple_scattering);
+        }
+        self.lights = lights;
+        self.precompute_seconds = start.elapsed().as_secs_f64();
     }
 
     /// Bring the model up to date after the coefficients, phase function or
@@ -545,6 +580,13 @@ fn calibration_tables(g: &GridMedium, settings: &HegemanSettings) -> Option<Tabl
 /// as points ([`AREA_PATCHES`]^2 Lambertian points per rectangle, one
 /// isotropic point per sphere); a constant environment or an environment
 /// map as [`ENVIRONMENT_DIRECTIONS`] ambient directions.
+/// [`model_lights`] that are points (point, spot and area lights).
+fn local_model_lights(scene: &Scene) -> Vec<ModelLight> {
+    let mut lights = model_lights(scene);
+    lights.retain(|l| matches!(l.source, LightSource::Point(_)));
+    lights
+}
+
 fn model_lights(scene: &Scene) -> Vec<ModelLight> {
     let mut lights = Vec::new();
     for light in &scene.lights {

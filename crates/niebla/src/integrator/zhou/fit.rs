@@ -13,6 +13,8 @@
 //! alternation of teleports at convergence and its per-frame insertion scheme
 //! for animations (niebla renders one density per scene).
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rayon::prelude::*;
 
 use super::lattice::Lattice;
@@ -136,13 +138,24 @@ impl Problem<'_> {
 /// fit's report. An all-zero density
 /// gives no RBFs.
 pub fn fit_rbfs(lattice: &Lattice, density: &[f32], settings: &FitSettings) -> (Vec<Rbf>, FitReport) {
+    fit_rbfs_cancellable(lattice, density, settings, None).expect("no cancel flag")
+}
+
+/// [`fit_rbfs`], giving up (`None`) at the first iteration that finds
+/// `cancel` set.
+pub fn fit_rbfs_cancellable(
+    lattice: &Lattice,
+    density: &[f32],
+    settings: &FitSettings,
+    cancel: Option<&AtomicBool>,
+) -> Option<(Vec<Rbf>, FitReport)> {
     let max = density.iter().copied().fold(0.0f32, f32::max);
     let norm2: f64 = density.iter().map(|v| (*v as f64).powi(2)).sum();
     if max <= 0.0 || settings.count == 0 || norm2 == 0.0 {
-        return (
+        return Some((
             Vec::new(),
             FitReport { relative_error: if norm2 > 0.0 { 1.0 } else { 0.0 }, history: vec![], teleports_kept: 0 },
-        );
+        ));
     }
     let target: Vec<f32> = density.iter().map(|v| v / max).collect();
     let unit = Lattice { lo: Vec3::splat(-0.5), h: 1.0, n: lattice.n };
@@ -174,6 +187,9 @@ pub fn fit_rbfs(lattice: &Lattice, density: &[f32], settings: &FitSettings) -> (
     let mut teleports_kept = 0;
     let target_norm2: f64 = target.iter().map(|v| (*v as f64).powi(2)).sum();
     for iteration in 0..settings.iterations {
+        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return None;
+        }
         if settings.teleport_every > 0 && iteration > 0 && iteration % settings.teleport_every == 0 {
             if let Some((x_new, e_new, f_new)) = teleport(&problem, &x, &e, f, (2.0 * r_min).min(r0)) {
                 x = x_new;
@@ -211,7 +227,7 @@ pub fn fit_rbfs(lattice: &Lattice, density: &[f32], settings: &FitSettings) -> (
         history.push((f / target_norm2).sqrt());
     }
     let rbfs = problem.rbfs(&x).into_iter().map(|r| Rbf { weight: r.weight * max, ..r }).collect();
-    (rbfs, FitReport { relative_error: (f / target_norm2).sqrt(), history, teleports_kept })
+    Some((rbfs, FitReport { relative_error: (f / target_norm2).sqrt(), history, teleports_kept }))
 }
 
 fn norm(v: &[f64]) -> f64 {

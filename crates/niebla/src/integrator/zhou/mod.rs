@@ -64,6 +64,7 @@ pub mod rbf;
 pub(crate) mod settings;
 pub mod sh;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -212,6 +213,16 @@ impl ZhouIntegrator {
     /// Precompute for `scene`: fit (or load) the RBFs of every grid medium,
     /// compute the source radiance and the view pass for the scene's camera.
     pub fn new(scene: &Scene, settings: ZhouSettings) -> ZhouIntegrator {
+        ZhouIntegrator::new_cancellable(scene, settings, None).expect("no cancel flag")
+    }
+
+    /// [`ZhouIntegrator::new`], giving up (`None`, no partial result) as
+    /// soon as the fit, the lighting or the diffusion finds `cancel` set.
+    pub fn new_cancellable(
+        scene: &Scene,
+        settings: ZhouSettings,
+        cancel: Option<&AtomicBool>,
+    ) -> Option<ZhouIntegrator> {
         let mut lights = ModelLight::from_scene(&scene.lights);
         let start = Instant::now();
         let local = match settings.local_lights {
@@ -232,24 +243,23 @@ impl ZhouIntegrator {
         let local_seconds = start.elapsed().as_secs_f64();
         let mut fit_seconds = 0.0;
         let mut lighting_seconds = 0.0;
-        let models = scene
-            .media
-            .iter()
-            .map(|m| match m {
+        let mut models = Vec::with_capacity(scene.media.len());
+        for m in &scene.media {
+            models.push(match m {
                 Medium::Grid(g) => {
                     let start = Instant::now();
-                    let (lattice, rbfs, smooth, fit) = decompose(g, &settings);
+                    let (lattice, rbfs, smooth, fit) = decompose(g, &settings, cancel)?;
                     fit_seconds += start.elapsed().as_secs_f64();
                     let start = Instant::now();
-                    let mut model = light_model(scene, g, &settings, &lights, lattice, rbfs, smooth, fit);
+                    let mut model = light_model(scene, g, &settings, &lights, lattice, rbfs, smooth, fit, cancel)?;
                     model.set_view(scene.camera.position, settings.sh_order as usize);
                     lighting_seconds += start.elapsed().as_secs_f64();
                     Some(model)
                 }
                 Medium::Homogeneous(_) => None,
-            })
-            .collect();
-        ZhouIntegrator {
+            });
+        }
+        Some(ZhouIntegrator {
             settings,
             lights,
             models,
@@ -257,7 +267,7 @@ impl ZhouIntegrator {
             local,
             fit_seconds,
             lighting_seconds: lighting_seconds + local_seconds,
-        }
+        })
     }
 
     /// Recompute the per-view source for a camera at `eye` (cheap: no fit,
@@ -276,16 +286,50 @@ impl ZhouIntegrator {
     /// lattice and its RBF fit depend on the density alone and are kept;
     /// the lighting, the diffusion and the view pass run again as in
     /// [`ZhouIntegrator::new`], so the result renders identically to a new
-    /// precomputation.
-    pub fn update_media(&mut self, scene: &Scene, changed: &[bool]) {
+    /// precomputation. `false` when `cancel` stopped it: the integrator is
+    /// then half updated and must be dropped.
+    pub fn update_media(&mut self, scene: &Scene, changed: &[bool], cancel: Option<&AtomicBool>) -> bool {
         let start = Instant::now();
         if let Some(local) = &mut self.local {
             local.update_media(scene, changed);
         }
+        let done = self.relight(scene, |index| changed.get(index) == Some(&true), cancel);
+        self.lighting_seconds = start.elapsed().as_secs_f64();
+        done
+    }
+
+    /// Bring the precomputation up to date after the lights of `scene` were
+    /// edited (intensity, color, position, direction; the same lights of
+    /// the same kinds), the scene it was built for otherwise unchanged (the
+    /// camera may have moved, and the scalars of the media flagged in
+    /// `changed_media`, as in [`ZhouIntegrator::update_media`]): the fits
+    /// are kept; the local-light model is updated ([`HegemanIntegrator::update_lights`]) and the lighting, the
+    /// diffusion and the view pass of every grid medium run again, so the
+    /// result renders identically to a new precomputation. `false` when
+    /// `cancel` stopped it: the integrator is then half updated and must be
+    /// dropped.
+    pub fn update_lights(&mut self, scene: &Scene, changed_media: &[bool], cancel: Option<&AtomicBool>) -> bool {
+        let start = Instant::now();
+        self.lights = ModelLight::from_scene(&scene.lights);
+        if self.settings.local_lights == LocalLights::Hegeman {
+            self.lights.retain(|l| matches!(l, ModelLight::Directional { .. }));
+        }
+        if let Some(local) = &mut self.local {
+            local.update_media(scene, changed_media);
+            local.update_lights(scene);
+        }
+        let done = self.relight(scene, |_| true, cancel);
+        self.lighting_seconds = start.elapsed().as_secs_f64();
+        done
+    }
+
+    /// Run the lighting, diffusion and view pass again for the grid media
+    /// whose index `redo` accepts, keeping their lattices and fits; `false`
+    /// when `cancel` stopped it (some models are then left empty).
+    fn relight(&mut self, scene: &Scene, redo: impl Fn(usize) -> bool, cancel: Option<&AtomicBool>) -> bool {
         let order = self.settings.sh_order as usize;
         for (index, (model, medium)) in self.models.iter_mut().zip(&scene.media).enumerate() {
-            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, changed.get(index) == Some(&true))
-            else {
+            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, redo(index)) else {
                 continue;
             };
             let lattice = model.lattice;
@@ -295,11 +339,15 @@ impl ZhouIntegrator {
                 &mut model.fit,
                 FitReport { relative_error: 0.0, history: Vec::new(), teleports_kept: 0 },
             );
-            *model = light_model(scene, g, &self.settings, &self.lights, lattice, rbfs, smooth, fit);
+            let Some(relit) = light_model(scene, g, &self.settings, &self.lights, lattice, rbfs, smooth, fit, cancel)
+            else {
+                return false;
+            };
+            *model = relit;
             model.set_view(scene.camera.position, order);
         }
         self.fit_seconds = 0.0;
-        self.lighting_seconds = start.elapsed().as_secs_f64();
+        true
     }
 
     /// Relative L2 error `||D - D~|| / ||D||` of each grid medium's fit.
@@ -406,7 +454,11 @@ impl ZhouIntegrator {
 
 /// Sample the medium's density on a lattice (2x2x2 supersampled cell
 /// averages), fit RBFs (or load them from the cache) and evaluate `D~` on the lattice.
-fn decompose(g: &GridMedium, settings: &ZhouSettings) -> (Lattice, Vec<Rbf>, Vec<f32>, FitReport) {
+fn decompose(
+    g: &GridMedium,
+    settings: &ZhouSettings,
+    cancel: Option<&AtomicBool>,
+) -> Option<(Lattice, Vec<Rbf>, Vec<f32>, FitReport)> {
     let (lo, hi) = g.world_bounds;
     let lattice = Lattice::over_box(lo, hi, settings.resolution.max(4) as usize);
     let density: Vec<f32> = (0..lattice.len())
@@ -437,7 +489,7 @@ fn decompose(g: &GridMedium, settings: &ZhouSettings) -> (Lattice, Vec<Rbf>, Vec
     let (local, fit) = match cached {
         Some((rbfs, error)) => (rbfs, FitReport { relative_error: error, history: Vec::new(), teleports_kept: 0 }),
         None => {
-            let (rbfs, report) = fit::fit_rbfs(&lattice, &density, &fit_settings);
+            let (rbfs, report) = fit::fit_rbfs_cancellable(&lattice, &density, &fit_settings, cancel)?;
             if settings.cache {
                 cache::store(key, &rbfs, report.relative_error);
             }
@@ -446,11 +498,12 @@ fn decompose(g: &GridMedium, settings: &ZhouSettings) -> (Lattice, Vec<Rbf>, Vec
     };
     let rbfs: Vec<Rbf> = local.iter().map(|r| lattice.rbf_to_world(r)).collect();
     let smooth = rbf::evaluate_at_nodes(&lattice, &rbfs);
-    (lattice, rbfs, smooth, fit)
+    Some((lattice, rbfs, smooth, fit))
 }
 
 /// Source radiance at the centres (single scattering, plus diffusion),
-/// interpolated to the lattice as SH, and the light transmittances.
+/// interpolated to the lattice as SH, and the light transmittances;
+/// `None` when `cancel` is found set between its steps.
 #[allow(clippy::too_many_arguments)]
 fn light_model(
     scene: &Scene,
@@ -461,7 +514,9 @@ fn light_model(
     rbfs: Vec<Rbf>,
     smooth: Vec<f32>,
     fit: FitReport,
-) -> GridModel {
+    cancel: Option<&AtomicBool>,
+) -> Option<GridModel> {
+    let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     let order = (settings.sh_order as usize).clamp(1, sh::MAX_ORDER);
     let nc = order * order;
     let sigma_t = g.sigma_t();
@@ -497,6 +552,9 @@ fn light_model(
     } else {
         vec![0.0; n * 3 * nc]
     };
+    if cancelled() {
+        return None;
+    }
     // Per centre: J_ss SH (3 nc), light transmittances (3 per light), and
     // the band-0/1 source of the lights (3 x 4) for the diffusion.
     let nl = lights.len();
@@ -528,6 +586,9 @@ fn light_model(
     } else {
         vec![0.0; lattice.len() * stride]
     };
+    if cancelled() {
+        return None;
+    }
     let nodes = lattice.len();
     let mut source_sh = vec![0f32; nodes * 3 * nc];
     let mut light_transmittance = vec![0f32; nodes * 3 * nl];
@@ -541,6 +602,9 @@ fn light_model(
         let k0 = (4.0 * std::f64::consts::PI).sqrt();
         let k1 = (3.0 / (4.0 * std::f64::consts::PI)).sqrt();
         for c in 0..3 {
+            if cancelled() {
+                return None;
+            }
             let sigma: Vec<f64> = smooth.iter().map(|d| (sigma_t[c] * d.max(0.0)) as f64).collect();
             let mut j0 = vec![0.0; nodes];
             let mut j1 = vec![0.0; 3 * nodes];
@@ -583,7 +647,17 @@ fn light_model(
     }
     let longest = lattice.h * *lattice.n.iter().max().unwrap() as f32;
     let step = settings.step_cells.max(0.05) * longest / settings.resolution.max(4) as f32;
-    GridModel { lattice, smooth, source_sh, view: vec![0.0; nodes * 3], light_transmittance, albedo, step, rbfs, fit }
+    Some(GridModel {
+        lattice,
+        smooth,
+        source_sh,
+        view: vec![0.0; nodes * 3],
+        light_transmittance,
+        albedo,
+        step,
+        rbfs,
+        fit,
+    })
 }
 
 impl GridModel {
