@@ -534,7 +534,12 @@ mod tests {
             volume_lights: false,
         };
         assert_eq!(a.key(), "single(steps=32, sampling=mis, transmittance=ray_march(step=0.25))");
-        let lit = IntegratorSettings::Single { volume_lights: true, ..a };
+        let lit = IntegratorSettings::Single {
+            step: Some(MarchStep::Count(32)),
+            sampling: SingleSampling::Mis,
+            transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+            volume_lights: true,
+        };
         assert_eq!(lit.key(), "single(steps=32, sampling=mis, transmittance=ray_march(step=0.25), volume_lights=true)");
         let b = IntegratorSettings::Single {
             step: Some(MarchStep::Count(33)),
