@@ -40,7 +40,12 @@ pub struct BenchArgs {
 }
 
 fn single(sampling: SingleSampling) -> IntegratorSettings {
-    IntegratorSettings::Single { step: None, sampling, transmittance: TransmittanceMethod::Analytic }
+    IntegratorSettings::Single {
+        step: None,
+        sampling,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
+    }
 }
 
 /// Render `spp` samples per pixel with `seed`; the image and the seconds it took.

@@ -71,8 +71,10 @@ pub struct PreviewArgs {
 /// interactive ray marcher ([`interactive_single`]).
 fn preview_settings(name: &str, from_file: IntegratorSettings) -> IntegratorSettings {
     if name == "single" {
-        let SingleIntegrator { step, sampling, transmittance } = interactive_single();
-        return IntegratorSettings::Single { step, sampling, transmittance };
+        let SingleIntegrator { step, sampling, transmittance, .. } = interactive_single();
+        // The scene file's choice of emissive media as lights is kept.
+        let volume_lights = matches!(from_file, IntegratorSettings::Single { volume_lights: true, .. });
+        return IntegratorSettings::Single { step, sampling, transmittance, volume_lights };
     }
     if from_file.name() == name {
         return from_file;
@@ -87,6 +89,7 @@ pub fn interactive_single() -> SingleIntegrator {
         step: None,
         sampling: SingleSampling::March,
         transmittance: TransmittanceMethod::RayMarch(MarchStep::Count(32)),
+        volume_lights: None,
     }
 }
 

@@ -133,6 +133,7 @@ fn compare_with_single(text: &str) -> (f64, f64) {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
     };
     let reference = block_stats(text, single, 64, 10);
     let analytic = block_stats(text, IntegratorSettings::Analytic, 16, 10);

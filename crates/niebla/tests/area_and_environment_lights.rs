@@ -67,8 +67,12 @@ fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
     // Lambertian radiance rho/pi * E with E = pi L (R/d)^2 for a sphere on the normal.
     let expected = (rho * radiance * (radius / height).powi(2)) as f64;
     let ray = Ray::new(camera.position, (Vec3::ZERO - camera.position).normalize());
-    let single =
-        SingleIntegrator { step: None, sampling: SingleSampling::Mis, transmittance: TransmittanceMethod::Analytic };
+    let single = SingleIntegrator {
+        step: None,
+        sampling: SingleSampling::Mis,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    };
     for (name, stats) in [
         ("single", mean_radiance(&single, &s, ray, None, 4_000)),
         ("volpath", mean_radiance(&VolPathIntegrator::new(8), &s, ray, None, 40_000)),
@@ -124,8 +128,12 @@ fn environment_map_seen_directly_is_its_radiance_and_lights_a_floor() {
     let seen = mean_radiance(&VolPathIntegrator::new(4), &s, up, None, 8);
     assert!((seen.mean() - map.le(up.d).g() as f64).abs() < 1e-6);
     let ray = Ray::new(camera.position, (Vec3::ZERO - camera.position).normalize());
-    let single =
-        SingleIntegrator { step: None, sampling: SingleSampling::Mis, transmittance: TransmittanceMethod::Analytic };
+    let single = SingleIntegrator {
+        step: None,
+        sampling: SingleSampling::Mis,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    };
     let a = mean_radiance(&single, &s, ray, None, 20_000);
     let b = mean_radiance(&VolPathIntegrator::new(4), &s, ray, None, 20_000);
     // Irradiance from the upper hemisphere by direct quadrature over pixels.

@@ -23,7 +23,12 @@ fn settings() -> Vec<IntegratorSettings> {
     for transmittance in [TransmittanceMethod::Analytic, TransmittanceMethod::RayMarch(MarchStep::Length(0.01))] {
         v.push(IntegratorSettings::Emission { step: Some(MarchStep::Length(0.01)), transmittance });
         for sampling in [SingleSampling::March, SingleSampling::Mis] {
-            v.push(IntegratorSettings::Single { step: Some(MarchStep::Length(0.01)), sampling, transmittance });
+            v.push(IntegratorSettings::Single {
+                step: Some(MarchStep::Length(0.01)),
+                sampling,
+                transmittance,
+                volume_lights: false,
+            });
         }
     }
     v

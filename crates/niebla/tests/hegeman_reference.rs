@@ -54,6 +54,7 @@ fn hegeman_thin_limit_matches_single() {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Ratio,
+        volume_lights: false,
     };
     let reference = render(&scene, &single, &options(256, 9), &|_, _| {}, None).unwrap();
     let image = hegeman(&scene, true, 16);

@@ -296,6 +296,7 @@ fn storing_direct_photons_adds_the_single_scattering_image() {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
     };
     let batches = 8;
     let mut diffs = Vec::new();

@@ -36,6 +36,7 @@ fn block_stats(sampling: SingleSampling, spp: u32, batches: u64) -> Vec<(f64, f6
         step: Some(MarchStep::Length(0.05)),
         sampling,
         transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
     };
     let mut per_batch: Vec<Vec<f64>> = Vec::new();
     for b in 0..batches {

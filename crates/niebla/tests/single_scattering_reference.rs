@@ -34,7 +34,12 @@ fn estimate(row: &std::collections::HashMap<String, String>, sampling: SingleSam
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![], vec![medium], vec![light], Some(MediumId(0)));
     // March step well below h (the integrand's width) and below the mean free path.
     let step = MarchStep::Length((0.25 * h).min(0.1));
-    let integrator = SingleIntegrator { step: Some(step), sampling, transmittance: TransmittanceMethod::Analytic };
+    let integrator = SingleIntegrator {
+        step: Some(step),
+        sampling,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    };
     let ray = Ray::new(Vec3::ZERO, Vec3::X);
     let mut stats = Stats::default();
     for i in 0..n {

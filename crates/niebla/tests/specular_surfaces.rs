@@ -78,8 +78,12 @@ fn mirror_shows_the_environment_times_its_fresnel_reflectance() {
     let d = Vec3::new(1.0, -1.0, 0.0).normalize();
     let ray = Ray::new(Vec3::new(-1.0, 1.0, 0.0), d);
     let expected = fresnel_complex(d.y.abs(), eta, k) * 2.0;
-    let single =
-        SingleIntegrator { step: None, sampling: SingleSampling::March, transmittance: TransmittanceMethod::Analytic };
+    let single = SingleIntegrator {
+        step: None,
+        sampling: SingleSampling::March,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    };
     for stats in [mean(&VolPathIntegrator::new(8), &s, ray, 16), mean(&single, &s, ray, 16)] {
         for c in 0..3 {
             assert!(

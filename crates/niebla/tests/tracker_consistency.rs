@@ -60,7 +60,12 @@ fn delta_ratio_and_residual_ratio_render_the_same_mean() {
     let s = scene(common::camera_along_x(8, 8, 30.0), vec![], vec![smoke()], lights, Some(MediumId(0)));
     let batches = 10u64;
     let stats = |method: TransmittanceMethod| -> Vec<(f64, f64)> {
-        let settings = IntegratorSettings::Single { step: None, sampling: SingleSampling::Mis, transmittance: method };
+        let settings = IntegratorSettings::Single {
+            step: None,
+            sampling: SingleSampling::Mis,
+            transmittance: method,
+            volume_lights: false,
+        };
         let images: Vec<_> = (0..batches)
             .map(|b| {
                 render(

@@ -71,6 +71,7 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
     };
     let (a, sa) = batch_stats(&s, single, 64, 8);
     let (b, sb) = batch_stats(&s, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }, 4096, 8);

@@ -235,6 +235,7 @@ fn chromatic_one_bounce_volpath_matches_single_under_a_point_light() {
         step: None,
         sampling: niebla::integrator::SingleSampling::Mis,
         transmittance: niebla::tracking::TransmittanceMethod::Analytic,
+        volume_lights: None,
     };
     let mut reference = [Stats::default(); 3];
     for i in 0..1_000_000u64 {

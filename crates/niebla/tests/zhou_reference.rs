@@ -42,6 +42,7 @@ fn single_reference(scene: &Scene, spp: u32) -> Image {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Ratio,
+        volume_lights: false,
     };
     render(scene, &single, &options(spp, 9), &|_, _| {}, None).unwrap()
 }

@@ -11,7 +11,8 @@ use crate::sampling::PixelSampler;
 use crate::tracking::TransmittanceMethod;
 use crate::world::{Hit, PathRay, Scene, MAX_BOUNDARY_CROSSINGS};
 
-use super::direct_surface_radiance;
+use super::direct::volume_light_surface_radiance;
+use super::{direct_surface_radiance, VolumeLights};
 
 /// Largest number of specular reflections and refractions a camera ray follows.
 pub const MAX_SPECULAR_BOUNCES: u32 = 16;
@@ -150,12 +151,27 @@ pub(crate) fn trace_camera_ray(
     sampler: &mut PixelSampler,
     segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
 ) -> Rgb {
-    struct DirectLighting<F> {
+    trace_camera_ray_with(scene, ray, medium, method, None, sampler, segment)
+}
+
+/// [`trace_camera_ray`] whose opaque surfaces are also lit by one point
+/// drawn from `volume_lights` (the emission inside media), when given.
+pub(crate) fn trace_camera_ray_with(
+    scene: &Scene,
+    ray: Ray,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    volume_lights: Option<&VolumeLights>,
+    sampler: &mut PixelSampler,
+    segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
+) -> Rgb {
+    struct DirectLighting<'a, F> {
         segment: F,
         method: TransmittanceMethod,
+        volume_lights: Option<&'a VolumeLights>,
     }
     impl<F: FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance> CameraRayVisitor
-        for DirectLighting<F>
+        for DirectLighting<'_, F>
     {
         #[inline]
         fn segment(
@@ -179,10 +195,14 @@ pub(crate) fn trace_camera_ray(
             sampler: &mut PixelSampler,
         ) -> Rgb {
             let bsdf = &scene.surface_bsdf(hit);
-            direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, self.method, sampler)
+            let mut l = direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, self.method, sampler);
+            if let Some(lights) = self.volume_lights {
+                l += volume_light_surface_radiance(scene, lights, &hit.surface, wo, bsdf, medium, self.method, sampler);
+            }
+            l
         }
     }
-    walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method })
+    walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method, volume_lights })
 }
 
 #[cfg(test)]

@@ -8,8 +8,11 @@ use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::tracking::TransmittanceMethod;
-use crate::world::{offset_origin, Scene};
+use crate::tracking::{segment_transmittance, TransmittanceMethod};
+use crate::world::{offset_origin, walk_shadow_ray, Scene};
+
+use super::VolumeLights;
+use std::ops::ControlFlow;
 
 /// Radiance scattered toward `wo` at the surface point of `surface`, from
 /// one sample of every light, with shadow rays that start in `medium` (the
@@ -105,6 +108,143 @@ pub fn light_in_scattered_radiance(
     let ignore = scene.light_object(light_index);
     let tr = scene.transmittance_ignoring(p, medium, ls.wi, ls.distance, ignore, method, sampler);
     ls.li * tr * (f / ls.pdf)
+}
+
+/// A point drawn in the emissive media as seen from `p`: its direction `wi`,
+/// distance, and `L_ve(y) / (p_V(y) |p - y|^2)`, the emission per unit
+/// length over the point's density in solid angle times distance (before
+/// shadow transmittance). `None` when nothing was drawn or nothing is emitted.
+struct VolumeLightPoint {
+    wi: Vec3,
+    distance: f32,
+    medium: MediumId,
+    le_over_pdf: Rgb,
+}
+
+/// Draw a point of `lights` seen from `p` (three uniform numbers).
+#[inline]
+fn sample_volume_light(
+    scene: &Scene,
+    lights: &VolumeLights,
+    p: Vec3,
+    sampler: &mut PixelSampler,
+) -> Option<VolumeLightPoint> {
+    let u = sampler.next_1d();
+    let v = sampler.next_2d();
+    let w = sampler.next_1d();
+    let s = lights.sample(u, [v.x, v.y, w])?;
+    let d = s.p - p;
+    let dist2 = d.length_squared();
+    if !(dist2 > 0.0) || !(s.pdf > 0.0) {
+        return None;
+    }
+    let l_ve = scene.medium(s.medium).at(s.p).l_ve;
+    if l_ve.is_black() {
+        return None;
+    }
+    let distance = dist2.sqrt();
+    Some(VolumeLightPoint { wi: d / distance, distance, medium: s.medium, le_over_pdf: l_ve / (s.pdf * dist2) })
+}
+
+/// Transmittance from `origin` (in `medium`) along `wi` over `distance`,
+/// zero unless the ray ends inside medium `target` (a point drawn in an
+/// emitter's bounding region may lie outside its shapes).
+#[allow(clippy::too_many_arguments)]
+fn transmittance_into_medium(
+    scene: &Scene,
+    origin: Vec3,
+    medium: Option<MediumId>,
+    wi: Vec3,
+    distance: f32,
+    target: MediumId,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let mut tr = Rgb::ONE;
+    let mut last = medium;
+    let reached = walk_shadow_ray(scene, origin, medium, wi, distance, None, |s| {
+        last = s.medium;
+        if let Some(id) = s.medium {
+            tr *= segment_transmittance(scene.medium(id), s.ray, 0.0, s.t_end, method, sampler);
+        }
+        if let Some(pane) = s.pane {
+            tr *= pane.weight;
+        }
+        if tr.is_black() {
+            return ControlFlow::Break(());
+        }
+        ControlFlow::Continue(())
+    });
+    if reached && last == Some(target) {
+        tr
+    } else {
+        Rgb::ZERO
+    }
+}
+
+/// In-scattered radiance `integral p(wo, wi) L_d(wi) dwi` at medium point
+/// `p` (without the sigma_s factor) from the emission inside media, one
+/// point drawn from `lights` (next-event estimation toward emissive media):
+/// `p(wo, wi) T(p, y) L_ve(y) / (p_V(y) |p - y|^2)`, with `L_ve` the
+/// emitted radiance per unit length and `p_V` the point's density per unit
+/// volume. Shadow rays start in `medium` and use `method`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn volume_light_in_scattered_radiance(
+    scene: &Scene,
+    lights: &VolumeLights,
+    p: Vec3,
+    wo: Vec3,
+    phase: &PhaseFunction,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let Some(y) = sample_volume_light(scene, lights, p, sampler) else {
+        return Rgb::ZERO;
+    };
+    let f = phase.eval(wo, y.wi);
+    if f == 0.0 {
+        return Rgb::ZERO;
+    }
+    let tr = transmittance_into_medium(scene, p, medium, y.wi, y.distance, y.medium, method, sampler);
+    y.le_over_pdf * tr * f
+}
+
+/// Radiance scattered toward `wo` at the surface point of `surface` from the
+/// emission inside media, one point drawn from `lights`:
+/// `f(wo, wi) |cos| T L_ve / (p_V |p - y|^2)`, with the conventions of
+/// [`direct_surface_radiance`] (shading normal, no light from below the
+/// geometric surface on the side of `wo`, shadow rays from `medium`).
+#[allow(clippy::too_many_arguments)]
+pub fn volume_light_surface_radiance(
+    scene: &Scene,
+    lights: &VolumeLights,
+    surface: &SurfaceHit,
+    wo: Vec3,
+    bsdf: &crate::bsdf::Bsdf,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+) -> Rgb {
+    let p = surface.p;
+    let Some(y) = sample_volume_light(scene, lights, p, sampler) else {
+        return Rgb::ZERO;
+    };
+    let ns = surface.shading_normal(wo);
+    let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -surface.n) } else { (ns, surface.n) };
+    let cos = y.wi.dot(n);
+    if cos <= 0.0 || y.wi.dot(ng) <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let f = bsdf.eval(ns, wo, y.wi);
+    if f.is_black() {
+        return Rgb::ZERO;
+    }
+    let origin = offset_origin(p, ng);
+    let distance = (p + y.wi * y.distance - origin).length();
+    let tr = transmittance_into_medium(scene, origin, medium, y.wi, distance, y.medium, method, sampler);
+    f * y.le_over_pdf * tr * cos
 }
 
 #[cfg(test)]

@@ -46,6 +46,9 @@ pub enum IntegratorSettings {
         sampling: SingleSampling,
         /// Transmittance estimator.
         transmittance: TransmittanceMethod,
+        /// Whether emissive media light scattering points and surfaces
+        /// (`volume_lights`, default false).
+        volume_lights: bool,
     },
     /// Unbiased volumetric path tracing (multiple scattering).
     VolPath {
@@ -101,10 +104,8 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         summary: "Single scattering with shadow rays (march, equiangular or MIS sampling)",
         interactive: true,
         parse: |o| {
-            single::settings::parse(o).map(|(step, sampling, transmittance)| IntegratorSettings::Single {
-                step,
-                sampling,
-                transmittance,
+            single::settings::parse(o).map(|(step, sampling, transmittance, volume_lights)| {
+                IntegratorSettings::Single { step, sampling, transmittance, volume_lights }
             })
         },
     },
@@ -300,8 +301,8 @@ impl IntegratorSettings {
             IntegratorSettings::Emission { step, transmittance } => {
                 emission_absorption::settings::key(*step, *transmittance)
             }
-            IntegratorSettings::Single { step, sampling, transmittance } => {
-                single::settings::key(*step, *sampling, *transmittance)
+            IntegratorSettings::Single { step, sampling, transmittance, volume_lights } => {
+                single::settings::key(*step, *sampling, *transmittance, *volume_lights)
             }
             IntegratorSettings::VolPath { max_depth, volume_light_sampling } => {
                 volpath::settings::key(*max_depth, *volume_light_sampling)
@@ -328,19 +329,26 @@ impl IntegratorSettings {
                 Some(photon_map_memory(scene, p.photon.photons, p.photon.max_depth, "each pass's photon map"))
             }
             IntegratorSettings::VolPath { volume_light_sampling: true, .. } => {
-                let bytes = super::VolumeLights::memory_estimate(scene);
-                (bytes > 0).then(|| PrecomputeMemory {
-                    bytes,
-                    field: "volume_light_sampling",
-                    what: "the light distribution over the majorant cells of the emissive grid media".to_string(),
-                })
+                volume_lights_memory(scene, "volume_light_sampling")
             }
+            IntegratorSettings::Single { volume_lights: true, .. } => volume_lights_memory(scene, "volume_lights"),
             IntegratorSettings::Emission { .. }
             | IntegratorSettings::Single { .. }
             | IntegratorSettings::VolPath { .. }
             | IntegratorSettings::Analytic => None,
         }
     }
+}
+
+/// The memory of [`super::VolumeLights`] for `scene`, reported under the
+/// setting `field` that turns it on; `None` without emissive grid media.
+fn volume_lights_memory(scene: &Scene, field: &'static str) -> Option<PrecomputeMemory> {
+    let bytes = super::VolumeLights::memory_estimate(scene);
+    (bytes > 0).then(|| PrecomputeMemory {
+        bytes,
+        field,
+        what: "the light distribution over the majorant cells of the emissive grid media".to_string(),
+    })
 }
 
 /// An integrator with its per-scene work done (the interactive methods'
@@ -374,9 +382,9 @@ impl PreparedIntegrator {
             IntegratorSettings::Emission { step, transmittance } => {
                 PreparedIntegrator::Emission(EmissionIntegrator { step, transmittance })
             }
-            IntegratorSettings::Single { step, sampling, transmittance } => {
-                PreparedIntegrator::Single(SingleIntegrator { step, sampling, transmittance })
-            }
+            IntegratorSettings::Single { step, sampling, transmittance, volume_lights } => PreparedIntegrator::Single(
+                SingleIntegrator::for_scene(scene, step, sampling, transmittance, volume_lights),
+            ),
             IntegratorSettings::VolPath { max_depth, volume_light_sampling } => PreparedIntegrator::VolPath(Box::new(
                 VolPathIntegrator::for_scene_with(scene, max_depth, volume_light_sampling),
             )),
@@ -535,7 +543,8 @@ mod tests {
             Some(IntegratorSettings::Single {
                 step: None,
                 sampling: SingleSampling::March,
-                transmittance: TransmittanceMethod::Analytic
+                transmittance: TransmittanceMethod::Analytic,
+                volume_lights: false
             })
         );
         assert_eq!(
@@ -572,12 +581,21 @@ mod tests {
             step: Some(MarchStep::Count(32)),
             sampling: SingleSampling::Mis,
             transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+            volume_lights: false,
         };
         assert_eq!(a.key(), "single(steps=32, sampling=mis, transmittance=ray_march(step=0.25))");
+        let lit = IntegratorSettings::Single {
+            step: Some(MarchStep::Count(32)),
+            sampling: SingleSampling::Mis,
+            transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+            volume_lights: true,
+        };
+        assert_eq!(lit.key(), "single(steps=32, sampling=mis, transmittance=ray_march(step=0.25), volume_lights=true)");
         let b = IntegratorSettings::Single {
             step: Some(MarchStep::Count(33)),
             sampling: SingleSampling::Mis,
             transmittance: TransmittanceMethod::RayMarch(MarchStep::Length(0.25)),
+            volume_lights: false,
         };
         assert_ne!(a.key(), b.key());
     }

@@ -117,6 +117,7 @@ impl AnalyticIntegrator {
                 step: None,
                 sampling: SingleSampling::Mis,
                 transmittance: TransmittanceMethod::Analytic,
+                volume_lights: None,
             };
             return single.segment(scene, id, ray, t_end, sampler);
         };

@@ -40,7 +40,7 @@ pub enum Kernel {
 /// Photon mapping along camera rays: single scattering and emission from
 /// [`SingleIntegrator`], multiple scattering from the volume map, surfaces
 /// from direct lighting plus the surface map. See the module docs.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct PhotonIntegrator<'a> {
     /// The maps (with beam radii when `query` is [`VolumeQuery::Beam`]).
     pub maps: &'a PhotonMaps,

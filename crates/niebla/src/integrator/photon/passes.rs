@@ -80,7 +80,12 @@ pub(super) fn with_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T +
 }
 
 fn single_of(settings: &PhotonSettings) -> SingleIntegrator {
-    SingleIntegrator { step: settings.step, sampling: settings.sampling, transmittance: TransmittanceMethod::Analytic }
+    SingleIntegrator {
+        step: settings.step,
+        sampling: settings.sampling,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    }
 }
 
 /// Radius of a map from the settings or, when `None`, measured on it.

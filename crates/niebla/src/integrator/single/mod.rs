@@ -1,9 +1,13 @@
 //! Single scattering along the camera ray (pbrt 2nd edition
 //! `SingleScatteringIntegrator`), with equiangular sampling toward point and
 //! spot lights (Kulla and Fajardo 2012) and its MIS combination with distance
-//! sampling. Surfaces are lit directly; media emission is included.
+//! sampling. Surfaces are lit directly; media emission is included. With
+//! `volume_lights`, emissive media also light the scattering points and
+//! surfaces (one point drawn from [`VolumeLights`] per shading point).
 
 pub(crate) mod settings;
+
+use std::sync::Arc;
 
 use crate::color::Rgb;
 use crate::math::Ray;
@@ -12,9 +16,11 @@ use crate::sampling::{balance_heuristic, PixelSampler};
 use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
+use super::camera_ray::trace_camera_ray_with;
+use super::direct::volume_light_in_scattered_radiance;
 use super::emission_absorption::{emission_segment, march_segment, marched_range};
 use super::equiangular::{equiangular_target, PointLightTarget};
-use super::{default_march_step, light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance};
+use super::{default_march_step, light_in_scattered_radiance, Integrator, SegmentRadiance, VolumeLights};
 
 /// How the single-scattering integrator picks scattering points on a camera ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -31,7 +37,7 @@ pub enum SingleSampling {
 }
 
 /// The single-scattering integrator.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct SingleIntegrator {
     /// Ray-march step for `March`; `None` picks [`default_march_step`] per medium.
     pub step: Option<MarchStep>,
@@ -39,18 +45,65 @@ pub struct SingleIntegrator {
     pub sampling: SingleSampling,
     /// Transmittance estimator for camera and shadow rays.
     pub transmittance: TransmittanceMethod,
+    /// Emissive media as lights (the `volume_lights` setting): the
+    /// distribution of points drawn toward them, `None` when off or when the
+    /// scene has no sampled emitter. Emission seen along camera rays counts
+    /// either way.
+    pub volume_lights: Option<Arc<VolumeLights>>,
 }
 
 impl Integrator for SingleIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, id, ray, t_end, sampler| {
+        let lights = self.volume_lights.as_deref();
+        trace_camera_ray_with(scene, ray, medium, self.transmittance, lights, sampler, |m, id, ray, t_end, sampler| {
             self.segment_in(scene, m, id, ray, t_end, diagonal, sampler)
         })
     }
 }
 
 impl SingleIntegrator {
+    /// The integrator for `scene`, with emissive media as lights when
+    /// `volume_lights` is true (the distribution is built here, once).
+    pub fn for_scene(
+        scene: &Scene,
+        step: Option<MarchStep>,
+        sampling: SingleSampling,
+        transmittance: TransmittanceMethod,
+        volume_lights: bool,
+    ) -> SingleIntegrator {
+        let volume_lights = volume_lights.then(|| VolumeLights::new(scene)).filter(|l| !l.is_empty()).map(Arc::new);
+        SingleIntegrator { step, sampling, transmittance, volume_lights }
+    }
+
+    /// In-scattered radiance at `p` from one point of the emissive media
+    /// (zero without volume lights).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn volume_in_scattered(
+        &self,
+        scene: &Scene,
+        m: &Medium,
+        id: MediumId,
+        p: crate::math::Vec3,
+        wo: crate::math::Vec3,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        match &self.volume_lights {
+            Some(lights) => volume_light_in_scattered_radiance(
+                scene,
+                lights,
+                p,
+                wo,
+                m.phase(),
+                Some(id),
+                self.transmittance,
+                sampler,
+            ),
+            None => Rgb::ZERO,
+        }
+    }
+
     /// Emission plus single scattering over `[0, t_end)` of `ray` inside medium
     /// `id` (`t_end` may be infinite), attenuated to the ray origin, and the
     /// transmittance across the segment. Surfaces play no part here except as
@@ -114,6 +167,7 @@ impl SingleIntegrator {
                 for index in 0..scene.lights.len() {
                     source += light_in_scattered_radiance(scene, index, p, wo, m.phase(), Some(id), method, sampler);
                 }
+                source += self.volume_in_scattered(scene, m, id, p, wo, sampler);
                 source *= mp.sigma_s;
             }
             source
@@ -176,6 +230,8 @@ impl SingleIntegrator {
                             ) * weight;
                         }
                     }
+                    // Emissive media have no equiangular strategy: weight 1.
+                    li += self.volume_in_scattered(scene, m, id, p, wo, sampler);
                     seg.radiance += tr * mp.sigma_s * li / pdf;
                 }
             }

@@ -26,23 +26,35 @@ struct SingleFields {
     /// Transmittance estimator of shadow rays (default `analytic`).
     #[serde(default)]
     transmittance: TransmittanceField,
+    /// Emissive media as lights for single scattering and surfaces
+    /// (default false: old scenes keep their images).
+    #[serde(default)]
+    volume_lights: bool,
 }
 
-/// `single`'s settings, `(step, sampling, transmittance)`, from its object
-/// (the `type` taken out).
-pub(crate) fn parse(object: Object) -> Result<(Option<MarchStep>, SingleSampling, TransmittanceMethod), Located> {
+/// `single`'s settings, `(step, sampling, transmittance, volume_lights)`,
+/// from its object (the `type` taken out).
+pub(crate) fn parse(object: Object) -> Result<(Option<MarchStep>, SingleSampling, TransmittanceMethod, bool), Located> {
     let fields: SingleFields = rest(object)?;
     let step = march_step(fields.step, fields.steps)?;
-    Ok((step, fields.sampling.sampling(), fields.transmittance.method(step)))
+    Ok((step, fields.sampling.sampling(), fields.transmittance.method(step), fields.volume_lights))
 }
 
 /// The stable key of `single`'s settings, e.g.
-/// `single(step=auto, sampling=mis, transmittance=analytic)`.
-pub(crate) fn key(step: Option<MarchStep>, sampling: SingleSampling, transmittance: TransmittanceMethod) -> String {
+/// `single(step=auto, sampling=mis, transmittance=analytic)`; with volume
+/// lights on, `, volume_lights=true` is appended (keys of old scenes are
+/// unchanged).
+pub(crate) fn key(
+    step: Option<MarchStep>,
+    sampling: SingleSampling,
+    transmittance: TransmittanceMethod,
+    volume_lights: bool,
+) -> String {
     format!(
-        "single({}, sampling={}, transmittance={})",
+        "single({}, sampling={}, transmittance={}{})",
         march_key(step),
         sampling_key(sampling),
-        transmittance_key(transmittance)
+        transmittance_key(transmittance),
+        if volume_lights { ", volume_lights=true" } else { "" }
     )
 }

@@ -138,7 +138,12 @@ fn every_sampling_of_single_matches_the_closed_form_airlight() {
     for (sampling, n) in
         [(SingleSampling::Equiangular, 4000), (SingleSampling::Mis, 4000), (SingleSampling::March, 256)]
     {
-        let single = SingleIntegrator { step: None, sampling, transmittance: TransmittanceMethod::Analytic };
+        let single = SingleIntegrator {
+            step: None,
+            sampling,
+            transmittance: TransmittanceMethod::Analytic,
+            volume_lights: None,
+        };
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         for s in 0..n {
             let mut sampler = PixelSampler::new(11, 0, 0, s);
