@@ -217,6 +217,7 @@ fn direct_beams_add_exactly_the_single_scattering_image() {
         step: None,
         sampling: SingleSampling::Mis,
         transmittance: TransmittanceMethod::Analytic,
+        volume_lights: false,
     };
     let batches = 8;
     let mut diffs = Vec::new();

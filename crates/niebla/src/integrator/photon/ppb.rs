@@ -99,7 +99,7 @@ impl Default for PpbSettings {
 /// Photon beams along camera rays: single scattering and emission from
 /// [`SingleIntegrator`], multiple scattering from the beams, surfaces from
 /// direct lighting plus the surface map. See the module docs.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct BeamIntegrator<'a> {
     /// The beams of the pass (the BVH holds the radius).
     pub beams: &'a BeamMap,
@@ -262,8 +262,12 @@ pub fn render_ppb(
                 1e-2
             }
         });
-        let single =
-            SingleIntegrator { step: None, sampling: settings.sampling, transmittance: TransmittanceMethod::Analytic };
+        let single = SingleIntegrator {
+            step: None,
+            sampling: settings.sampling,
+            transmittance: TransmittanceMethod::Analytic,
+            volume_lights: None,
+        };
         for s in options.first_sample..options.first_sample + options.spp as u64 {
             if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 return Err(RenderError::Cancelled);
@@ -283,7 +287,7 @@ pub fn render_ppb(
                     surface_kernel: Kernel::Radius(r_surface),
                     query: VolumeQuery::Beam,
                     step: None,
-                    single,
+                    single: single.clone(),
                 },
             };
             let pass_options = RenderOptions { spp: 1, first_sample: s, threads: None, ..*options };
