@@ -96,7 +96,8 @@ def fields():
     column = smoothstep(1.0, 0.35, q) * smoothstep(0.5, 0.85, y) * smoothstep(2.35, 1.85, y)
     smoke = column * (0.25 + 0.75 * fbm(n2, p * 3.0 + 11.0))
 
-    density = np.maximum(core * (0.5 + 0.5 * fbm(n3, p * 6.0)), 0.6 * smoke)
+    # The burning gas is thin (density 0.08-0.2), the smoke above it thicker.
+    density = np.maximum(core * (0.08 + 0.12 * fbm(n3, p * 6.0)), 0.6 * smoke)
     density = np.where(density > 1e-3, density, 0.0)
     live = density > 0.0
     flame = np.where(live & (flame > 1e-3), flame, 0.0)
