@@ -336,7 +336,8 @@ PYRO_FLAME_NAMES = ["flame", "flames", "fire"]
 def vdb_grids(vdb_path: str) -> dict:
     """{grid name: (value type, world min, world max)} of a VDB file, the
     bounds those of its active voxels (voxel centres +- half a voxel, through
-    the grid's index-to-world map); read by Debian's python3-openvdb."""
+    the grid's index-to-world map; None for an empty grid); read by Debian's
+    python3-openvdb."""
     script = r"""
 import itertools, json, sys
 try:
@@ -345,6 +346,9 @@ except ImportError:
     import openvdb as vdb
 out = {}
 for g in vdb.readAll(sys.argv[1])[0]:
+    if g.activeVoxelCount() == 0:
+        out[g.name] = [g.valueTypeName, None, None]
+        continue
     lo, hi = g.evalActiveVoxelBoundingBox()
     pts = [g.transform.indexToWorld(tuple((hi if bit else lo)[a] + (0.5 if bit else -0.5) for a, bit in enumerate(bits)))
            for bits in itertools.product((0, 1), repeat=3)]
@@ -392,6 +396,8 @@ def _pyro_object(bpy, scene, name, m, shape, scene_dir):
     bmin, bmax = np.asarray(shape["min"], float), np.asarray(shape["max"], float)
     for g in filter(None, (density, flame, temp)):
         lo, hi = grids[g][1], grids[g][2]
+        if lo is None:
+            continue
         for c in np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T:
             w = (xf @ np.array([*c, 1.0]))[:3]
             if np.any(w < bmin - 1e-4) or np.any(w > bmax + 1e-4):
