@@ -15,9 +15,10 @@ if [ ! -x "$venv/bin/python" ]; then
     echo "creating $venv"
     "$python" -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c "import mitsuba, numpy" 2>/dev/null; then
+# Pillow writes the PNG figures of docs/ (e.g. docs/fireball_figure.py).
+if ! "$venv/bin/python" -c "import mitsuba, numpy, PIL" 2>/dev/null; then
     "$venv/bin/pip" install --quiet --upgrade pip
-    "$venv/bin/pip" install --quiet mitsuba numpy
+    "$venv/bin/pip" install --quiet mitsuba numpy pillow
 fi
 
 # Dr.Jit's code needs LLVM 19 or newer here (LLVM 15 aborts with "Cannot
