@@ -527,6 +527,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             }
         }
         GeometryDesc::Rectangle(r) => validate_transform(&format!("{base}.to_world"), &r.to_world)?,
+        GeometryDesc::Disk(d) => validate_transform(&format!("{base}.to_world"), &d.to_world)?,
         GeometryDesc::Mesh(m) => validate_mesh(base, m)?,
     }
     if let Some(name) = &shape.interior {
