@@ -217,6 +217,8 @@ pub enum BsdfDesc {
     ThinDielectric(ThinDielectricDesc),
     /// `"plastic"`: coated diffuse (see [`PlasticDesc`]).
     Plastic(PlasticDesc),
+    /// `"roughplastic"`: rough coated diffuse (see [`RoughPlasticDesc`]).
+    RoughPlastic(RoughPlasticDesc),
     /// `"twosided"`: reflecting models on both sides (see [`TwoSidedDesc`]).
     TwoSided(TwoSidedDesc),
 }
@@ -248,6 +250,7 @@ impl BsdfDesc {
         "roughdielectric",
         "thindielectric",
         "plastic",
+        "roughplastic",
         "twosided",
     ];
 }

@@ -139,6 +139,8 @@ fn rough_bsdfs_keep_mitsuba_names() {
         sh[2]["bsdf"],
         json!({"type": "roughconductor", "distribution": "beckmann", "alpha_u": 0.1, "alpha_v": 0.3, "material": "Au"})
     );
+    // niebla reads every one of them.
+    crate::scene::parse_scene_str(&s.scene.to_string(), "t").unwrap();
 }
 
 #[test]
