@@ -166,7 +166,10 @@ impl RoughPlastic {
 /// Tables already computed, by (distribution, alpha bits, eta bits). Each is
 /// built once per distinct coating and lives as long as the program (a
 /// scene holds few distinct coatings; this keeps [`RoughPlastic`] `Copy`).
-static TABLES: Mutex<Vec<((MicrofacetKind, u32, u32), &'static CoatingTables)>> = Mutex::new(Vec::new());
+static TABLES: Mutex<Vec<(TableKey, &'static CoatingTables)>> = Mutex::new(Vec::new());
+
+/// Distribution, bits of alpha, bits of eta.
+type TableKey = (MicrofacetKind, u32, u32);
 
 /// The coating integrals of a `kind` distribution of roughness `alpha` and
 /// relative index `eta`, computed on first request and shared afterwards.
