@@ -184,6 +184,9 @@ fn errors_name_file_line_and_element() {
         e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"),
         "{e}"
     );
+    let e = err("<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\
+                 <string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>");
+    assert!(e.starts_with("t.xml:8: ") && e.contains("textures and volumes are not supported here"), "{e}");
     let e = err("<shape type=\"cylinder\"/>");
     assert!(e.starts_with("t.xml:8: <shape type=\"cylinder\">: not supported"), "{e}");
     let e = err("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>");
