@@ -18,8 +18,9 @@ an error rather than a silent approximation:
   from the data (false for gray media, as a Mitsuba user would);
 - phase: `isotropic`, `hg` (same sign convention: g > 0 forward), an inline
   `tabulated` table at regularly spaced cosines -> `tabphase`;
-- shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere`, `rectangle` (both
-  renderers use [-1,1]^2 in local xy with normal +z) with niebla's
+- shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere`, `rectangle` and
+  `disk` (both renderers use [-1,1]^2, or the unit disk, in local xy with
+  normal +z) with niebla's
   `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
   `null`, `diffuse` -> `diffuse`; `interior`/`exterior` media by reference;
 - lights: `point`, `spot` (look_at from position to target), `directional`,
@@ -277,8 +278,8 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
             d = {"type": "cube", "to_world": mi.ScalarTransform4f(_box_matrix(s["min"], s["max"]).tolist())}
         elif t == "sphere":
             d = {"type": "sphere", "center": s["center"], "radius": float(s["radius"])}
-        elif t == "rectangle":
-            d = {"type": "rectangle", "to_world": mi.ScalarTransform4f(niebla_transform(s.get("to_world")).tolist())}
+        elif t in ("rectangle", "disk"):
+            d = {"type": t, "to_world": mi.ScalarTransform4f(niebla_transform(s.get("to_world")).tolist())}
         else:
             raise Unsupported(f"shapes[{i}]: type {t!r}")
         b = s.get("bsdf", {"type": "null"})

@@ -64,6 +64,12 @@ CONFIGS = [
     {"type": "plastic"},
     {"type": "plastic", "diffuse_reflectance": [0.8, 0.3, 0.1], "int_ior": 1.7, "nonlinear": True},
     {"type": "plastic", "diffuse_reflectance": [0.2, 0.9, 0.4], "specular_reflectance": [0.5, 0.5, 0.5], "ext_ior": 1.33},
+    {"type": "roughplastic"},
+    {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": [0.8, 0.3, 0.1], "int_ior": 1.7,
+     "nonlinear": True},
+    {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.5, "diffuse_reflectance": [0.2, 0.9, 0.4],
+     "specular_reflectance": [0.5, 0.5, 0.5], "ext_ior": 1.33},
+    {"type": "roughplastic", "distribution": "ggx", "alpha": 0.05, "int_ior": 1.2, "diffuse_reflectance": 0.9},
 ]
 
 # Mitsuba's wi (toward the camera; niebla's wo), (theta, phi) in degrees.

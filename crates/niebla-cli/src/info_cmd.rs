@@ -89,6 +89,7 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
             niebla::geometry::Shape::Sphere(_) => "sphere".to_string(),
             niebla::geometry::Shape::Box(_) => "box".to_string(),
             niebla::geometry::Shape::Rectangle(_) => "rectangle".to_string(),
+            niebla::geometry::Shape::Disk(_) => "disk".to_string(),
             niebla::geometry::Shape::Mesh(m) => format!(
                 "mesh ({} triangles, {} vertices{}, {} degenerate triangles skipped, {}, {})",
                 m.mesh.triangle_count(),

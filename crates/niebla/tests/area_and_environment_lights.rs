@@ -86,6 +86,49 @@ fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
     assert!((direct.mean() - radiance as f64).abs() < 1e-5);
 }
 
+/// A disk light of radius `R` facing a Lambertian floor from height `h`:
+/// the point below its centre receives `E = pi L R^2 / (h^2 + R^2)` and shows
+/// `rho L R^2 / (h^2 + R^2)` (the disk is read from a scene file, so the
+/// parser and builder are covered too).
+#[test]
+fn floor_under_a_disk_light_shows_the_closed_form_radiance() {
+    let (radius, height, radiance, rho) = (1.5f32, 2.0f32, 3.0f32, 0.6f32);
+    let text = format!(
+        r#"{{"version": 1,
+            "camera": {{"type": "perspective", "position": [3, 1, 0], "target": [0, 0, 0], "width": 1, "height": 1}},
+            "shapes": [{{"type": "rectangle", "to_world": {{"scale": 50, "rotate_x": -90}},
+                         "bsdf": {{"type": "diffuse", "reflectance": {rho}}}}}],
+            "lights": [{{"type": "area", "radiance": {radiance},
+                         "shape": {{"type": "disk", "to_world": {{"scale": {radius}, "rotate_x": 90,
+                                    "translate": [0, {height}, 0]}}}}}}]}}"#
+    );
+    let desc = parse_scene_str(&text, "disk.json").unwrap();
+    let built = build_scene(&desc, "disk.json", std::path::Path::new(".")).unwrap();
+    let s = &built.scene;
+    let Light::Area(light) = &s.lights[0] else { panic!("an area light") };
+    assert!((light.area() - std::f32::consts::PI * radius * radius).abs() < 1e-4);
+    let expected = (rho * radiance * radius * radius / (height * height + radius * radius)) as f64;
+    let camera = Vec3::new(3.0, 1.0, 0.0);
+    let ray = Ray::new(camera, (Vec3::ZERO - camera).normalize());
+    let single = SingleIntegrator {
+        step: None,
+        sampling: SingleSampling::Mis,
+        transmittance: TransmittanceMethod::Analytic,
+        volume_lights: None,
+    };
+    for (name, stats) in [
+        ("single", mean_radiance(&single, s, ray, None, 4_000)),
+        ("volpath", mean_radiance(&VolPathIntegrator::new(8), s, ray, None, 40_000)),
+    ] {
+        let z = (stats.mean() - expected) / (stats.standard_error() + 1e-6 * expected);
+        assert!(z.abs() < 4.0, "{name}: {} +- {} vs {expected}", stats.mean(), stats.standard_error());
+    }
+    // Looking up at the disk inside its rim shows its radiance; just outside the rim, the black ceiling.
+    let up = |x: f32| mean_radiance(&VolPathIntegrator::new(8), s, Ray::new(Vec3::new(x, 0.5, 0.0), Vec3::Y), None, 4);
+    assert!((up(0.98 * radius).mean() - radiance as f64).abs() < 1e-5);
+    assert_eq!(up(1.02 * radius).mean(), 0.0);
+}
+
 #[test]
 fn uniform_environment_map_is_a_white_furnace_for_volpath() {
     // A 16 x 8 map of radiance 0.5 everywhere, rotated: every direction sees 0.5.

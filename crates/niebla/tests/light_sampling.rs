@@ -553,6 +553,33 @@ fn rectangle_directions_follow_pdf_li_chi_square() {
 }
 
 #[test]
+fn disk_directions_follow_pdf_li_chi_square() {
+    // The same sheared placement as the rectangle's, for the unit disk (an
+    // ellipse in the world): its directions lie in the cone around the
+    // direction to its center that holds the circumscribed parallelogram.
+    let m = Mat3::from_cols(Vec3::new(0.8, 0.1, 0.0), Vec3::new(0.3, 0.5, 0.2), Vec3::new(0.0, 0.0, 1.0));
+    let rot = Mat3::from_axis_angle(Vec3::new(1.0, 0.2, 0.0).normalize(), 2.5);
+    let affine = glam::Affine3A::from_mat3_translation(rot * m, Vec3::new(0.4, -0.3, 1.2));
+    let disk = niebla::geometry::Disk::new(Transform::new(affine).unwrap());
+    let light = AreaLight::new(AreaShape::Disk(disk), Rgb::ONE, true).unwrap();
+    let p = Vec3::new(1.1, 0.5, -0.2);
+    let axis = (light_center(&light) - p).normalize();
+    let cos_min = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)]
+        .iter()
+        .map(|&(x, y)| (disk.transform.point_to_world(Vec3::new(x, y, 0.0)) - p).normalize().dot(axis))
+        .fold(1.0f32, f32::min) as f64
+        - 1e-3;
+    let hist = ConeHistogram { frame: Frame::from_z(axis), cos_min, n_cos: 10, n_phi: 16 };
+    let n = 200_000;
+    let mut rng = PixelSampler::from_key(343);
+    let samples: Vec<Vec3> = (0..n).map(|_| light.sample_li(p, rng.next_2d()).unwrap().wi).collect();
+    let observed = hist.observed(samples.into_iter());
+    let expected = hist.expected(n, 128, |w| light.pdf_li(p, w));
+    assert!(expected[expected.len() - 1] < 0.01 * n as f64, "pdf_li does not integrate to ~1 over the cone");
+    assert_chi2("disk directions", &observed, &expected);
+}
+
+#[test]
 fn sphere_directions_follow_pdf_li_chi_square() {
     // Outside: uniform in the cone, 2e5 samples in 10 x 16 cells of the cone
     // itself (expected counts by quadrature of pdf_li, equal cells).
@@ -586,6 +613,7 @@ fn light_center(light: &AreaLight) -> Vec3 {
     match light.shape {
         AreaShape::Sphere(s) => s.center,
         AreaShape::Rectangle(r) => r.transform.point_to_world(Vec3::ZERO),
+        AreaShape::Disk(d) => d.transform.point_to_world(Vec3::ZERO),
     }
 }
 

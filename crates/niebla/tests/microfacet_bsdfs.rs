@@ -1,5 +1,5 @@
 //! The microfacet and layered surfaces (`roughconductor`, `roughdielectric`,
-//! `thindielectric`, `plastic`, `twosided`) against Mitsuba 3's own values,
+//! `thindielectric`, `plastic`, `roughplastic`, `twosided`) against Mitsuba 3's own values,
 //! their samplers against their densities (chi-square), reciprocity, and
 //! energy conservation.
 
@@ -25,9 +25,11 @@ fn vec3(v: &serde_json::Value) -> Vec3 {
 }
 
 /// Mitsuba 3.9.1's `eval` and `pdf` (scalar_rgb) at fixed local directions,
-/// from scripts/mitsuba_bsdf_values.py: 648 rows over 12 BSDFs (rough
+/// from scripts/mitsuba_bsdf_values.py: 864 rows over 16 BSDFs (rough
 /// conductors and dielectrics with both distributions, isotropic and
-/// anisotropic, several indices; plastics), 6 incident and 9 outgoing
+/// anisotropic, several indices; plastics; rough plastics with both
+/// distributions, alpha 0.05 to 0.5, nonlinear, tinted specular, another
+/// outside index), 6 incident and 9 outgoing
 /// directions on both sides. Mitsuba's `eval` includes |cos(wo)|; niebla's
 /// `f` does not. Tolerance: relative 2e-4 plus 2e-6 absolute; both
 /// renderers compute the same f32 formulas, and the largest relative
@@ -72,7 +74,7 @@ fn eval_and_pdf_match_mitsuba() {
         assert!(close(pdf, expected_pdf), "{key} wo {wo} wi {wi}: pdf niebla {pdf} vs Mitsuba {expected_pdf}");
         rows += 1;
     }
-    assert_eq!(rows, 648);
+    assert_eq!(rows, 864);
     eprintln!("largest relative difference of eval: {worst:.2e}");
 }
 
@@ -91,6 +93,10 @@ fn models() -> Vec<(&'static str, Bsdf)> {
         r#"{"type": "plastic", "diffuse_reflectance": 0.9, "int_ior": 1.8, "nonlinear": true}"#,
         r#"{"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha": 0.3}}"#,
         r#"{"type": "twosided", "bsdf": [{"type": "diffuse", "reflectance": 0.7}, {"type": "plastic"}]}"#,
+        r#"{"type": "roughplastic", "distribution": "beckmann", "alpha": 0.2, "diffuse_reflectance": [0.8, 0.4, 0.1]}"#,
+        r#"{"type": "roughplastic", "distribution": "ggx", "alpha": 0.6, "diffuse_reflectance": 0.9, "int_ior": 1.8,
+            "nonlinear": true}"#,
+        r#"{"type": "twosided", "bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": 0.1}}"#,
     ]
     .into_iter()
     .map(|j| (j, bsdf_from_json(j)))
@@ -483,6 +489,9 @@ fn white_furnace_pixels_are_at_most_one() {
         r#"{"type": "roughdielectric", "distribution": "ggx", "alpha": 0.4, "int_ior": 1.5, "ext_ior": 1}"#,
         r#"{"type": "roughdielectric", "distribution": "beckmann", "alpha": 0.8, "int_ior": 1.33, "ext_ior": 1}"#,
         r#"{"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha": 0.2}}"#,
+        r#"{"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": 1}"#,
+        r#"{"type": "roughplastic", "distribution": "beckmann", "alpha": 0.6, "diffuse_reflectance": 1,
+            "nonlinear": true}"#,
     ] {
         let scene = sphere_scene(bsdf_from_json(json), None, 1.0);
         for ray in rays() {

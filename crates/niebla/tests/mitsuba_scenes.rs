@@ -177,3 +177,8 @@ fn thin_dielectric_boundaries_match_mitsuba() {
 fn tabulated_phase_function_matches_mitsuba() {
     check("tabphase_fog");
 }
+
+#[test]
+fn disk_light_over_rough_plastics_matches_mitsuba() {
+    check("disk_roughplastic");
+}

@@ -39,6 +39,7 @@ pub fn surface_albedo(bsdf: &Bsdf) -> Rgb {
         Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ONE,
         Bsdf::RoughConductor(b) => b.specular_reflectance,
         Bsdf::Plastic(b) => b.diffuse_reflectance,
+        Bsdf::RoughPlastic(b) => b.diffuse_reflectance,
         Bsdf::TwoSided(b) => reflector_albedo(&b.front),
     }
 }
@@ -50,6 +51,7 @@ fn reflector_albedo(r: &Reflector) -> Rgb {
         Reflector::Conductor { .. } => Rgb::ONE,
         Reflector::RoughConductor(b) => b.specular_reflectance,
         Reflector::Plastic(b) => b.diffuse_reflectance,
+        Reflector::RoughPlastic(b) => b.diffuse_reflectance,
     }
 }
 

@@ -158,7 +158,7 @@ impl Microfacet {
             }
             MicrofacetKind::Ggx => {
                 // Heitz 2018: a point on the projected hemisphere.
-                let mut p = square_to_uniform_disk_concentric(u);
+                let mut p = crate::sampling::sample_uniform_disk_concentric(u);
                 let s = 0.5 * (1.0 + cos_theta_i);
                 let lower = (1.0 - p.x * p.x).max(0.0).sqrt();
                 p.y = lower + (p.y - lower) * s;
@@ -188,17 +188,6 @@ fn sincos_phi(v: Vec3) -> (f32, f32) {
     }
     let inv = 1.0 / sin_theta_2.sqrt();
     ((v.y * inv).clamp(-1.0, 1.0), (v.x * inv).clamp(-1.0, 1.0))
-}
-
-/// Shirley and Chiu's concentric map of the unit square onto the unit disk.
-fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
-    let x = 2.0 * u.x - 1.0;
-    let y = 2.0 * u.y - 1.0;
-    if x == 0.0 && y == 0.0 {
-        return Vec2::ZERO;
-    }
-    let (r, phi) = if x * x > y * y { (x, (PI / 4.0) * (y / x)) } else { (y, PI / 2.0 - (PI / 4.0) * (x / y)) };
-    Vec2::new(r * phi.cos(), r * phi.sin())
 }
 
 /// Inverse error function on (-1, 1): Giles, "Approximating the erfinv

@@ -56,6 +56,7 @@ mod mitsuba_conductors;
 mod plastic;
 mod rough_conductor;
 mod rough_dielectric;
+pub mod rough_plastic;
 mod thin_dielectric;
 mod two_sided;
 
@@ -68,6 +69,7 @@ pub use mitsuba_conductors::MITSUBA_CONDUCTORS;
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use rough_conductor::RoughConductor;
 pub use rough_dielectric::RoughDielectric;
+pub use rough_plastic::RoughPlastic;
 pub use thin_dielectric::ThinDielectric;
 pub use two_sided::{Reflector, TwoSided};
 
@@ -111,6 +113,8 @@ pub enum Bsdf {
     ThinDielectric(ThinDielectric),
     /// Smooth coated diffuse surface (Mitsuba's `plastic`), one-sided.
     Plastic(Plastic),
+    /// Rough coated diffuse surface (Mitsuba's `roughplastic`), one-sided.
+    RoughPlastic(RoughPlastic),
     /// Mitsuba's `twosided`: a reflecting model on each side of `n`.
     TwoSided(TwoSided),
 }
@@ -224,6 +228,10 @@ impl Bsdf {
                 let (wo, wi) = to_local(n, wo, wi);
                 b.eval_local(wo, wi)
             }
+            Bsdf::RoughPlastic(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.eval_local(wo, wi)
+            }
             Bsdf::TwoSided(b) => {
                 let (wo, wi) = to_local(n, wo, wi);
                 b.eval_local(wo, wi)
@@ -247,6 +255,10 @@ impl Bsdf {
                 b.pdf_local(wo, wi)
             }
             Bsdf::Plastic(b) => {
+                let (wo, wi) = to_local(n, wo, wi);
+                b.pdf_local(wo, wi)
+            }
+            Bsdf::RoughPlastic(b) => {
                 let (wo, wi) = to_local(n, wo, wi);
                 b.pdf_local(wo, wi)
             }
@@ -336,6 +348,18 @@ impl Bsdf {
                     eta: 1.0,
                 })
             }
+            Bsdf::RoughPlastic(b) => {
+                let frame = Frame::from_z(n);
+                let s = b.sample_local(frame.to_local(wo), u_lobe, u)?;
+                Some(BsdfSample {
+                    wi: frame.to_world(s.wi),
+                    f: s.f,
+                    pdf: s.pdf,
+                    is_specular: false,
+                    is_transmission: false,
+                    eta: 1.0,
+                })
+            }
             Bsdf::TwoSided(b) => {
                 let frame = Frame::from_z(n);
                 let s = b.sample_local(frame.to_local(wo), u_lobe, u)?;
@@ -357,7 +381,11 @@ impl Bsdf {
     pub fn is_specular(&self) -> bool {
         match self {
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => true,
-            Bsdf::Diffuse { .. } | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) | Bsdf::Plastic(_) => false,
+            Bsdf::Diffuse { .. }
+            | Bsdf::RoughConductor(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::Plastic(_)
+            | Bsdf::RoughPlastic(_) => false,
             Bsdf::TwoSided(b) => b.front.is_specular() && b.back.is_specular(),
         }
     }
@@ -371,7 +399,7 @@ impl Bsdf {
     }
 
     /// The model with its textured color set to `color` (clamped to
-    /// [0, 1]): a diffuse `reflectance`, a plastic's `diffuse_reflectance`,
+    /// [0, 1]): a diffuse `reflectance`, a (rough) plastic's `diffuse_reflectance`,
     /// a rough conductor's `specular_reflectance`, or those of the sides of
     /// a `twosided` that [`TwoSided::textured`] marks. Other models are
     /// returned unchanged.
@@ -382,6 +410,7 @@ impl Bsdf {
             Bsdf::Diffuse { .. } => Bsdf::Diffuse { reflectance: color },
             Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor { specular_reflectance: color, ..b }),
             Bsdf::Plastic(b) => Bsdf::Plastic(Plastic { diffuse_reflectance: color, ..b }),
+            Bsdf::RoughPlastic(b) => Bsdf::RoughPlastic(RoughPlastic { diffuse_reflectance: color, ..b }),
             Bsdf::TwoSided(mut b) => {
                 if b.textured & 1 != 0 {
                     b.front = b.front.with_texture(color);

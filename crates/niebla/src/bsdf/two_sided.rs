@@ -3,7 +3,7 @@
 //! (local `z -> -z`) and the back model is used, as Mitsuba does.
 
 use super::fresnel::fresnel_complex;
-use super::{LocalSample, Plastic, RoughConductor};
+use super::{LocalSample, Plastic, RoughConductor, RoughPlastic};
 use crate::color::Rgb;
 use crate::math::{Vec2, Vec3, INV_PI};
 use crate::sampling::sample_cosine_hemisphere;
@@ -28,11 +28,13 @@ pub enum Reflector {
     RoughConductor(RoughConductor),
     /// Smooth plastic.
     Plastic(Plastic),
+    /// Rough plastic.
+    RoughPlastic(RoughPlastic),
 }
 
 impl Reflector {
     /// The model with its textured color set to `color` (diffuse
-    /// `reflectance`, plastic `diffuse_reflectance`, rough conductor
+    /// `reflectance`, (rough) plastic `diffuse_reflectance`, rough conductor
     /// `specular_reflectance`); unchanged for a smooth conductor.
     #[inline]
     pub fn with_texture(self, color: Rgb) -> Reflector {
@@ -43,6 +45,7 @@ impl Reflector {
                 Reflector::RoughConductor(RoughConductor { specular_reflectance: color, ..b })
             }
             Reflector::Plastic(b) => Reflector::Plastic(Plastic { diffuse_reflectance: color, ..b }),
+            Reflector::RoughPlastic(b) => Reflector::RoughPlastic(RoughPlastic { diffuse_reflectance: color, ..b }),
         }
     }
 
@@ -65,6 +68,7 @@ impl Reflector {
             Reflector::Conductor { .. } => Rgb::ZERO,
             Reflector::RoughConductor(b) => b.eval_local(wo, wi),
             Reflector::Plastic(b) => b.eval_local(wo, wi),
+            Reflector::RoughPlastic(b) => b.eval_local(wo, wi),
         }
     }
 
@@ -81,6 +85,7 @@ impl Reflector {
             Reflector::Conductor { .. } => 0.0,
             Reflector::RoughConductor(b) => b.pdf_local(wo, wi),
             Reflector::Plastic(b) => b.pdf_local(wo, wi),
+            Reflector::RoughPlastic(b) => b.pdf_local(wo, wi),
         }
     }
 
@@ -105,6 +110,7 @@ impl Reflector {
                 Some(LocalSample { wi, f, pdf, specular: false })
             }
             Reflector::Plastic(b) => b.sample_local(wo, u_lobe, u),
+            Reflector::RoughPlastic(b) => b.sample_local(wo, u_lobe, u),
         }
     }
 }

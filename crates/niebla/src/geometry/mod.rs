@@ -2,12 +2,13 @@
 //!
 //! Shapes are a closed set (`Shape` enum) so intersection is a `match`, not a
 //! virtual call. Normals returned by intersections are geometric and point
-//! outward (for the rectangle: along its local +z; for a mesh: by the
+//! outward (for the rectangle and the disk: along their local +z; for a mesh: by the
 //! right-hand rule of its counter-clockwise winding). Meshes carry their own
 //! hierarchy ([`bvh`]) and are intersected watertight ([`triangle`]).
 
 mod aabb_box;
 pub mod bvh;
+mod disk;
 pub mod mesh;
 mod rectangle;
 mod sphere;
@@ -16,6 +17,7 @@ pub mod triangle;
 
 pub use aabb_box::AxisAlignedBox;
 pub use bvh::Bvh;
+pub use disk::Disk;
 pub use mesh::{MeshDataError, MeshInstance, TriangleMesh};
 pub use rectangle::Rectangle;
 pub use sphere::Sphere;
@@ -95,6 +97,8 @@ pub enum Shape {
     Box(AxisAlignedBox),
     /// A parallelogram (transformed unit square).
     Rectangle(Rectangle),
+    /// An ellipse (transformed unit disk).
+    Disk(Disk),
     /// A triangle mesh placed by a transform.
     Mesh(MeshInstance),
 }
@@ -107,6 +111,7 @@ impl Shape {
             Shape::Sphere(s) => s.intersect(ray, t_min, t_max),
             Shape::Box(b) => b.intersect(ray, t_min, t_max),
             Shape::Rectangle(r) => r.intersect(ray, t_min, t_max),
+            Shape::Disk(d) => d.intersect(ray, t_min, t_max),
             Shape::Mesh(m) => m.hit(ray, t_min, t_max).map(|h| m.surface_at(ray, &h)),
         }
     }
@@ -120,6 +125,7 @@ impl Shape {
             Shape::Sphere(s) => s.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
             Shape::Box(b) => b.hit_t(ray, inv, t_min, t_max).map(PrimitiveHit::at),
             Shape::Rectangle(r) => r.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
+            Shape::Disk(d) => d.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
             Shape::Mesh(m) => m.hit(ray, t_min, t_max),
         }
     }
@@ -142,6 +148,7 @@ impl Shape {
             Shape::Sphere(s) => s.surface_at(ray, hit.t),
             Shape::Box(b) => b.surface_at(ray, hit.t),
             Shape::Rectangle(r) => r.surface_at(ray, hit.t),
+            Shape::Disk(d) => d.surface_at(ray, hit.t),
             Shape::Mesh(m) => m.surface_at(ray, hit),
         }
     }
@@ -162,6 +169,7 @@ impl Shape {
                 let q = r.transform.to_local.transform_point3(surface.p);
                 Vec2::new(0.5 * (q.x + 1.0), 0.5 * (q.y + 1.0))
             }
+            Shape::Disk(d) => d.uv(surface.p),
             Shape::Box(b) => {
                 let f = (surface.p - b.min) / (b.max - b.min);
                 let n = surface.n;
@@ -180,7 +188,7 @@ impl Shape {
     /// True for shapes that enclose a volume (and so can hold a medium).
     pub fn is_closed(&self) -> bool {
         match self {
-            Shape::Rectangle(_) => false,
+            Shape::Rectangle(_) | Shape::Disk(_) => false,
             Shape::Mesh(m) => m.closed,
             _ => true,
         }
@@ -191,7 +199,7 @@ impl Shape {
         match self {
             Shape::Sphere(s) => (p - s.center).length_squared() < s.radius * s.radius,
             Shape::Box(b) => p.cmpgt(b.min).all() && p.cmplt(b.max).all(),
-            Shape::Rectangle(_) => false,
+            Shape::Rectangle(_) | Shape::Disk(_) => false,
             Shape::Mesh(m) => m.contains(p),
         }
     }
@@ -201,7 +209,7 @@ impl Shape {
         match self {
             Shape::Sphere(s) => 4.0 / 3.0 * crate::math::PI * s.radius.powi(3),
             Shape::Box(b) => (b.max - b.min).element_product(),
-            Shape::Rectangle(_) => 0.0,
+            Shape::Rectangle(_) | Shape::Disk(_) => 0.0,
             Shape::Mesh(m) => m.volume(),
         }
     }
@@ -212,6 +220,7 @@ impl Shape {
             Shape::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
             Shape::Box(b) => (b.min, b.max),
             Shape::Rectangle(r) => r.bounds(),
+            Shape::Disk(d) => d.bounds(),
             Shape::Mesh(m) => m.bounds(),
         }
     }

@@ -4,7 +4,8 @@
 //!
 //! Front sides: a rectangle's local +z side (the unit square `[-1, 1]^2` of
 //! the local xy plane placed by its `Transform`, see
-//! [`crate::geometry::Rectangle`]); a sphere's outside. A two-sided light emits
+//! [`crate::geometry::Rectangle`]), and likewise a disk's
+//! ([`crate::geometry::Disk`]); a sphere's outside. A two-sided light emits
 //! `L` from both sides.
 //!
 //! Directions follow the crate convention: `wi` points from the receiver
@@ -13,7 +14,7 @@
 
 use super::LightError;
 use crate::color::Rgb;
-use crate::geometry::{Rectangle, Sphere, SurfaceHit};
+use crate::geometry::{Disk, Rectangle, Sphere, SurfaceHit};
 use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, PI};
 use crate::sampling::sample_uniform_sphere;
 
@@ -22,26 +23,30 @@ use crate::sampling::sample_uniform_sphere;
 pub enum AreaShape {
     /// A parallelogram: the transformed square `[-1, 1]^2`, front side local +z.
     Rectangle(Rectangle),
+    /// An ellipse: the transformed unit disk, front side local +z.
+    Disk(Disk),
     /// A sphere, front side outside.
     Sphere(Sphere),
 }
 
 impl AreaShape {
-    /// World-space surface area (the parallelogram's area; `4 pi r^2`).
+    /// World-space surface area (the parallelogram's or ellipse's area; `4 pi r^2`).
     #[inline]
     pub fn area(&self) -> f32 {
         match self {
             AreaShape::Rectangle(r) => r.area(),
+            AreaShape::Disk(d) => d.area(),
             AreaShape::Sphere(s) => 4.0 * PI * s.radius * s.radius,
         }
     }
 
     /// Nearest intersection with `t` in `(t_min, t_max)`; the normal is the
-    /// front-side normal (rectangle local +z, sphere outward).
+    /// front-side normal (rectangle and disk local +z, sphere outward).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
         match self {
             AreaShape::Rectangle(r) => r.intersect(ray, t_min, t_max),
+            AreaShape::Disk(d) => d.intersect(ray, t_min, t_max),
             AreaShape::Sphere(s) => s.intersect(ray, t_min, t_max),
         }
     }
@@ -145,7 +150,7 @@ impl AreaLight {
     /// Sample a point on the light as seen from `p_ref` with `u` in [0, 1)^2.
     /// Sphere, `p_ref` outside: uniform over the cone of directions that see
     /// the sphere (pbrt-v4 spherical-cap sampling); inside: uniform by area.
-    /// Rectangle: uniform by area. The pdf is converted to solid angle.
+    /// Rectangle and disk: uniform by area. The pdf is converted to solid angle.
     /// `None` when the point emits nothing toward `p_ref` (its back side of a
     /// one-sided light) or the density is degenerate.
     pub fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<AreaLightSample> {
@@ -205,13 +210,14 @@ impl AreaLight {
 
     /// A point uniformly distributed by area and its front-side normal.
     #[inline]
-    fn sample_area(&self, u: Vec2) -> (Vec3, Vec3) {
+    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3) {
         match &self.shape {
             AreaShape::Rectangle(r) => {
                 // An affine map takes uniform points of the square to uniform points.
                 let local = Vec3::new(2.0 * u.x - 1.0, 2.0 * u.y - 1.0, 0.0);
                 (r.transform.point_to_world(local), r.normal)
             }
+            AreaShape::Disk(d) => (d.sample_point(u), d.normal),
             AreaShape::Sphere(s) => {
                 let n = sample_uniform_sphere(u);
                 (s.center + s.radius * n, n)

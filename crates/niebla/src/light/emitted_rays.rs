@@ -13,7 +13,7 @@
 //! of travel, placed outside the sphere: only light that can reach the scene
 //! is emitted, and the power is `pi r^2` times the irradiance.
 
-use super::{AreaShape, Light};
+use super::Light;
 use crate::color::Rgb;
 use crate::math::{Frame, Ray, Vec2, Vec3, PI};
 use crate::sampling::{
@@ -183,15 +183,7 @@ impl Light {
                 })
             }
             Light::Area(a) => {
-                let (p, n_front) = match &a.shape {
-                    AreaShape::Rectangle(r) => {
-                        (r.transform.point_to_world(Vec3::new(2.0 * u_pos.x - 1.0, 2.0 * u_pos.y - 1.0, 0.0)), r.normal)
-                    }
-                    AreaShape::Sphere(s) => {
-                        let n = sample_uniform_sphere(u_pos);
-                        (s.center + s.radius * n, n)
-                    }
-                };
+                let (p, n_front) = a.sample_area(u_pos);
                 // A two-sided light picks its side with probability 1/2 (the
                 // first direction number, remapped).
                 let (n, u, side_pdf) = if a.two_sided {
@@ -224,8 +216,8 @@ impl Light {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Rectangle, Sphere, Transform};
-    use crate::light::{AreaLight, ConstantLight, DirectionalLight, PointLight, SpotLight};
+    use crate::geometry::{Disk, Rectangle, Sphere, Transform};
+    use crate::light::{AreaLight, AreaShape, ConstantLight, DirectionalLight, PointLight, SpotLight};
     use crate::sampling::PixelSampler;
 
     fn lights() -> Vec<Light> {
@@ -246,6 +238,7 @@ mod tests {
                 AreaLight::new(AreaShape::Sphere(Sphere { center: Vec3::X, radius: 0.4 }), Rgb::splat(1.5), false)
                     .unwrap(),
             ),
+            Light::Area(AreaLight::new(AreaShape::Disk(Disk::new(t)), Rgb::splat(2.0), false).unwrap()),
         ]
     }
 

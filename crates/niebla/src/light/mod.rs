@@ -27,7 +27,7 @@ pub enum Light {
     Directional(DirectionalLight),
     /// Uniform environment of constant radiance.
     Constant(ConstantLight),
-    /// Emitting rectangle or sphere of uniform radiance (its shape is also a
+    /// Emitting rectangle, disk or sphere of uniform radiance (its shape is also a
     /// scene object, which rays hit).
     Area(AreaLight),
     /// Lat-long environment map, importance sampled.

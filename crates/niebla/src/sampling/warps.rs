@@ -93,6 +93,18 @@ pub fn equiangular_pdf(t: f32, t_a: f32, t_b: f32, t_c: f32, h: f32) -> f32 {
     h / ((theta_b - theta_a) * (h * h + d * d))
 }
 
+/// Shirley and Chiu's concentric map of `u` in [0, 1)^2 onto the unit disk:
+/// uniform by area (density `1 / pi`), low distortion.
+pub fn sample_uniform_disk_concentric(u: Vec2) -> Vec2 {
+    let x = 2.0 * u.x - 1.0;
+    let y = 2.0 * u.y - 1.0;
+    if x == 0.0 && y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, phi) = if x * x > y * y { (x, (PI / 4.0) * (y / x)) } else { (y, PI / 2.0 - (PI / 4.0) * (x / y)) };
+    Vec2::new(r * phi.cos(), r * phi.sin())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use super::{RenderSettings, Scene, SceneError, SceneObject};
 use crate::bsdf::Bsdf;
 use crate::camera::PerspectiveCamera;
 use crate::color::Rgb;
-use crate::geometry::{AxisAlignedBox, Rectangle, Shape, Sphere, Transform};
+use crate::geometry::{AxisAlignedBox, Disk, Rectangle, Shape, Sphere, Transform};
 use crate::integrator::IntegratorSettings;
 use crate::light::{
     AreaLight, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
@@ -190,6 +190,11 @@ fn build_with_loaders(
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
                 Shape::Rectangle(Rectangle::new(t))
             }
+            GeometryDesc::Disk(d) => {
+                let t = build_transform(&d.to_world)
+                    .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
+                Shape::Disk(Disk::new(t))
+            }
             GeometryDesc::Mesh(d) => {
                 let t = build_transform(&d.to_world)
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
@@ -252,8 +257,14 @@ fn build_with_loaders(
                         })?;
                         AreaShape::Rectangle(Rectangle::new(t))
                     }
+                    GeometryDesc::Disk(d) => {
+                        let t = build_transform(&d.to_world).ok_or_else(|| {
+                            err(&format!("{shape_path}.to_world"), "transform is singular (zero scale?)".into())
+                        })?;
+                        AreaShape::Disk(Disk::new(t))
+                    }
                     GeometryDesc::Box(_) | GeometryDesc::Mesh(_) => {
-                        return Err(err(&shape_path, "an area light is a rectangle or a sphere".into()))
+                        return Err(err(&shape_path, "an area light is a rectangle, a disk or a sphere".into()))
                     }
                 };
                 let light = AreaLight::new(area_shape, a.radiance.to_rgb(), a.two_sided)
@@ -262,6 +273,7 @@ fn build_with_loaders(
                 let shape = match &light.shape {
                     AreaShape::Sphere(s) => Shape::Sphere(*s),
                     AreaShape::Rectangle(r) => Shape::Rectangle(*r),
+                    AreaShape::Disk(d) => Shape::Disk(*d),
                 };
                 objects.push(SceneObject {
                     shape,

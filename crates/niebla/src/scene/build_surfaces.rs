@@ -8,7 +8,9 @@ use std::sync::Arc;
 use super::build_texture::TextureLoader;
 use super::desc::*;
 use super::SceneError;
-use crate::bsdf::{Bsdf, Microfacet, Plastic, Reflector, RoughConductor, RoughDielectric, ThinDielectric, TwoSided};
+use crate::bsdf::{
+    Bsdf, Microfacet, Plastic, Reflector, RoughConductor, RoughDielectric, RoughPlastic, ThinDielectric, TwoSided,
+};
 use crate::color::Rgb;
 use crate::limits::MemoryBudget;
 use crate::texture::Texture;
@@ -51,6 +53,11 @@ pub(super) fn build_surface(
             let (b, t) = plastic(d, path, ctx)?;
             texture = t;
             Bsdf::Plastic(b)
+        }
+        BsdfDesc::RoughPlastic(d) => {
+            let (b, t) = rough_plastic(d, path, ctx)?;
+            texture = t;
+            Bsdf::RoughPlastic(b)
         }
         BsdfDesc::TwoSided(d) => {
             let (front, t_front) = reflector(&d.front, &format!("{path}.bsdf"), ctx)?;
@@ -101,11 +108,15 @@ fn reflector(
             let (b, t) = plastic(d, path, ctx)?;
             (Reflector::Plastic(b), t)
         }
+        BsdfDesc::RoughPlastic(d) => {
+            let (b, t) = rough_plastic(d, path, ctx)?;
+            (Reflector::RoughPlastic(b), t)
+        }
         _ => {
             return Err(SceneError::new(
                 ctx.source,
                 path,
-                "twosided takes a reflecting bsdf (diffuse, conductor, roughconductor or plastic)",
+                "twosided takes a reflecting bsdf (diffuse, conductor, roughconductor, plastic or roughplastic)",
             ))
         }
     })
@@ -160,6 +171,30 @@ fn plastic(
     };
     let eta = d.int_ior / d.ext_ior;
     Ok((Plastic::new(eta, diffuse, specular, d.nonlinear, diffuse_mean, specular.average()), texture))
+}
+
+fn rough_plastic(
+    d: &RoughPlasticDesc,
+    path: &str,
+    ctx: &mut TextureContext,
+) -> Result<(RoughPlastic, Option<Arc<Texture>>), SceneError> {
+    let p = &d.plastic;
+    let (diffuse, texture) = color_or_texture(&p.diffuse_reflectance, &format!("{path}.diffuse_reflectance"), ctx)?;
+    let specular = p.specular_reflectance.to_rgb();
+    let diffuse_mean = match &texture {
+        Some(t) => t.mean(),
+        None => diffuse.average(),
+    };
+    let b = RoughPlastic::new(
+        microfacet(&d.microfacet),
+        p.int_ior / p.ext_ior,
+        diffuse,
+        specular,
+        p.nonlinear,
+        diffuse_mean,
+        specular.average(),
+    );
+    Ok((b, texture))
 }
 
 /// A constant color, or a texture (the constant then 0.5, unused).

@@ -620,6 +620,7 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
         "sphere" => rest(object).map(GeometryDesc::Sphere),
         "box" => rest(object).map(GeometryDesc::Box),
         "rectangle" => rest(object).map(GeometryDesc::Rectangle),
+        "disk" => rest(object).map(GeometryDesc::Disk),
         "mesh" => rest(object).map(GeometryDesc::Mesh),
         _ => Err(unknown_type("shape", &tag, GeometryDesc::TYPES)),
     };
@@ -926,8 +927,9 @@ fn parse_light(mut object: Object) -> Result<LightDesc, Located> {
         "directional" => rest(object).map(LightDesc::Directional),
         "constant" => rest(object).map(LightDesc::Constant),
         "area" => {
-            let shape = take::<ShapeDesc>(&mut object, "shape")?
-                .ok_or_else(|| Located::new("shape", "missing required field `shape`: a rectangle or sphere object"))?;
+            let shape = take::<ShapeDesc>(&mut object, "shape")?.ok_or_else(|| {
+                Located::new("shape", "missing required field `shape`: a rectangle, disk or sphere object")
+            })?;
             let raw: RawArea = rest(object)?;
             Ok(LightDesc::Area(AreaLightDesc { shape, radiance: raw.radiance, two_sided: raw.two_sided }))
         }

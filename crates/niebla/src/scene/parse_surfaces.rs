@@ -1,5 +1,5 @@
 //! Reading the microfacet and layered surfaces (`roughconductor`,
-//! `roughdielectric`, `thindielectric`, `plastic`, `twosided`) from a
+//! `roughdielectric`, `thindielectric`, `plastic`, `roughplastic`, `twosided`) from a
 //! shape's `bsdf` object, with Mitsuba 3's parameter names and defaults.
 
 use serde::Deserialize;
@@ -16,6 +16,7 @@ pub(super) fn parse_surface(tag: &str, object: Object) -> Option<Result<BsdfDesc
         "roughdielectric" => parse_rough_dielectric(object),
         "thindielectric" => parse_thin_dielectric(object),
         "plastic" => parse_plastic(object),
+        "roughplastic" => parse_rough_plastic(object),
         "twosided" => parse_two_sided(object),
         _ => return None,
     })
@@ -222,15 +223,28 @@ struct RawPlastic {
     nonlinear: bool,
 }
 
-fn parse_plastic(object: Object) -> Result<BsdfDesc, Located> {
+fn plastic_desc(object: Object) -> Result<PlasticDesc, Located> {
     let raw: RawPlastic = rest(object)?;
-    Ok(BsdfDesc::Plastic(PlasticDesc {
+    Ok(PlasticDesc {
         diffuse_reflectance: raw.diffuse_reflectance,
         specular_reflectance: raw.specular_reflectance,
         int_ior: raw.int_ior,
         ext_ior: raw.ext_ior,
         nonlinear: raw.nonlinear,
-    }))
+    })
+}
+
+fn parse_plastic(object: Object) -> Result<BsdfDesc, Located> {
+    plastic_desc(object).map(BsdfDesc::Plastic)
+}
+
+fn parse_rough_plastic(mut object: Object) -> Result<BsdfDesc, Located> {
+    let microfacet = take_microfacet(&mut object)?;
+    if let AlphaDesc::Anisotropic { .. } = microfacet.alpha {
+        return Err(Located::new("alpha_u", "roughplastic is isotropic (as in Mitsuba): give `alpha`"));
+    }
+    let plastic = plastic_desc(object)?;
+    Ok(BsdfDesc::RoughPlastic(RoughPlasticDesc { microfacet, plastic }))
 }
 
 #[derive(Deserialize)]

@@ -527,6 +527,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             }
         }
         GeometryDesc::Rectangle(r) => validate_transform(&format!("{base}.to_world"), &r.to_world)?,
+        GeometryDesc::Disk(d) => validate_transform(&format!("{base}.to_world"), &d.to_world)?,
         GeometryDesc::Mesh(m) => validate_mesh(base, m)?,
     }
     if let Some(name) = &shape.interior {
@@ -609,6 +610,19 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
             validate_reflectance(&format!("{base}.diffuse_reflectance"), &d.diffuse_reflectance)?;
             color(&format!("{base}.specular_reflectance"), &d.specular_reflectance, in_unit_interval)
         }
+        BsdfDesc::RoughPlastic(d) => {
+            alpha(&d.microfacet)?;
+            let p = &d.plastic;
+            iors(p.int_ior, p.ext_ior)?;
+            if p.int_ior == p.ext_ior {
+                return fail(
+                    format!("{base}.int_ior"),
+                    format!("must differ from ext_ior ({}): the coating needs an interface (as in Mitsuba)", p.ext_ior),
+                );
+            }
+            validate_reflectance(&format!("{base}.diffuse_reflectance"), &p.diffuse_reflectance)?;
+            color(&format!("{base}.specular_reflectance"), &p.specular_reflectance, in_unit_interval)
+        }
         BsdfDesc::TwoSided(d) => {
             let sides: Vec<(String, &BsdfDesc)> = if d.front == d.back {
                 vec![(format!("{base}.bsdf"), &*d.front)]
@@ -628,11 +642,14 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                     BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => {
                         color(&format!("{path}.reflectance"), r, below_one)?
                     }
-                    BsdfDesc::RoughConductor(_) | BsdfDesc::Plastic(_) => validate_surface(&path, side)?,
+                    BsdfDesc::RoughConductor(_) | BsdfDesc::Plastic(_) | BsdfDesc::RoughPlastic(_) => {
+                        validate_surface(&path, side)?
+                    }
                     _ => {
                         return fail(
                             format!("{path}.type"),
-                            "twosided takes a reflecting bsdf: diffuse, conductor, roughconductor or plastic",
+                            "twosided takes a reflecting bsdf: diffuse, conductor, roughconductor, plastic or \
+                             roughplastic",
                         )
                     }
                 }

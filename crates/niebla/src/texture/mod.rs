@@ -4,7 +4,8 @@
 //! vertex uvs (without them, a hit's barycentric `(b1, b2)`); a sphere maps
 //! the azimuth about +z to `u` (over 2 pi, from +x toward +y) and the polar
 //! angle from +z to `v` (over pi); a rectangle maps its local square
-//! `[-1, 1]^2` to `[0, 1]^2`; a box maps each face's two other coordinates to
+//! `[-1, 1]^2` to `[0, 1]^2`; a disk maps its local radius to `u` and the
+//! azimuth (over 2 pi, from +x toward +y) to `v`; a box maps each face's two other coordinates to
 //! `[0, 1]^2` over the face. A bitmap's `v = 0` is the bottom row of the
 //! image and `v = 1` the top (the convention of OBJ and PLY uvs), `u = 0`
 //! its left column.

@@ -37,7 +37,7 @@
 //! whenever coefficients change (cheap); a view ray only fetches them.
 //!
 //! Scope: point, spot and directional lights; area lights as a few
-//! Lambertian points ([`AREA_PATCHES`]^2 per rectangle, one isotropic point
+//! Lambertian points ([`AREA_PATCHES`]^2 per rectangle or disk, one isotropic point
 //! per sphere); a constant environment or an environment map is
 //! approximated by [`ENVIRONMENT_DIRECTIONS`] directional lights (the cube's
 //! diagonals, each carrying the radiance integral of its octant as
@@ -577,7 +577,7 @@ fn calibration_tables(g: &GridMedium, settings: &HegemanSettings) -> Option<Tabl
 }
 
 /// The scene's lights in the model: point, spot, directional; area lights
-/// as points ([`AREA_PATCHES`]^2 Lambertian points per rectangle, one
+/// as points ([`AREA_PATCHES`]^2 Lambertian points per rectangle or disk, one
 /// isotropic point per sphere); a constant environment or an environment
 /// map as [`ENVIRONMENT_DIRECTIONS`] ambient directions.
 /// [`model_lights`] that are points (point, spot and area lights).
@@ -667,6 +667,25 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                                 source: LightSource::Point(rect.transform.point_to_world(Vec3::new(u, v, 0.0))),
                                 power: area.radiance * share,
                                 emission: Emission::Lambert { normal: rect.normal, two_sided: area.two_sided },
+                                ambient: false,
+                            });
+                        }
+                    }
+                }
+                // A disk as AREA_PATCHES rings x AREA_PATCHES sectors of
+                // equal area, a Lambertian point at each cell's centre.
+                AreaShape::Disk(disk) => {
+                    let n = AREA_PATCHES;
+                    let share = area.area() / (n * n) as f32;
+                    for i in 0..n {
+                        let r = ((i as f32 + 0.5) / n as f32).sqrt();
+                        for j in 0..n {
+                            let phi = 2.0 * std::f32::consts::PI * (j as f32 + 0.5) / n as f32;
+                            let local = Vec3::new(r * phi.cos(), r * phi.sin(), 0.0);
+                            lights.push(ModelLight {
+                                source: LightSource::Point(disk.transform.point_to_world(local)),
+                                power: area.radiance * share,
+                                emission: Emission::Lambert { normal: disk.normal, two_sided: area.two_sided },
                                 ambient: false,
                             });
                         }

@@ -13,7 +13,7 @@ pub enum LightDesc {
     Directional(DirectionalLightDesc),
     /// `"type": "constant"`: uniform environment.
     Constant(ConstantLightDesc),
-    /// `"type": "area"`: an emitting rectangle or sphere.
+    /// `"type": "area"`: an emitting rectangle, disk or sphere.
     Area(AreaLightDesc),
     /// `"type": "envmap"`: a lat-long environment map from an EXR file.
     Envmap(EnvmapLightDesc),
@@ -24,17 +24,17 @@ impl LightDesc {
     pub const TYPES: &'static [&'static str] = &["point", "spot", "directional", "constant", "area", "envmap"];
 }
 
-/// An area light: a `rectangle` or `sphere` (the shape syntax of `shapes`,
-/// without media or bsdf) emitting uniform `radiance` (W/(sr m^2)) from its
-/// front (a rectangle's local +z side, a sphere's outside), or from both sides
-/// of a rectangle with `two_sided`. Its surface is black: it absorbs what hits it.
+/// An area light: a `rectangle`, `disk` or `sphere` (the shape syntax of
+/// `shapes`, without media or bsdf) emitting uniform `radiance` (W/(sr m^2))
+/// from its front (a rectangle's or disk's local +z side, a sphere's
+/// outside), or from both sides of a rectangle or disk with `two_sided`. Its surface is black: it absorbs what hits it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AreaLightDesc {
     /// The emitting shape.
     pub shape: ShapeDesc,
     /// Emitted radiance, finite and >= 0.
     pub radiance: ColorDesc,
-    /// Emit from both sides of a rectangle (default false).
+    /// Emit from both sides of a rectangle or disk (default false).
     pub two_sided: bool,
 }
 

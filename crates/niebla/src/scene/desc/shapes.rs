@@ -31,13 +31,15 @@ pub enum GeometryDesc {
     Box(BoxDesc),
     /// `"type": "rectangle"`.
     Rectangle(RectangleDesc),
+    /// `"type": "disk"`.
+    Disk(DiskDesc),
     /// `"type": "mesh"`: a triangle mesh from a file or inline arrays.
     Mesh(Box<MeshDesc>),
 }
 
 impl GeometryDesc {
     /// The `type` names, in the order of the variants.
-    pub const TYPES: &'static [&'static str] = &["sphere", "box", "rectangle", "mesh"];
+    pub const TYPES: &'static [&'static str] = &["sphere", "box", "rectangle", "disk", "mesh"];
 }
 
 /// A triangle mesh: read from `file` (Wavefront OBJ or PLY, ASCII or
@@ -113,6 +115,16 @@ pub struct BoxDesc {
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RectangleDesc {
+    /// Object-to-world transform; default identity.
+    #[serde(default)]
+    pub to_world: TransformDesc,
+}
+
+/// A disk: the unit disk `x^2 + y^2 <= 1` in the xy plane at `z = 0` with
+/// normal +z (Mitsuba's convention), mapped by `to_world`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiskDesc {
     /// Object-to-world transform; default identity.
     #[serde(default)]
     pub to_world: TransformDesc,
@@ -205,6 +217,8 @@ pub enum BsdfDesc {
     ThinDielectric(ThinDielectricDesc),
     /// `"plastic"`: coated diffuse (see [`PlasticDesc`]).
     Plastic(PlasticDesc),
+    /// `"roughplastic"`: rough coated diffuse (see [`RoughPlasticDesc`]).
+    RoughPlastic(RoughPlasticDesc),
     /// `"twosided"`: reflecting models on both sides (see [`TwoSidedDesc`]).
     TwoSided(TwoSidedDesc),
 }
@@ -236,6 +250,7 @@ impl BsdfDesc {
         "roughdielectric",
         "thindielectric",
         "plastic",
+        "roughplastic",
         "twosided",
     ];
 }

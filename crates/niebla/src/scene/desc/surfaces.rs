@@ -86,6 +86,16 @@ pub struct PlasticDesc {
     pub nonlinear: bool,
 }
 
+/// `"roughplastic"`: a diffuse base under a rough dielectric coating
+/// (Mitsuba's; isotropic roughness only).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughPlasticDesc {
+    /// Normal distribution of the coating (`distribution`, `alpha`; default beckmann, 0.1).
+    pub microfacet: MicrofacetDesc,
+    /// The colors, indices and `nonlinear`, with `plastic`'s defaults.
+    pub plastic: PlasticDesc,
+}
+
 /// `"twosided"`: reflecting models on both sides.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TwoSidedDesc {

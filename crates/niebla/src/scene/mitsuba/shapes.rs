@@ -1,6 +1,7 @@
-//! `<shape>`: `sphere`, `cube`, `rectangle`, `obj`, `ply` (with their
+//! `<shape>`: `sphere`, `cube`, `rectangle`, `disk`, `obj`, `ply` (with their
 //! `to_world`, bsdf, `interior`/`exterior` media and an `area` emitter) into
-//! niebla shapes, or into an area light for an emitting rectangle or sphere.
+//! niebla shapes, or into an area light for an emitting rectangle, disk or
+//! sphere.
 
 use serde_json::{json, Map, Value};
 
@@ -84,10 +85,11 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
                 }
             }
         }
-        "rectangle" => {
-            // Flipping the normal of [-1, 1]^2 is a half turn about x: the same square, facing -z.
+        "rectangle" | "disk" => {
+            // Flipping the normal of [-1, 1]^2 (or of the unit disk) is a half
+            // turn about x: the same set, facing -z.
             let m = if flip { mul(&m, &rotation([1.0, 0.0, 0.0], 180.0)) } else { m };
-            shape.insert("type".into(), json!("rectangle"));
+            shape.insert("type".into(), json!(t));
             if !is_identity(&m) {
                 shape.insert("to_world".into(), to_json(&m));
             }
@@ -107,7 +109,6 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             }
             p.harmless(&["flip_tex_coords"], "ignored (niebla's importer reads no textures)", &mut c.notes);
         }
-        "disk" => return Err(p.error("not supported (niebla has no disk shape; use a rectangle or a mesh)")),
         _ => return Err(p.error("not supported")),
     }
 
@@ -151,9 +152,10 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         }
         let radiance = ep.color("radiance")?.unwrap_or([1.0; 3]);
         ep.finish()?;
-        if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "sphere")) {
+        if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "disk" | "sphere")) {
             return Err(p.error(
-                "an area emitter on this shape is not supported (niebla's area lights are rectangles and spheres)",
+                "an area emitter on this shape is not supported (niebla's area lights are rectangles, disks and \
+                 spheres)",
             ));
         }
         let black = bsdf == json!({"type": "diffuse", "reflectance": 0.0});

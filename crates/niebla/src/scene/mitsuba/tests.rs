@@ -94,6 +94,27 @@ fn media_shapes_and_refs() {
 }
 
 #[test]
+fn disks_keep_their_placement_and_emit() {
+    let s = import(
+        r#"<shape type="disk"><transform name="to_world"><scale value="2"/><translate z="1"/></transform></shape>
+           <shape type="disk"><boolean name="flip_normals" value="true"/>
+             <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#,
+    )
+    .unwrap();
+    let sc = &s.scene;
+    assert_eq!(
+        sc["shapes"][0],
+        json!({"type": "disk", "to_world": {"matrix": [[2.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0],
+               [0.0, 0.0, 2.0, 1.0], [0.0, 0.0, 0.0, 1.0]]}, "bsdf": {"type": "diffuse", "reflectance": 0.5}})
+    );
+    // flip_normals: a half turn about x (y and z negated).
+    assert_eq!(sc["lights"][0]["shape"]["type"], json!("disk"));
+    assert_eq!(sc["lights"][0]["shape"]["to_world"]["matrix"][2][2], json!(-1.0));
+    let desc = crate::scene::parse_scene_str(&sc.to_string(), "t").unwrap();
+    assert!(matches!(desc.shapes[0].geometry, crate::scene::desc::GeometryDesc::Disk(_)));
+}
+
+#[test]
 fn rough_bsdfs_keep_mitsuba_names() {
     let s = import(
         r#"<shape type="sphere"><bsdf type="roughdielectric"><string name="distribution" value="ggx"/>
@@ -118,6 +139,8 @@ fn rough_bsdfs_keep_mitsuba_names() {
         sh[2]["bsdf"],
         json!({"type": "roughconductor", "distribution": "beckmann", "alpha_u": 0.1, "alpha_v": 0.3, "material": "Au"})
     );
+    // niebla reads every one of them.
+    crate::scene::parse_scene_str(&s.scene.to_string(), "t").unwrap();
 }
 
 #[test]
@@ -161,8 +184,11 @@ fn errors_name_file_line_and_element() {
         e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"),
         "{e}"
     );
-    let e = err("<shape type=\"disk\"/>");
-    assert!(e.starts_with("t.xml:8: <shape type=\"disk\">: not supported"), "{e}");
+    let e = err("<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\
+                 <string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>");
+    assert!(e.starts_with("t.xml:8: ") && e.contains("textures and volumes are not supported here"), "{e}");
+    let e = err("<shape type=\"cylinder\"/>");
+    assert!(e.starts_with("t.xml:8: <shape type=\"cylinder\">: not supported"), "{e}");
     let e = err("<shape type=\"sphere\"><float name=\"radius\" value=\"abc\"/></shape>");
     assert!(e.contains("expected one number"), "{e}");
     let e = err("<shape type=\"sphere\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"400:0.1, 700:0.5\"/></bsdf></shape>");
