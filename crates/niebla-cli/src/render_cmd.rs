@@ -101,12 +101,13 @@ pub struct RenderArgs {
     /// library: `pip install pyoidn` and NIEBLA_OIDN_LIBRARY (see README).
     #[arg(long)]
     pub denoise: bool,
-    /// Adaptive sampling: pixels whose estimated relative standard error
-    /// (from all but their last pass) is below THRESHOLD, in (0, 1), stop
-    /// taking samples; the image stays unbiased. --spp is the most a pixel
-    /// takes. The EXR also holds `spp.Z` (samples per pixel) and
-    /// `variance.RGB`; it is not a checkpoint (no --resume). Uses the
-    /// independent sampler (the argument needs independent passes).
+    /// Adaptive sampling: a pixel stops taking samples once the predicted
+    /// relative standard error of its value (from the first half of its
+    /// samples) is below THRESHOLD, in (0, 1), and so is its neighbours';
+    /// the image stays unbiased. --spp is the most a pixel takes. The EXR
+    /// also holds `spp.Z` (samples per pixel) and `variance.RGB`; it is not
+    /// a checkpoint (no --resume). Uses the independent sampler (the
+    /// argument needs independent passes; `--sampler sobol` is refused).
     #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "aovs", "denoise", "transparent"])]
     pub adaptive: Option<f32>,
     /// Render frames of a sequence: `N`, `FIRST-LAST` or `FIRST-LAST:STEP`
@@ -288,6 +289,13 @@ pub fn render_loaded(
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
     if let Some(threshold) = args.adaptive {
+        if args.sampler.as_deref().and_then(SamplerKind::parse) == Some(SamplerKind::Sobol) {
+            return Err(CliError::invalid_option(
+                "--adaptive",
+                "renders with the independent sampler (its unbiasedness needs passes independent of each other, \
+                 which Sobol points are not); drop --sampler sobol",
+            ));
+        }
         let seed = args.seed.or(built.settings.seed);
         let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet: args.quiet.quiet };
         return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, outputs).map(|()| None);

@@ -2,24 +2,45 @@
 //! is below a threshold stop receiving samples, and the image still has
 //! the expectation of the plain render.
 //!
-//! Passes follow the progressive schedule (1, 1, 2, 4, ... samples per
-//! pixel, sample indices continuing), and a pixel takes a pass only while
-//! it is active. **Decisions lag one pass**: whether pixel `p` takes pass
-//! `k` is decided from the samples of passes `< k - 1` alone (of any pixel),
-//! and once inactive a pixel stays so. If `p` stops before pass `K`, its
-//! value is
-//! `(S_{<K-1} + M_{K-1} (N - n_{<K-1})) / N`: the sum of its passes before
-//! the last, plus the mean `M_{K-1}` of its last pass standing in for every
-//! sample it did not take (`N` the samples of the whole schedule). Writing
-//! the value as `sum_i (n_i / N) Z_i` over the schedule's passes, with `Z_i`
-//! the pass mean where `p` took pass `i` and `M_{K-1}` where it did not:
-//! `E[Z_i 1{active at i}] = mu P(active at i)` because the decision uses
-//! passes `< i - 1` only, and `E[M_{K-1} 1{K = k}] = mu P(K = k)` because
-//! the event `K = k` is decided from passes `< k - 1`, which pass `k - 1`'s
-//! samples are independent of. So `E[Z_i] = mu` for every `i` and the
-//! image is unbiased. (Averaging all the samples a pixel took until it
-//! looked converged would not be: a pixel whose first samples happened to
-//! be bright shows a lower relative error and stops sooner.)
+//! **Schedule.** Passes end at the sample counts 1, 2, 3, 4, 6, 8, 12, 16,
+//! 24, ... (powers of two and 1.5 times powers of two, [`schedule`]), then
+//! at `spp`; sample indices continue across passes. A pixel takes a pass
+//! only while it is active, and once stopped it stays so.
+//!
+//! **Decisions see the first half.** Before the pass that starts after
+//! `t` samples, the decisions use the samples `< d` of every pixel, with
+//! `d` the largest pass end `<= t / 2` ([`cutoff`]). A pixel `p` stopping
+//! there gets the value
+//! `(S_{<d} + M_{[d, t)} (N - d)) / N`: the sum of its decided samples plus
+//! the mean of its samples `d .. t` standing in for every sample from `d`
+//! to the schedule's `N`. Unbiased: write the value as `sum_j (n_j / N) Z_j`
+//! over the schedule's passes, `Z_j` being pass `j`'s mean where `p` took
+//! it and the stand-in mean where it did not. Whether `p` is active at pass
+//! `j` depends on samples `< d(b_j) < b_j` only, independent of pass `j`'s
+//! samples, so `E[Z_j 1{active}] = mu P(active)`; the event "`p` stops
+//! before the pass starting at `t`" depends on samples `< d(t)` only, and
+//! the stand-in samples `d(t) .. t` are independent of them, so
+//! `E[M 1{stop at t}] = mu P(stop at t)`. Hence `E[Z_j] = mu` for every
+//! `j`. (Averaging all the samples a pixel took until it looked converged
+//! would not be unbiased: a pixel whose first samples happened to be bright
+//! shows a lower relative error and stops sooner.) The image mean used for
+//! the error floor and a neighbour's decision use other pixels' samples,
+//! which are independent of `p`'s.
+//!
+//! **Error measure.** From the decided samples of a pixel, per channel,
+//! the per-sample relative variance `s^2 / (m^2 + eps)` with
+//! `eps = (0.01 mean(image))^2` (the weights of `Image::relative_mse`),
+//! averaged over the channels, times the factor by which stopping now
+//! scales it, `(d + (N - d)^2 / (t - d)) / N^2`: the predicted relative
+//! variance of the pixel's value if it stops now. A pixel is *converged*
+//! when that is below `threshold^2`, at least [`MIN_DECIDED`] samples are
+//! decided, and every channel with light rests on at least
+//! [`MIN_EFFECTIVE`] effective samples (`S^2 / Q`, sum squared over sum of
+//! squares: about the number of nonzero samples; a mean carried by one
+//! rare bright sample has a sample variance that is not to be trusted). A
+//! pixel stops when it and its eight neighbours are converged (stopped
+//! neighbours count as converged): an isolated noisy pixel keeps its
+//! neighbourhood sampling.
 //!
 //! The argument needs the passes of a pixel to be independent, so adaptive
 //! renders use the independent sampler: Owen-scrambled Sobol points of a
@@ -27,20 +48,28 @@
 //! independent of them (measured: with Sobol the adaptive image mean came
 //! out 4.5 standard errors low on the test scene of `tests/adaptive.rs`).
 //!
-//! A pixel may stop only once its decisions see `spp / 8` samples (at
-//! least 8). The error of a pixel is the standard error of its channel-averaged mean,
-//! from the samples' sums and sums of squares, over that mean (floored at
-//! 1% of the image's mean, so black pixels do not run forever).
+//! Decisions are made serially from exact per-pixel sums, so the image does
+//! not depend on the thread count.
 
+use std::collections::VecDeque;
 use std::sync::atomic::AtomicBool;
 
 use crate::aov::{Aov, AovSet};
 use crate::color::Rgb;
-use crate::film::{mean_of_sum, Image, FRACTION_BITS};
+use crate::film::{Image, FRACTION_BITS};
 use crate::integrator::{IntegratorSettings, PreparedIntegrator};
 use crate::render::{RenderError, RenderOptions};
 use crate::sampling::SamplerKind;
 use crate::world::Scene;
+
+/// Decided samples a pixel needs before it may stop (so the earliest stop
+/// is after 16 samples).
+pub const MIN_DECIDED: u64 = 8;
+
+/// Effective samples (`S^2 / Q` of a channel's decided samples) every
+/// channel with light needs before its pixel may stop (below
+/// [`MIN_DECIDED`], so that equal samples pass despite rounding).
+pub const MIN_EFFECTIVE: f64 = 6.0;
 
 /// The result of an adaptive render.
 #[derive(Clone, Debug)]
@@ -60,7 +89,7 @@ pub struct AdaptiveImage {
 pub struct AdaptiveOptions {
     /// Samples per pixel of the schedule (the most a pixel takes).
     pub spp: u32,
-    /// Relative standard error below which a pixel stops, in (0, 1).
+    /// Relative standard error of a pixel's value below which it stops, in (0, 1).
     pub threshold: f32,
     /// Sampler seed.
     pub seed: u64,
@@ -68,41 +97,108 @@ pub struct AdaptiveOptions {
     pub threads: Option<usize>,
 }
 
-/// Per-pixel running sums (fixed point, as `film::SampleSums`).
-#[derive(Clone, Copy, Default)]
-struct PixelState {
-    /// Sums and squares of the samples of all passes taken.
+/// The sample counts at which the passes of an adaptive render of `spp`
+/// samples per pixel end: 1, 2, 3, 4, 6, 8, 12, ... below `spp`, then `spp`
+/// (empty for 0).
+pub fn schedule(spp: u64) -> Vec<u64> {
+    let mut ends = Vec::new();
+    let mut p = 1u64;
+    while p < spp {
+        ends.push(p);
+        if p >= 2 && p + p / 2 < spp {
+            ends.push(p + p / 2);
+        }
+        p *= 2;
+    }
+    if spp > 0 {
+        ends.push(spp);
+    }
+    ends
+}
+
+/// The decision cutoff before the pass starting after `t` samples: the
+/// largest pass end of `ends` (a [`schedule`]) that is at most `t / 2` (0 if none).
+pub fn cutoff(ends: &[u64], t: u64) -> u64 {
+    ends.iter().copied().filter(|&b| 2 * b <= t).max().unwrap_or(0)
+}
+
+/// Sums and sums of squares (fixed point, as `film::SampleSums`) of `n`
+/// samples of one pixel.
+#[derive(Clone, Copy, Default, Debug)]
+struct Moments {
     sum: [i128; 3],
     square: [i128; 3],
     n: u64,
-    /// The same, up to the pass before the last one taken (what decisions see
-    /// of this pixel after the last pass is in).
-    lagged: ([i128; 3], [i128; 3], u64),
-    /// Sums of the last pass taken, and its size.
-    last: [i128; 3],
-    last_n: u64,
-    active: bool,
+}
+
+impl Moments {
+    fn add(&mut self, other: &Moments) {
+        for c in 0..3 {
+            self.sum[c] += other.sum[c];
+            self.square[c] += other.square[c];
+        }
+        self.n += other.n;
+    }
+
+    /// Mean of channel `c` (0 without samples).
+    fn mean(&self, c: usize) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            to_f64(self.sum[c]) / self.n as f64
+        }
+    }
+
+    /// Unbiased sample variance of channel `c` (0 below two samples).
+    fn sample_variance(&self, c: usize) -> f64 {
+        if self.n < 2 {
+            return 0.0;
+        }
+        let n = self.n as f64;
+        let m = self.mean(c);
+        ((to_f64(self.square[c]) - n * m * m) / (n - 1.0)).max(0.0)
+    }
+
+    /// `S^2 / Q` of channel `c`: the number of equal samples that would
+    /// give these sums (`None` for a channel without light).
+    fn effective_samples(&self, c: usize) -> Option<f64> {
+        let (s, q) = (to_f64(self.sum[c]), to_f64(self.square[c]));
+        (q > 0.0).then(|| s * s / q)
+    }
 }
 
 fn to_f64(v: i128) -> f64 {
     v as f64 * (2f64).powi(-FRACTION_BITS)
 }
 
-/// Relative standard error of the channel-averaged mean of `n` samples with
-/// sums `sum` and sums of squares `square`, against `floor`.
-fn relative_error(sum: [i128; 3], square: [i128; 3], n: u64, floor: f64) -> f64 {
-    if n < 2 {
-        return f64::INFINITY;
-    }
-    let nf = n as f64;
-    let mut mean = 0.0;
-    let mut var = 0.0;
+/// The factor by which a pixel's per-sample variance becomes the variance
+/// of its value when it stops with `d` decided samples and `t` taken, of a
+/// schedule of `n` samples: `(d + (n - d)^2 / (t - d)) / n^2`.
+pub fn stop_variance_factor(d: u64, t: u64, n: u64) -> f64 {
+    let (d, t, n) = (d as f64, t as f64, n as f64);
+    (d + (n - d) * (n - d) / (t - d)) / (n * n)
+}
+
+/// The value and variance of a pixel with `decided` samples `< d` and
+/// `standin` samples `d .. t` whose standin mean stands in for samples
+/// `d .. n` (`standin` empty: the pixel took all `n` samples, all in `decided`).
+fn pixel_value(decided: &Moments, standin: &Moments, n: u64) -> (Rgb, Rgb) {
+    let mut all = *decided;
+    all.add(standin);
+    let nf = n.max(1) as f64;
+    let (mut value, mut variance) = (Rgb::ZERO, Rgb::ZERO);
     for c in 0..3 {
-        let m = to_f64(sum[c]) / nf;
-        mean += m / 3.0;
-        var += ((to_f64(square[c]) - nf * m * m) / (nf * (nf - 1.0))).max(0.0) / 9.0;
+        let s2 = all.sample_variance(c);
+        if standin.n == 0 {
+            value[c] = all.mean(c) as f32;
+            variance[c] = (s2 / all.n.max(1) as f64) as f32;
+        } else {
+            let v = (to_f64(decided.sum[c]) + standin.mean(c) * (n - decided.n) as f64) / nf;
+            value[c] = v as f32;
+            variance[c] = (s2 * stop_variance_factor(decided.n, all.n, n)) as f32;
+        }
     }
-    var.sqrt() / mean.abs().max(floor)
+    (value, variance)
 }
 
 /// Render `scene` adaptively (see the module documentation). `threshold`
@@ -116,95 +212,113 @@ pub fn render_adaptive(
     cancel: Option<&AtomicBool>,
 ) -> Result<AdaptiveImage, RenderError> {
     let prepared = PreparedIntegrator::new(scene, settings);
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let pixels = w as usize * h as usize;
-    let mut state = vec![PixelState { active: true, ..Default::default() }; pixels];
-    let set = AovSet::EMPTY.with(Aov::Variance);
+    let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+    let pixels = w * h;
     let total = u64::from(options.spp);
-    let mut done = 0u64;
-    // A stopped pixel's last pass (as many samples as it had before it)
-    // stands in for all it skips, so a rare bright sample there is scaled
-    // up by up to `total / n`: decisions wait for `total / 8` samples (at
-    // least 8), which bounds that factor by 8 and keeps sample variances
-    // of heavy-tailed pixels from looking converged too early.
-    let min_lagged = (total / 8).max(8);
-    while done < total {
-        let size = crate::progressive::next_pass_size(done).min(total - done);
-        // Decide from what every pixel had before its last pass.
-        let image_mean: f64 = state
-            .iter()
-            .map(|p| {
-                if p.lagged.2 > 0 {
-                    (0..3).map(|c| to_f64(p.lagged.0[c])).sum::<f64>() / (3.0 * p.lagged.2 as f64)
-                } else {
-                    0.0
+    let ends = schedule(total);
+    let threshold2 = (options.threshold as f64).powi(2);
+    let set = AovSet::EMPTY.with(Aov::Variance);
+    let mut active = vec![true; pixels];
+    let mut decided = vec![Moments::default(); pixels];
+    let mut taken = vec![0u64; pixels];
+    let mut value = vec![Rgb::ZERO; pixels];
+    let mut variance = vec![Rgb::ZERO; pixels];
+    // Passes after the cutoff: (start, per-pixel moments of the pass).
+    let mut pending: VecDeque<(u64, Vec<Moments>)> = VecDeque::new();
+    let mut converged = vec![false; pixels];
+    let mut t = 0u64;
+    for &end in &ends {
+        if t > 0 {
+            let d = cutoff(&ends, t);
+            while pending.front().is_some_and(|(start, _)| *start < d) {
+                let (_, pass) = pending.pop_front().expect("checked");
+                for i in (0..pixels).filter(|&i| active[i]) {
+                    decided[i].add(&pass[i]);
                 }
-            })
-            .sum::<f64>()
-            / pixels.max(1) as f64;
-        let floor = (0.01 * image_mean).max(1e-12);
-        for p in state.iter_mut().filter(|p| p.active) {
-            let (sum, square, n) = p.lagged;
-            if n >= min_lagged && relative_error(sum, square, n, floor) < options.threshold as f64 {
-                p.active = false;
+            }
+            if d >= MIN_DECIDED {
+                let image_mean = (0..pixels)
+                    .map(|i| {
+                        if active[i] {
+                            (0..3).map(|c| decided[i].mean(c)).sum::<f64>() / 3.0
+                        } else {
+                            value[i].average() as f64
+                        }
+                    })
+                    .sum::<f64>()
+                    / pixels.max(1) as f64;
+                let eps = (0.01 * image_mean).powi(2).max(f64::MIN_POSITIVE);
+                let factor = stop_variance_factor(d, t, total);
+                for i in 0..pixels {
+                    converged[i] = !active[i] || {
+                        let m = &decided[i];
+                        let relative: f64 =
+                            (0..3).map(|c| m.sample_variance(c) / (m.mean(c).powi(2) + eps)).sum::<f64>() / 3.0;
+                        let trusted = (0..3).all(|c| m.effective_samples(c).is_none_or(|e| e >= MIN_EFFECTIVE));
+                        trusted && relative * factor < threshold2
+                    };
+                }
+                for y in 0..h {
+                    for x in 0..w {
+                        let i = y * w + x;
+                        if !active[i] {
+                            continue;
+                        }
+                        let mut all = true;
+                        for yy in y.saturating_sub(1)..(y + 2).min(h) {
+                            for xx in x.saturating_sub(1)..(x + 2).min(w) {
+                                all &= converged[yy * w + xx];
+                            }
+                        }
+                        if all {
+                            let mut standin = Moments::default();
+                            for (_, pass) in &pending {
+                                standin.add(&pass[i]);
+                            }
+                            (value[i], variance[i]) = pixel_value(&decided[i], &standin, total);
+                            active[i] = false;
+                        }
+                    }
+                }
             }
         }
-        let active: Vec<bool> = state.iter().map(|p| p.active).collect();
         if !active.iter().any(|&a| a) {
             break;
         }
+        let size = end - t;
         let pass = RenderOptions {
             spp: size as u32,
             seed: options.seed,
-            first_sample: done,
+            first_sample: t,
             threads: options.threads,
             sampler: SamplerKind::Independent,
         };
         let (sums, squares) = prepared.render_aov_sums_masked(scene, &pass, set, Some(&active), progress, cancel)?;
-        for (i, p) in state.iter_mut().enumerate().filter(|(_, p)| p.active) {
-            p.lagged = (p.sum, p.square, p.n);
-            p.last = sums.sums[i];
-            p.last_n = size;
-            for c in 0..3 {
-                p.sum[c] += sums.sums[i][c];
-                p.square[c] += squares.values[i * 3 + c];
-            }
-            p.n += size;
-        }
-        done += size;
+        let moments = (0..pixels)
+            .map(|i| {
+                if active[i] {
+                    taken[i] += size;
+                    let square = [0, 1, 2].map(|c| squares.values[i * 3 + c]);
+                    Moments { sum: sums.sums[i], square, n: size }
+                } else {
+                    Moments::default()
+                }
+            })
+            .collect();
+        pending.push_back((t, moments));
+        t = end;
     }
-    let n_total = done.max(1) as f64;
-    let mut image = Image::new(w, h);
-    let mut variance = Vec::with_capacity(pixels);
-    for (i, p) in state.iter().enumerate() {
-        // Samples of the schedule this pixel did not take, stood in for by its last pass.
-        let missing = (done - p.n) as f64;
-        let before_last = p.n - p.last_n;
-        let mut value = Rgb::ZERO;
-        let mut var = Rgb::ZERO;
-        for c in 0..3 {
-            let last_mean = if p.last_n > 0 { to_f64(p.last[c]) / p.last_n as f64 } else { 0.0 };
-            let v = if missing > 0.0 {
-                (to_f64(p.sum[c] - p.last[c]) + last_mean * (p.last_n as f64 + missing)) / n_total
-            } else {
-                mean_of_sum(p.sum[c], p.n) as f64
-            };
-            value[c] = v as f32;
-            // Sample variance of the pixel's samples, propagated through the weights.
-            let n = p.n as f64;
-            let s2 = if p.n > 1 {
-                ((to_f64(p.square[c]) - n * (to_f64(p.sum[c]) / n).powi(2)) / (n - 1.0)).max(0.0)
-            } else {
-                0.0
-            };
-            let w_last = p.last_n as f64 + missing;
-            let weight = if p.last_n > 0 { before_last as f64 + w_last * w_last / p.last_n as f64 } else { 0.0 };
-            var[c] = (s2 * weight / (n_total * n_total)) as f32;
+    // Pixels that took every sample: the mean of all of them.
+    for i in (0..pixels).filter(|&i| active[i]) {
+        let mut all = decided[i];
+        for (_, pass) in &pending {
+            all.add(&pass[i]);
         }
-        image.pixels[i] = value;
-        variance.push(var);
+        (value[i], variance[i]) = pixel_value(&all, &Moments::default(), total);
     }
-    Ok(AdaptiveImage { image, spp: state.iter().map(|p| p.n).collect(), variance, total_spp: done })
+    let mut image = Image::new(w as u32, h as u32);
+    image.pixels = value;
+    Ok(AdaptiveImage { image, spp: taken, variance, total_spp: total })
 }
 
 /// Writes an adaptive render as an EXR: the image (`R`, `G`, `B`), the
@@ -241,4 +355,43 @@ pub fn write_adaptive_exr(
         .to_buffered(std::io::Cursor::new(&mut bytes))
         .map_err(|e| encode(e.to_string()))?;
     crate::film::write_atomically(path, &bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schedule_ends_at_powers_of_two_and_their_halves() {
+        assert_eq!(schedule(64), vec![1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64]);
+        assert_eq!(schedule(20), vec![1, 2, 3, 4, 6, 8, 12, 16, 20]);
+        assert_eq!(schedule(1), vec![1]);
+        assert!(schedule(0).is_empty());
+        let ends = schedule(64);
+        // The cutoff is a pass end at most half the samples taken.
+        assert_eq!([16, 24, 32, 48].map(|t| cutoff(&ends, t)), [8, 12, 16, 24]);
+        assert_eq!(cutoff(&ends, 1), 0);
+    }
+
+    #[test]
+    fn stop_variance_factor_limits() {
+        // Standing in with every remaining sample is the plain mean: 1 / N.
+        assert!((stop_variance_factor(8, 64, 64) - 1.0 / 64.0).abs() < 1e-15);
+        // 8 decided, 8 standing in for 56 of 64: (8 + 56^2 / 8) / 64^2.
+        assert!((stop_variance_factor(8, 16, 64) - 400.0 / 4096.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_stopped_pixel_scales_its_standin_mean() {
+        let q = |v: f64| (v * (2f64).powi(FRACTION_BITS)) as i128;
+        // 4 decided samples of value 1, 4 standin samples of value 3, schedule 16.
+        let decided = Moments { sum: [q(4.0); 3], square: [q(4.0); 3], n: 4 };
+        let standin = Moments { sum: [q(12.0); 3], square: [q(36.0); 3], n: 4 };
+        let (value, variance) = pixel_value(&decided, &standin, 16);
+        // (4 + 3 * 12) / 16 = 2.5.
+        assert!((value[0] - 2.5).abs() < 1e-6, "{value:?}");
+        // Sample variance of four 1s and four 3s: 8 / 7; factor (4 + 144 / 4) / 256.
+        let expected = 8.0 / 7.0 * 40.0 / 256.0;
+        assert!((variance[1] as f64 - expected).abs() < 1e-6, "{variance:?}");
+    }
 }

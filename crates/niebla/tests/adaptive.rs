@@ -29,7 +29,7 @@ fn adaptive_image_has_the_plain_mean() {
     let scene = &built.scene;
     let volpath = registry::defaults("volpath").unwrap();
     let spp = 64;
-    let options = AdaptiveOptions { spp, threshold: 0.05, seed: 7, threads: None };
+    let options = AdaptiveOptions { spp, threshold: 0.3, seed: 7, threads: None };
     let adaptive = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
     let plain_options =
         RenderOptions { spp, seed: 8, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
@@ -65,8 +65,9 @@ fn adaptive_image_has_the_plain_mean() {
 }
 
 /// Unbiasedness over many independent renders of one small image: the
-/// mean of 64 adaptive renders (at most 64 spp) against 64 plain renders
-/// of 64 spp, within 4 SE.
+/// mean of 64 adaptive renders (at most 256 spp, threshold 0.4 so that
+/// many pixels stop) against 64 plain renders
+/// of 256 spp, within 4 SE.
 #[test]
 fn adaptive_mean_over_seeds_matches_the_plain_mean() {
     let built = fog_spot(8, 6);
@@ -79,16 +80,20 @@ fn adaptive_mean_over_seeds_matches_the_plain_mean() {
         (m, (v / values.len() as f64).sqrt())
     };
     let prepared = PreparedIntegrator::new(scene, &volpath);
+    let mut taken = 0u64;
     let adaptive: Vec<f64> = (0..runs)
         .map(|seed| {
-            let options = AdaptiveOptions { spp: 64, threshold: 0.2, seed, threads: None };
-            render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap().image.mean().average() as f64
+            let options = AdaptiveOptions { spp: 256, threshold: 0.4, seed, threads: None };
+            let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
+            taken += result.spp.iter().sum::<u64>();
+            result.image.mean().average() as f64
         })
         .collect();
+    let share = taken as f64 / (runs as f64 * 48.0 * 256.0);
     let plain: Vec<f64> = (0..runs)
         .map(|seed| {
             let options = RenderOptions {
-                spp: 64,
+                spp: 256,
                 seed: 1000 + seed,
                 first_sample: 0,
                 threads: None,
@@ -99,50 +104,201 @@ fn adaptive_mean_over_seeds_matches_the_plain_mean() {
         .collect();
     let ((a, sa), (p, sp)) = (mean_and_se(&adaptive), mean_and_se(&plain));
     let se = (sa * sa + sp * sp).sqrt();
-    eprintln!("image mean over {runs} seeds: adaptive {a:.5} (SE {sa:.1e}), plain {p:.5} (SE {sp:.1e})");
+    eprintln!(
+        "image mean over {runs} seeds: adaptive {a:.5} (SE {sa:.1e}), plain {p:.5} (SE {sp:.1e}); {share:.2} of the samples"
+    );
     assert!((a - p).abs() <= 4.0 * se, "adaptive {a}, plain {p}, SE {se}");
+    assert!(share < 0.9, "some pixels must stop early: took {share:.2} of the samples");
 }
 
-/// The figure of the report (run by hand): time and relative MSE against a
-/// 1024 spp reference, plain (independent and Sobol samplers) and adaptive
-/// (independent, as it must be), on the small fog_spot scene.
+/// Half the image sees a constant environment straight on (every sample
+/// equal: converged at once), half a lit fog box (noisy): the flat pixels
+/// stop at the first decision (16 of 64 samples) with the exact value, the
+/// noisy ones under a strict threshold take every sample.
+#[test]
+fn flat_pixels_stop_early_and_noisy_ones_take_every_sample() {
+    let text = r#"{"version": 1,
+        "camera": {"type": "perspective", "position": [0, 1, 4], "target": [0, 1, 0], "fov_y": 40, "width": 24, "height": 12},
+        "media": {"fog": {"type": "homogeneous", "sigma_t": 1.0, "albedo": 0.8}},
+        "shapes": [{"type": "box", "min": [-4, -2, -1], "max": [-0.2, 4, 1], "interior": "fog", "bsdf": {"type": "null"}}],
+        "lights": [{"type": "spot", "position": [-1, 3, 0], "target": [-1, 0, 0], "intensity": 20, "cutoff_angle": 30, "beam_width": 20},
+                   {"type": "constant", "radiance": [0.1, 0.2, 0.3]}]}"#;
+    let desc = parse_scene_str(text, "flat_noisy.json").unwrap_or_else(|e| panic!("{e}"));
+    let built = build_scene(&desc, "flat_noisy.json", std::path::Path::new(".")).unwrap();
+    let scene = &built.scene;
+    let volpath = registry::defaults("volpath").unwrap();
+    let options = AdaptiveOptions { spp: 64, threshold: 0.01, seed: 3, threads: Some(2) };
+    let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
+    let (w, h) = (24usize, 12usize);
+    for y in 0..h {
+        let row: Vec<u64> = (0..w).map(|x| result.spp[y * w + x]).collect();
+        eprintln!("{row:?}");
+    }
+    for y in 0..h {
+        // Right third: the environment alone (the box's edge projects left of the centre).
+        for x in 2 * w / 3..w {
+            let i = y * w + x;
+            assert_eq!(result.spp[i], 16, "flat pixel ({x}, {y})");
+            let v = result.image.pixels[i];
+            assert!((v[0] - 0.1).abs() < 1e-6 && (v[2] - 0.3).abs() < 1e-6, "flat pixel ({x}, {y}): {v:?}");
+        }
+        // Left third: inside the fog box.
+        for x in 0..w / 3 {
+            assert_eq!(result.spp[y * w + x], 64, "noisy pixel ({x}, {y})");
+        }
+    }
+    // The same render on one thread is the same image.
+    let one =
+        render_adaptive(scene, &volpath, &AdaptiveOptions { threads: Some(1), ..options }, &|_, _| {}, None).unwrap();
+    assert_eq!(one.image, result.image);
+    assert_eq!(one.spp, result.spp);
+}
+
+/// The adaptive mean equals the plain mean on a second scene (a point
+/// light in fog with surfaces, `bench/scenes/fog_point.json` at 16x16),
+/// over 32 seeds each, within 4 SE.
+#[test]
+fn adaptive_mean_matches_the_plain_mean_on_fog_point() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/scenes/fog_point.json");
+    let mut built = niebla::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    built.scene.camera.width = 16;
+    built.scene.camera.height = 16;
+    let scene = &built.scene;
+    let settings = registry::defaults("volpath").unwrap();
+    let prepared = PreparedIntegrator::new(scene, &settings);
+    let runs = 32u64;
+    let stats = |values: &[f64]| {
+        let m = values.iter().sum::<f64>() / values.len() as f64;
+        let v = values.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (values.len() - 1) as f64;
+        (m, v / values.len() as f64)
+    };
+    let (mut adaptive, mut plain, mut taken) = (Vec::new(), Vec::new(), 0u64);
+    for seed in 0..runs {
+        let options = AdaptiveOptions { spp: 64, threshold: 0.3, seed, threads: None };
+        let result = render_adaptive(scene, &settings, &options, &|_, _| {}, None).unwrap();
+        taken += result.spp.iter().sum::<u64>();
+        adaptive.push(result.image.mean().average() as f64);
+        let options = RenderOptions {
+            spp: 64,
+            seed: 5000 + seed,
+            first_sample: 0,
+            threads: None,
+            sampler: SamplerKind::Independent,
+        };
+        plain.push(prepared.render(scene, &options, &|_, _| {}, None).unwrap().mean().average() as f64);
+    }
+    let ((a, va), (p, vp)) = (stats(&adaptive), stats(&plain));
+    let se = (va + vp).sqrt();
+    let share = taken as f64 / (runs as f64 * 256.0 * 64.0);
+    eprintln!(
+        "fog_point image mean over {runs} seeds: adaptive {a:.5}, plain {p:.5}, SE {se:.1e}; {share:.2} of the samples"
+    );
+    assert!((a - p).abs() <= 4.0 * se, "adaptive {a}, plain {p}, SE {se}");
+    assert!(share < 0.9, "some pixels must stop early: took {share:.2} of the samples");
+}
+
+/// Samples per pixel at which relative MSE crosses `target`, interpolated
+/// on log-log axes between the two bracketing points `(spp, rel MSE)`
+/// (sorted by spp); `None` if not bracketed.
+fn samples_to_reach(points: &[(f64, f64)], target: f64) -> Option<f64> {
+    points.windows(2).find(|w| w[0].1 >= target && w[1].1 < target).map(|w| {
+        let (x0, y0, x1, y1) = (w[0].0.ln(), w[0].1.ln(), w[1].0.ln(), w[1].1.ln());
+        (x0 + (target.ln() - y0) * (x1 - x0) / (y1 - y0)).exp()
+    })
+}
+
+/// The figure of the report (run by hand): mean samples per pixel and
+/// seconds to a relative MSE of 1e-2 (and 3.3e-3) against a 4096 spp reference, plain
+/// (independent sampler) and adaptive, on `bench/scenes/fog_spot.json` and
+/// `bench/scenes/fog_point.json` and `bench/scenes/milk_cube.json` at 48x48
+/// (volpath, max depth 64), with the most any sample allocation could gain.
 /// `cargo test -p niebla --test adaptive -- --ignored --nocapture`
+/// (`NIEBLA_FIGURE_SCENES=milk_cube` for a subset).
 #[test]
 #[ignore]
 fn adaptive_time_to_error_figure() {
-    let built = fog_spot(96, 72);
-    let scene = &built.scene;
-    let volpath = registry::defaults("volpath").unwrap();
-    let prepared = PreparedIntegrator::new(scene, &volpath);
-    let plain = |spp: u32, seed: u64, sampler: SamplerKind| {
-        let options = RenderOptions { spp, seed, first_sample: 0, threads: None, sampler };
-        let start = std::time::Instant::now();
-        let image = prepared.render(scene, &options, &|_, _| {}, None).unwrap();
-        (image, start.elapsed().as_secs_f64())
-    };
-    let (reference, t_ref) = plain(1024, 1, SamplerKind::Sobol);
-    eprintln!("reference 1024 spp: {t_ref:.1} s");
-    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
-        for spp in [16, 32, 64, 128, 256] {
-            let (image, t) = plain(spp, 2, sampler);
-            eprintln!(
-                "plain {} {spp:4} spp: rel MSE {:.3e} in {t:.2} s",
-                sampler.name(),
-                image.relative_mse(&reference)
-            );
+    let only = std::env::var("NIEBLA_FIGURE_SCENES").unwrap_or_default();
+    for name in ["fog_spot", "fog_point", "milk_cube"] {
+        if !only.is_empty() && !only.split(',').any(|s| s == name) {
+            continue;
         }
-    }
-    for threshold in [0.1f32, 0.05, 0.03] {
-        for spp in [64, 128, 256] {
-            let options = AdaptiveOptions { spp, threshold, seed: 2, threads: None };
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../bench/scenes/{name}.json"));
+        let mut built = niebla::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        built.scene.camera.width = 48;
+        built.scene.camera.height = 48;
+        let scene = &built.scene;
+        let settings = built.settings.integrator;
+        let prepared = PreparedIntegrator::new(scene, &settings);
+        let plain = |spp: u32, seed: u64| {
+            let options =
+                RenderOptions { spp, seed, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
             let start = std::time::Instant::now();
-            let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
-            let t = start.elapsed().as_secs_f64();
-            let taken = result.spp.iter().sum::<u64>() as f64 / result.spp.len() as f64;
-            eprintln!(
-                "adaptive {spp:4} spp threshold {threshold}: rel MSE {:.3e} in {t:.2} s (mean {taken:.1} spp taken)",
-                result.image.relative_mse(&reference)
-            );
+            let image = prepared.render(scene, &options, &|_, _| {}, None).unwrap();
+            (image, start.elapsed().as_secs_f64())
+        };
+        let (reference, t_ref) = plain(4096, 1);
+        eprintln!("{name} 48x48: reference 4096 spp in {t_ref:.1} s");
+        // Per-sample relative variance of each pixel (the metric's weights),
+        // from the sample variance of a 256 spp render: the most any
+        // allocation of samples can gain over a uniform one is
+        // mean(v) / mean(sqrt(v))^2 (samples n_p proportional to sqrt(v_p)).
+        let set = AovSet::EMPTY.with(Aov::Variance);
+        let options =
+            RenderOptions { spp: 256, seed: 3, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
+        let (sums, layers) = prepared.render_aov_sums(scene, &options, set, &|_, _| {}, None).unwrap();
+        let layers = layers.layers(&sums, 256);
+        let variance = layers.get(Aov::Variance).unwrap();
+        let eps = (0.01 * reference.mean().average() as f64).powi(2);
+        let mut v: Vec<f64> = (0..reference.pixels.len())
+            .map(|i| {
+                let r = reference.pixels[i];
+                (0..3).map(|c| 256.0 * variance.rgb(i)[c] as f64 / ((r[c] as f64).powi(2) + eps)).sum::<f64>() / 3.0
+            })
+            .collect();
+        v.sort_by(f64::total_cmp);
+        let mean_v = v.iter().sum::<f64>() / v.len() as f64;
+        let mean_sqrt = v.iter().map(|x| x.sqrt()).sum::<f64>() / v.len() as f64;
+        let q = |f: f64| v[((v.len() - 1) as f64 * f) as usize];
+        eprintln!(
+            "  per-sample relative variance: mean {mean_v:.3}, quantiles 10% {:.3} 50% {:.3} 90% {:.3} 99% {:.3}; best allocation gain {:.2}x",
+            q(0.1),
+            q(0.5),
+            q(0.9),
+            q(0.99),
+            mean_v / (mean_sqrt * mean_sqrt)
+        );
+        let target = 1e-2;
+        let (mut spp_points, mut time_points) = (Vec::new(), Vec::new());
+        for spp in [8, 16, 32, 64, 128, 256, 512] {
+            let (image, t) = plain(spp, 2);
+            let e = image.relative_mse(&reference);
+            eprintln!("  plain            {spp:4} spp: rel MSE {e:.3e} in {t:.2} s");
+            spp_points.push((spp as f64, e));
+            time_points.push((t, e));
+        }
+        for target in [target, target / 3.0] {
+            let (s, t) = (samples_to_reach(&spp_points, target), samples_to_reach(&time_points, target));
+            eprintln!("  plain to {target:.1e}: {s:.1?} spp, {t:.2?} s");
+        }
+        for threshold in [0.1f32, 0.07, 0.05] {
+            let (mut spp_points, mut time_points) = (Vec::new(), Vec::new());
+            for spp in [16, 32, 64, 128, 256, 512] {
+                let options = AdaptiveOptions { spp, threshold, seed: 2, threads: None };
+                let start = std::time::Instant::now();
+                let result = render_adaptive(scene, &settings, &options, &|_, _| {}, None).unwrap();
+                let t = start.elapsed().as_secs_f64();
+                let taken = result.spp.iter().sum::<u64>() as f64 / result.spp.len() as f64;
+                let e = result.image.relative_mse(&reference);
+                eprintln!(
+                    "  adaptive {threshold:.2} {spp:4} spp: rel MSE {e:.3e} in {t:.2} s, mean {taken:.1} spp taken"
+                );
+                spp_points.push((taken, e));
+                time_points.push((t, e));
+            }
+            for target in [target, target / 3.0] {
+                let (s, t) = (samples_to_reach(&spp_points, target), samples_to_reach(&time_points, target));
+                eprintln!("  adaptive {threshold:.2} to {target:.1e}: {s:.1?} spp, {t:.2?} s");
+            }
         }
     }
 }
