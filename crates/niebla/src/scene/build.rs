@@ -299,6 +299,14 @@ fn build_with_loaders(
     }
 
     let camera = build_camera(&desc.camera, source)?;
+    // Moving media see the shutter: their majorants grow by the largest
+    // displacement over it.
+    let CameraDesc::Perspective(camera_desc) = &desc.camera;
+    for m in &mut media {
+        if let crate::medium::Medium::Grid(g) = m {
+            g.set_shutter(camera.shutter, camera_desc.fps);
+        }
+    }
     let bounds = scene_bounds(&camera, &objects, &lights, &media);
 
     let mut scene = Scene {
