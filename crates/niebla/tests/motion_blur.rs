@@ -14,7 +14,7 @@ use std::sync::OnceLock;
 
 use niebla::film::Image;
 use niebla::render::{render, RenderOptions};
-use niebla::scene::{build_scene, parse_scene_str, BuiltScene, SceneError};
+use niebla::scene::{build_scene, parse_scene_frame, parse_scene_str, BuiltScene, CameraDesc, SceneError};
 
 const FILE: &str = "motion_test.json";
 
@@ -321,4 +321,37 @@ fn bad_motion_input_names_the_file_and_the_field() {
     let e = build_scene(&parse_scene_str(text, FILE).unwrap(), FILE, vdb_dir()).err().expect("an error");
     assert_eq!(e.path, "media.fog.velocity");
     assert!(e.to_string().contains("\"type\": \"vdb\""), "{e}");
+}
+
+#[test]
+fn keyframed_camera_moves_between_its_poses_at_the_shutter_ends() {
+    // Keyframes: x = 0 at frame 1, x = 4 at frame 5 (x = frame - 1 between).
+    let text = |shutter: &str| {
+        format!(
+            r#"{{"version": 1,
+                "camera": {{"type": "perspective", "position": [0, 0, 3], "target": [0, 0, 0],
+                            "width": 4, "height": 4 {shutter},
+                            "keyframes": [{{"frame": 1, "position": [0, 0, 3]}}, {{"frame": 5, "position": [4, 0, 3]}}]}}}}"#
+        )
+    };
+    let camera = |shutter: &str, frame: u32| {
+        let (desc, _) = parse_scene_frame(&text(shutter), FILE, Some(frame)).unwrap();
+        let CameraDesc::Perspective(c) = desc.camera;
+        c
+    };
+    // Shutter [0, 0.5] at frame 2: poses x = 1 and 1.5, so x = 1 at time 0
+    // and 2 at time 1.
+    let c = camera(r#", "shutter_open": 0, "shutter_close": 0.5"#, 2);
+    assert_eq!(c.position, [1.0, 0.0, 3.0]);
+    assert_eq!(c.motion.as_ref().unwrap().position, Some([2.0, 0.0, 3.0]));
+    assert_eq!(c.motion.as_ref().unwrap().target, None);
+    // Shutter [-0.5, 0.5] at frame 1, where the keyframes start (held
+    // before): poses x = 0 at 0.5 and 0.5 at 1.5, the line x = 0.25 + 0.5 t.
+    let c = camera(r#", "shutter_open": -0.5, "shutter_close": 0.5"#, 1);
+    assert_eq!(c.position, [0.25, 0.0, 3.0]);
+    assert_eq!(c.motion.as_ref().unwrap().position, Some([0.75, 0.0, 3.0]));
+    // A closed shutter: no motion, the keyframed pose.
+    let c = camera("", 2);
+    assert_eq!(c.position, [1.0, 0.0, 3.0]);
+    assert!(c.motion.is_none());
 }
