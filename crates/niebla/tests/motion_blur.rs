@@ -355,3 +355,32 @@ fn keyframed_camera_moves_between_its_poses_at_the_shutter_ends() {
     assert_eq!(c.position, [1.0, 0.0, 3.0]);
     assert!(c.motion.is_none());
 }
+
+#[test]
+fn pyro_medium_moves_by_its_velocity_grid() {
+    // An emitting pyro blob (constant emission colour where the density is
+    // positive): the zero velocity grid gives the still image bit for bit,
+    // `vel` blurs it, and a missing grid is an error at the field.
+    let pyro = |extra: &str| {
+        let text = format!(
+            r#"{{"version": 1,
+                "camera": {{"type": "perspective", "position": [0, 0, 3], "target": [0, 0, 0],
+                            "fov_y": 26, "width": 16, "height": 16 {}}},
+                "render": {{"integrator": {{"type": "volpath"}}, "spp": 8, "seed": 3}},
+                "media": {{"fire": {{"type": "pyro", "file": "blob.vdb", "density": 8,
+                                     "emission_strength": 2 {extra}}}}},
+                "shapes": [{{"type": "box", "min": [-1.5, -1.5, -1.5], "max": [1.5, 1.5, 1.5], "interior": "fire"}}]}}"#,
+            camera_shutter()
+        );
+        build_scene(&parse_scene_str(&text, FILE).unwrap(), FILE, vdb_dir())
+    };
+    let still = render_batch(&pyro("").unwrap(), 8, 0);
+    let zero = render_batch(&pyro(r#", "velocity": "zero""#).unwrap(), 8, 0);
+    assert!(still.pixels.iter().zip(&zero.pixels).all(|(p, q)| p.0.map(f32::to_bits) == q.0.map(f32::to_bits)));
+    let moving = strips(&render_batch(&pyro(r#", "velocity": "vel""#).unwrap(), 8, 0));
+    let still = strips(&still);
+    // The blob moves toward +x (strip 3): more light there, less in strip 0.
+    assert!(moving[3] > still[3] * 1.05 && moving[0] < still[0], "{moving:?} vs {still:?}");
+    let e = pyro(r#", "velocity": "velocity""#).err().expect("an error");
+    assert_eq!(e.path, "media.fire.velocity");
+}
