@@ -280,6 +280,13 @@ fn moving_camera_equals_the_average_of_renders_at_sub_times() {
     assert_blur_matches(&blurred, &averaged, &unblurred, "moving camera");
 }
 
+fn expect_error(built: Result<BuiltScene, SceneError>) -> SceneError {
+    match built {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e,
+    }
+}
+
 fn error_of(camera_extra: &str, medium_extra: &str) -> SceneError {
     match scene(camera_extra, medium_extra) {
         Ok(_) => panic!("expected an error for {camera_extra} {medium_extra}"),
@@ -318,7 +325,7 @@ fn bad_motion_input_names_the_file_and_the_field() {
         "camera": {"type": "perspective", "position": [0, 0, 3], "target": [0, 0, 0], "width": 4, "height": 4},
         "media": {"fog": {"type": "grid", "density": {"type": "constant"}, "sigma_t": 1, "albedo": 1,
                           "velocity": "vel"}}}"#;
-    let e = build_scene(&parse_scene_str(text, FILE).unwrap(), FILE, vdb_dir()).err().expect("an error");
+    let e = expect_error(build_scene(&parse_scene_str(text, FILE).unwrap(), FILE, vdb_dir()));
     assert_eq!(e.path, "media.fog.velocity");
     assert!(e.to_string().contains("\"type\": \"vdb\""), "{e}");
 }
@@ -381,6 +388,6 @@ fn pyro_medium_moves_by_its_velocity_grid() {
     let still = strips(&still);
     // The blob moves toward +x (strip 3): more light there, less in strip 0.
     assert!(moving[3] > still[3] * 1.05 && moving[0] < still[0], "{moving:?} vs {still:?}");
-    let e = pyro(r#", "velocity": "velocity""#).err().expect("an error");
+    let e = expect_error(pyro(r#", "velocity": "velocity""#));
     assert_eq!(e.path, "media.fire.velocity");
 }
