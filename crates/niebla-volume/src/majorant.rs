@@ -168,6 +168,69 @@ impl DensityBoundGrid {
         (lo, hi)
     }
 
+    /// Cell size along each axis.
+    pub fn cell_size(&self) -> [f32; 3] {
+        std::array::from_fn(|a| (self.bounds_max[a] - self.bounds_min[a]) / self.res[a] as f32)
+    }
+
+    /// The majorants of the field displaced by at most `radius[a]` cells
+    /// along each axis `a` (motion blur: the field at `x` read at `x - v
+    /// t`): the box grown by `radius` cells on every side and each cell the
+    /// largest value of the cells within `radius` of it (a separable max
+    /// filter; cells outside the original box count as zero). The grown
+    /// cells have the original cell size up to rounding, which the caller
+    /// covers by a radius one larger than the displacement needs.
+    ///
+    /// ```
+    /// use niebla_volume::MajorantGrid;
+    /// let m = MajorantGrid::new([3, 1, 1], [0.0; 3], [3.0, 1.0, 1.0], vec![0.0, 2.0, 0.0]).unwrap();
+    /// let d = m.dilated([1, 0, 0]);
+    /// assert_eq!(d.res(), [5, 1, 1]);
+    /// assert_eq!(d.bounds(), ([-1.0, 0.0, 0.0], [4.0, 1.0, 1.0]));
+    /// assert_eq!(d.values(), &[0.0, 2.0, 2.0, 2.0, 0.0]);
+    /// ```
+    pub fn dilated(&self, radius: [usize; 3]) -> DensityBoundGrid {
+        let h = self.cell_size();
+        let res: [usize; 3] = std::array::from_fn(|a| self.res[a] + 2 * radius[a]);
+        let bounds_min = std::array::from_fn(|a| self.bounds_min[a] - radius[a] as f32 * h[a]);
+        let bounds_max = std::array::from_fn(|a| self.bounds_max[a] + radius[a] as f32 * h[a]);
+        // Place the old values in the grown grid, then max-filter per axis.
+        let index = |c: [usize; 3], res: [usize; 3]| (c[2] * res[1] + c[1]) * res[0] + c[0];
+        let mut values = vec![0.0f32; res.iter().product()];
+        for z in 0..self.res[2] {
+            for y in 0..self.res[1] {
+                for x in 0..self.res[0] {
+                    let v = self.values[index([x, y, z], self.res)];
+                    values[index([x + radius[0], y + radius[1], z + radius[2]], res)] = v;
+                }
+            }
+        }
+        for a in 0..3 {
+            let r = radius[a];
+            if r == 0 {
+                continue;
+            }
+            let source = values.clone();
+            for z in 0..res[2] {
+                for y in 0..res[1] {
+                    for x in 0..res[0] {
+                        let c = [x, y, z];
+                        let lo = c[a].saturating_sub(r);
+                        let hi = (c[a] + r).min(res[a] - 1);
+                        let mut m = 0.0f32;
+                        for k in lo..=hi {
+                            let mut n = c;
+                            n[a] = k;
+                            m = m.max(source[index(n, res)]);
+                        }
+                        values[index(c, res)] = m;
+                    }
+                }
+            }
+        }
+        DensityBoundGrid { res, bounds_min, bounds_max, values }
+    }
+
     /// Coordinate of the cell boundary plane `k` along axis `a` (the same
     /// formula the DDA uses, so both agree to the bit).
     #[inline(always)]

@@ -231,7 +231,7 @@ pub fn pixel_sum<I: Integrator>(scene: &Scene, integrator: &I, options: &RenderO
     let mut sum = [0i128; 3];
     for s in options.first_sample..options.first_sample + options.spp as u64 {
         let mut sampler = PixelSampler::for_pixel(options.sampler, options.seed, x, y, s);
-        let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
+        let ray = scene.camera.sample_ray(x, y, &mut sampler);
         let l = integrator.radiance(scene, ray, scene.camera_medium, &mut sampler);
         debug_assert!(l.is_finite(), "non-finite radiance {l:?} at pixel ({x}, {y}) sample {s}");
         if l.is_finite() {

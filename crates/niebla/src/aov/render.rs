@@ -57,7 +57,7 @@ pub fn render_aov_sums_masked_with<I: Integrator>(
         }
         for s in options.first_sample..options.first_sample + options.spp as u64 {
             let mut sampler = PixelSampler::for_pixel(options.sampler, options.seed, x, y, s);
-            let ray = scene.camera.generate_ray(x, y, sampler.next_2d());
+            let ray = scene.camera.sample_ray(x, y, &mut sampler);
             let mut split = integrator.radiance_split(scene, ray, scene.camera_medium, &mut sampler);
             debug_assert!(
                 split.total.is_finite(),

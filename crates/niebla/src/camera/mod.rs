@@ -1,6 +1,21 @@
 //! Cameras.
 
 use crate::math::{Ray, Vec2, Vec3};
+use crate::sampling::PixelSampler;
+
+/// A camera that moves during the shutter: its eye, target and up at the
+/// rendered frame (time 0) and one frame later (time 1), interpolated
+/// linearly in time (frames) and extrapolated outside `[0, 1]`; the field of
+/// view stays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraMotion {
+    /// Eye at times 0 and 1.
+    pub position: [Vec3; 2],
+    /// Target at times 0 and 1.
+    pub target: [Vec3; 2],
+    /// Approximate up at times 0 and 1.
+    pub up: [Vec3; 2],
+}
 
 /// A pinhole perspective camera looking from `position` toward a target.
 ///
@@ -24,6 +39,13 @@ pub struct PerspectiveCamera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Shutter opening and closing instants, in frames relative to the
+    /// rendered frame (`open <= close`); equal: no motion blur, every sample
+    /// at that instant without drawing a number.
+    pub shutter: [f32; 2],
+    /// How the camera moves, if it does; the fields above are its pose at
+    /// time 0.
+    pub motion: Option<CameraMotion>,
 }
 
 impl PerspectiveCamera {
@@ -48,7 +70,48 @@ impl PerspectiveCamera {
             tan_half_fov_y: (0.5 * fov_y_deg.to_radians()).tan(),
             width,
             height,
+            shutter: [0.0; 2],
+            motion: None,
         })
+    }
+
+    /// The instant of a camera sample: uniform in the shutter interval (one
+    /// number drawn from `sampler`), or the shutter's single instant (no
+    /// number drawn, so scenes without motion blur keep their numbers).
+    #[inline]
+    pub fn sample_time(&self, sampler: &mut PixelSampler) -> f32 {
+        let [open, close] = self.shutter;
+        if open == close {
+            open
+        } else {
+            open + (close - open) * sampler.next_1d()
+        }
+    }
+
+    /// The camera sample of pixel `(x, y)`: a uniform point of the pixel
+    /// (a 2D draw), then its instant ([`PerspectiveCamera::sample_time`]),
+    /// which is stored in `sampler` ([`PixelSampler::time`]); the ray is
+    /// shot from the camera's pose at that instant.
+    #[inline]
+    pub fn sample_ray(&self, x: u32, y: u32, sampler: &mut PixelSampler) -> Ray {
+        let u = sampler.next_2d();
+        let time = self.sample_time(sampler);
+        sampler.set_time(time);
+        match &self.motion {
+            None => self.generate_ray(x, y, u),
+            Some(m) => self.at_time(m, time).generate_ray(x, y, u),
+        }
+    }
+
+    /// The static camera posed as `motion` is at `time` (frames); the
+    /// camera itself where the interpolated frame is degenerate (scene
+    /// validation rejects such motions at the shutter's ends).
+    pub fn at_time(&self, motion: &CameraMotion, time: f32) -> PerspectiveCamera {
+        let lerp = |v: [Vec3; 2]| v[0] + (v[1] - v[0]) * time;
+        let (position, target, up) = (lerp(motion.position), lerp(motion.target), lerp(motion.up));
+        let Some(forward) = (target - position).try_normalize() else { return *self };
+        let Some(right) = forward.cross(up).try_normalize() else { return *self };
+        PerspectiveCamera { position, forward, right, up: right.cross(forward), motion: None, ..*self }
     }
 
     /// Ray through the point `(x + u.x, y + u.y)` of the image plane (pixel units).

@@ -138,7 +138,7 @@ fn sample_volume_light(
     if !(dist2 > 0.0) || !(s.pdf > 0.0) {
         return None;
     }
-    let l_ve = scene.medium(s.medium).at(s.p).l_ve;
+    let l_ve = scene.medium(s.medium).at_time(s.p, sampler.time()).l_ve;
     if l_ve.is_black() {
         return None;
     }

@@ -456,6 +456,39 @@ impl PreparedIntegrator {
         true
     }
 
+    /// An error when `scene` has a moving medium (a velocity grid seen
+    /// through an open shutter) and this integrator does not see media at
+    /// each camera sample's time: those that precompute the media (hegeman,
+    /// zhou), trace photons (photon, ppm, ppb) or use closed forms
+    /// (analytic). Emission, single and volpath track at the sample's time.
+    fn check_motion(&self, scene: &Scene) -> Result<(), RenderError> {
+        let name = match self {
+            PreparedIntegrator::Emission(_) | PreparedIntegrator::Single(_) | PreparedIntegrator::VolPath(_) => {
+                return Ok(())
+            }
+            PreparedIntegrator::Analytic(_) => "analytic",
+            PreparedIntegrator::Hegeman(_) => "hegeman",
+            PreparedIntegrator::Zhou(_) => "zhou",
+            PreparedIntegrator::Photon(_) => "photon",
+            PreparedIntegrator::Ppm(_) => "ppm",
+            PreparedIntegrator::Ppb(_) => "ppb",
+        };
+        let moving = scene.media.iter().position(|m| matches!(m, crate::medium::Medium::Grid(g) if g.motion.is_some()));
+        match moving {
+            None => Ok(()),
+            Some(index) => {
+                let medium = scene.medium_names.get(index).cloned().unwrap_or_else(|| format!("#{index}"));
+                Err(RenderError::Unsupported {
+                    integrator: name,
+                    reason: format!(
+                        "medium {medium:?} moves during the shutter (its `velocity` grid); motion blur of media \
+                         is rendered by volpath, single and emission"
+                    ),
+                })
+            }
+        }
+    }
+
     /// Render `options.spp` samples per pixel of `scene` (the scene the
     /// integrator was prepared for): the mean of [`Self::render_sums`].
     pub fn render(
@@ -477,6 +510,7 @@ impl PreparedIntegrator {
         progress: ProgressFn,
         cancel: Option<&AtomicBool>,
     ) -> Result<SampleSums, RenderError> {
+        self.check_motion(scene)?;
         match self {
             PreparedIntegrator::Emission(i) => render_sums_with(scene, i, options, progress, cancel),
             PreparedIntegrator::Single(i) => render_sums_with(scene, i, options, progress, cancel),
@@ -516,6 +550,7 @@ impl PreparedIntegrator {
         cancel: Option<&AtomicBool>,
     ) -> Result<(SampleSums, crate::aov::AovSums), RenderError> {
         use crate::aov::render_aov_sums_masked_with as with;
+        self.check_motion(scene)?;
         match self {
             PreparedIntegrator::Emission(i) => with(scene, i, options, set, active, progress, cancel),
             PreparedIntegrator::Single(i) => with(scene, i, options, set, active, progress, cancel),

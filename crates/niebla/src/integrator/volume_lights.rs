@@ -344,7 +344,7 @@ pub fn majorant_at(medium: &Medium, p: Vec3) -> Rgb {
     match medium {
         Medium::Homogeneous(h) => h.sigma_t(),
         Medium::Grid(g) => {
-            let m = &g.majorant;
+            let m = g.tracking_majorant();
             let res = m.res();
             let (lo, hi) = m.bounds();
             let q = g.world_to_grid.transform_point3(p);

@@ -4,8 +4,8 @@
 
 use std::sync::Arc;
 
-use glam::Affine3A;
-use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid};
+use glam::{Affine3A, Mat3};
+use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid, SparseVec3Grid};
 
 use crate::color::{BlackbodyTable, Rgb};
 use crate::math::{Ray, Vec3};
@@ -89,6 +89,64 @@ pub enum GridEmission {
     Pyro(Box<super::PyroEmission>),
 }
 
+/// Eulerian motion of a grid medium from a velocity grid: at time `t`
+/// (frames relative to the rendered frame) the fields at a point `x` are
+/// those of the stored grids at `x - v(x) t` (semi-Lagrangian advection by
+/// one step, as production renderers blur smoke caches). The displacement
+/// is computed in the density grid's space, so a zero velocity leaves every
+/// lookup bit-identical.
+#[derive(Clone, Debug)]
+pub struct GridMotion {
+    /// The velocity grid, looked up trilinearly in its index space (zero,
+    /// its background, outside its data).
+    pub velocity: Arc<SparseVec3Grid>,
+    /// The density grid's space to the velocity grid's index space.
+    pub grid_to_velocity: Affine3A,
+    /// A stored velocity to its displacement per frame in the density grid's
+    /// space (units, the medium's `to_world` and the frame rate applied).
+    pub to_grid_per_frame: Mat3,
+    /// The same displacement in the world (for emission fields, which have
+    /// their own spaces).
+    pub to_world_per_frame: Mat3,
+    /// The largest absolute value of each stored velocity component
+    /// (background, tiles and voxels).
+    pub max_abs_velocity: [f32; 3],
+    /// Whether the stored values are per second (else per frame): until
+    /// [`GridMedium::set_shutter`], the matrices above map to displacements
+    /// per second.
+    pub per_second: bool,
+    /// The majorant grid of the moving density over the shutter: the static
+    /// one dilated by the largest displacement ([`GridMedium::set_shutter`]).
+    pub majorant: MajorantGrid,
+}
+
+impl GridMotion {
+    /// The density grid's point whose stored values are seen at grid point
+    /// `p` at `time` (frames): `p - v(p) time`.
+    #[inline]
+    pub fn source_point(&self, p: Vec3, time: f32) -> Vec3 {
+        let v = self.velocity.lookup_index(self.grid_to_velocity.transform_point3(p).to_array());
+        p - self.to_grid_per_frame * Vec3::from(v) * time
+    }
+
+    /// The world point whose stored values are seen at world point `p_world`
+    /// (density grid point `p_grid`) at `time`.
+    #[inline]
+    pub fn source_world_point(&self, p_world: Vec3, p_grid: Vec3, time: f32) -> Vec3 {
+        let v = self.velocity.lookup_index(self.grid_to_velocity.transform_point3(p_grid).to_array());
+        p_world - self.to_world_per_frame * Vec3::from(v) * time
+    }
+
+    /// The largest displacement along each axis of the density grid's space
+    /// over times of absolute value at most `max_abs_time` (frames).
+    pub fn max_displacement(&self, max_abs_time: f32) -> [f32; 3] {
+        let m = self.to_grid_per_frame;
+        let rows = [m.row(0), m.row(1), m.row(2)];
+        let v = Vec3::from(self.max_abs_velocity);
+        rows.map(|r| r.abs().dot(v) * max_abs_time)
+    }
+}
+
 /// A heterogeneous medium: `sigma_x(p) = density(p) * sigma_x`.
 #[derive(Clone, Debug)]
 pub struct GridMedium {
@@ -109,8 +167,11 @@ pub struct GridMedium {
     pub emission: GridEmission,
     /// Phase function.
     pub phase: PhaseFunction,
-    /// World-space bounding box of the majorant grid (outside: no medium).
+    /// World-space bounding box of the majorant grid (outside: no medium);
+    /// with motion, of the dilated majorant grid.
     pub world_bounds: (Vec3, Vec3),
+    /// Eulerian motion blur from a velocity grid, if the medium moves.
+    pub motion: Option<GridMotion>,
 }
 
 impl GridMedium {
@@ -126,20 +187,7 @@ impl GridMedium {
         emission: GridEmission,
         phase: PhaseFunction,
     ) -> GridMedium {
-        let grid_to_world = world_to_grid.inverse();
-        let (lo, hi) = majorant.bounds();
-        let mut wlo = Vec3::splat(f32::INFINITY);
-        let mut whi = Vec3::splat(f32::NEG_INFINITY);
-        for k in 0..8 {
-            let c = Vec3::new(
-                if k & 1 == 0 { lo[0] } else { hi[0] },
-                if k & 2 == 0 { lo[1] } else { hi[1] },
-                if k & 4 == 0 { lo[2] } else { hi[2] },
-            );
-            let w = grid_to_world.transform_point3(c);
-            wlo = wlo.min(w);
-            whi = whi.max(w);
-        }
+        let world_bounds = world_box(&world_to_grid, &majorant);
         GridMedium {
             sigma_a,
             sigma_s,
@@ -149,10 +197,117 @@ impl GridMedium {
             minorant,
             emission,
             phase,
-            world_bounds: (wlo, whi),
+            world_bounds,
+            motion: None,
         }
     }
 
+    /// Sets the exposure of a moving medium: its motion scaled to frames
+    /// (`per_second` values divided by `fps`) and its majorant dilated by
+    /// the largest displacement over the `shutter` (frames) plus one cell
+    /// for rounding, its world bounds grown to match. Without motion, or
+    /// with a shutter of the single instant 0, the medium stays static
+    /// (and renders as without a velocity grid).
+    pub fn set_shutter(&mut self, shutter: [f32; 2], fps: f32) {
+        let Some(mut motion) = self.motion.take() else { return };
+        let max_abs_time = shutter[0].abs().max(shutter[1].abs());
+        if max_abs_time == 0.0 {
+            return;
+        }
+        if motion.per_second {
+            motion.per_second = false;
+            motion.to_grid_per_frame *= 1.0 / fps;
+            motion.to_world_per_frame *= 1.0 / fps;
+        }
+        let d = motion.max_displacement(max_abs_time);
+        let h = self.majorant.cell_size();
+        // No displacement along an axis: no growth (a zero velocity keeps
+        // the static majorant, so the image is the static one bit for bit);
+        // else one cell more than the displacement covers, for rounding.
+        // A displacement beyond the grid's own size is cut there (the box
+        // grows by at most its size on each side; the max filter then spans
+        // the whole axis, so inside the grown box the bound holds).
+        let res = self.majorant.res();
+        let radius: [usize; 3] = std::array::from_fn(|a| {
+            let cells = (d[a] / h[a]).ceil();
+            if d[a] == 0.0 {
+                0
+            } else if cells.is_finite() && cells < res[a] as f32 {
+                cells as usize + 1
+            } else {
+                res[a]
+            }
+        });
+        if radius != [0; 3] {
+            // The minima no longer bound the moving density from below.
+            self.minorant = None;
+        }
+        motion.majorant = self.majorant.dilated(radius);
+        self.world_bounds = world_box(&self.world_to_grid, &motion.majorant);
+        self.motion = Some(motion);
+    }
+
+    /// The majorant grid trackers use: the dilated one of a moving medium.
+    #[inline]
+    pub fn tracking_majorant(&self) -> &MajorantGrid {
+        self.motion.as_ref().map_or(&self.majorant, |m| &m.majorant)
+    }
+
+    /// Density at world point `p` at `time` (frames; 0 for a static view).
+    #[inline]
+    pub fn density_at_time(&self, p: Vec3, time: f32) -> f32 {
+        let g = self.world_to_grid.transform_point3(p);
+        match &self.motion {
+            Some(m) if time != 0.0 => self.density.lookup(m.source_point(g, time)),
+            _ => self.density.lookup(g),
+        }
+    }
+
+    /// Emitted radiance per unit length at world point `p` at `time` with
+    /// density `density` (already looked up at `time`): emission fields are
+    /// read at the point the motion brings to `p`.
+    #[inline]
+    pub fn l_ve_at_time(&self, p: Vec3, density: f32, time: f32) -> Rgb {
+        match (&self.motion, &self.emission) {
+            (Some(m), GridEmission::Field { .. } | GridEmission::Temperature { .. } | GridEmission::Pyro(_))
+                if time != 0.0 =>
+            {
+                let g = self.world_to_grid.transform_point3(p);
+                self.l_ve(m.source_world_point(p, g, time), density)
+            }
+            _ => self.l_ve(p, density),
+        }
+    }
+
+    /// Coefficients at world point `p` at `time` (frames).
+    #[inline]
+    pub fn point_at_time(&self, p: Vec3, time: f32) -> MediumPoint {
+        let d = self.density_at_time(p, time);
+        MediumPoint { sigma_a: self.sigma_a * d, sigma_s: self.sigma_s * d, l_ve: self.l_ve_at_time(p, d, time) }
+    }
+}
+
+/// The world-space bounding box of a bound grid's box placed by the inverse
+/// of `world_to_grid`.
+fn world_box(world_to_grid: &Affine3A, majorant: &MajorantGrid) -> (Vec3, Vec3) {
+    let grid_to_world = world_to_grid.inverse();
+    let (lo, hi) = majorant.bounds();
+    let mut wlo = Vec3::splat(f32::INFINITY);
+    let mut whi = Vec3::splat(f32::NEG_INFINITY);
+    for k in 0..8 {
+        let c = Vec3::new(
+            if k & 1 == 0 { lo[0] } else { hi[0] },
+            if k & 2 == 0 { lo[1] } else { hi[1] },
+            if k & 4 == 0 { lo[2] } else { hi[2] },
+        );
+        let w = grid_to_world.transform_point3(c);
+        wlo = wlo.min(w);
+        whi = whi.max(w);
+    }
+    (wlo, whi)
+}
+
+impl GridMedium {
     /// Extinction per unit density.
     #[inline]
     pub fn sigma_t(&self) -> Rgb {
@@ -192,7 +347,7 @@ impl GridMedium {
 
     /// Largest extinction anywhere (max over channels).
     pub fn max_sigma_t(&self) -> f32 {
-        self.majorant.max_value() * self.sigma_t().max_channel()
+        self.tracking_majorant().max_value() * self.sigma_t().max_channel()
     }
 
     /// Parameter range `[t0, t1]` of `ray` within `[t_min, t_max]` inside the

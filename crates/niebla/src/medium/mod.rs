@@ -10,7 +10,7 @@ mod grid;
 mod homogeneous;
 mod pyro;
 
-pub use grid::{DensityGrid, GridEmission, GridField, GridMedium};
+pub use grid::{DensityGrid, GridEmission, GridField, GridMedium, GridMotion};
 pub use homogeneous::HomogeneousMedium;
 pub use pyro::{ColorRamp, PyroEmission, PyroTemperature, PYRO_STEFAN_BOLTZMANN};
 
@@ -54,12 +54,23 @@ pub enum Medium {
 }
 
 impl Medium {
-    /// Coefficients at world point `p`.
+    /// Coefficients at world point `p` (a moving medium at time 0).
     #[inline]
     pub fn at(&self, p: Vec3) -> MediumPoint {
         match self {
             Medium::Homogeneous(m) => m.point(),
             Medium::Grid(m) => m.point(p),
+        }
+    }
+
+    /// Coefficients at world point `p` at `time` (frames relative to the
+    /// rendered frame, a camera sample's
+    /// [`crate::sampling::PixelSampler::time`]).
+    #[inline]
+    pub fn at_time(&self, p: Vec3, time: f32) -> MediumPoint {
+        match self {
+            Medium::Homogeneous(m) => m.point(),
+            Medium::Grid(m) => m.point_at_time(p, time),
         }
     }
 

@@ -103,6 +103,9 @@ pub struct PixelSampler {
     /// Sample index and pixel hash, for choices stratified across samples.
     stratum: u64,
     mode: Mode,
+    /// Instant of the camera sample (frames relative to the rendered frame,
+    /// see [`PixelSampler::time`]).
+    time: f32,
 }
 
 impl PixelSampler {
@@ -112,7 +115,7 @@ impl PixelSampler {
         let pixel = ((y as u64) << 32) | x as u64;
         let key = hash_u64(hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03));
         let stratum = sample_index.wrapping_add(hash_u64(hash_u64(seed) ^ pixel) % 1_000_003);
-        PixelSampler { key, dimension: 0, stratum, mode: Mode::Independent }
+        PixelSampler { key, dimension: 0, stratum, mode: Mode::Independent, time: 0.0 }
     }
 
     /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with
@@ -135,14 +138,14 @@ impl PixelSampler {
                     pair: u64::MAX,
                     values: [0; 2],
                 };
-                PixelSampler { key, dimension: 0, stratum, mode }
+                PixelSampler { key, dimension: 0, stratum, mode, time: 0.0 }
             }
         }
     }
 
     /// A stream keyed by an arbitrary 64-bit value (photon index, test seed, ...).
     pub fn from_key(key: u64) -> PixelSampler {
-        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key, mode: Mode::Independent }
+        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key, mode: Mode::Independent, time: 0.0 }
     }
 
     /// Stratified choice of one of `n` options: consecutive sample indices of a
@@ -213,6 +216,26 @@ impl PixelSampler {
                 Vec2::new((a >> 8) as f32 * scale, (b >> 8) as f32 * scale)
             }
         }
+    }
+
+    /// The instant of this camera sample, in frames relative to the rendered
+    /// frame (0 unless the camera's shutter is open over an interval): set
+    /// once when the camera ray is generated
+    /// ([`crate::camera::PerspectiveCamera::sample_ray`]) and read by every
+    /// lookup of a moving medium along the sample's path, its shadow rays
+    /// included. All rays of one camera sample share the instant, and every
+    /// estimator already receives the sampler with its ray, so no ray built
+    /// on the way can lose it. Streams from [`PixelSampler::from_key`]
+    /// (photons) are at time 0.
+    #[inline]
+    pub fn time(&self) -> f32 {
+        self.time
+    }
+
+    /// Set the instant of this camera sample ([`PixelSampler::time`]).
+    #[inline]
+    pub fn set_time(&mut self, time: f32) {
+        self.time = time;
     }
 
     /// The dimension the next draw uses (how many were drawn so far, plus

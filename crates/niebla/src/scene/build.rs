@@ -9,7 +9,7 @@ use glam::{Affine3A, Mat4};
 use super::desc::*;
 use super::{RenderSettings, Scene, SceneError, SceneObject};
 use crate::bsdf::Bsdf;
-use crate::camera::PerspectiveCamera;
+use crate::camera::{CameraMotion, PerspectiveCamera};
 use crate::color::Rgb;
 use crate::geometry::{AxisAlignedBox, Disk, Rectangle, Shape, Sphere, Transform};
 use crate::integrator::IntegratorSettings;
@@ -311,6 +311,14 @@ fn build_with_loaders(
     }
 
     let camera = build_camera(&desc.camera, source)?;
+    // Moving media see the shutter: their majorants grow by the largest
+    // displacement over it.
+    let CameraDesc::Perspective(camera_desc) = &desc.camera;
+    for m in &mut media {
+        if let crate::medium::Medium::Grid(g) = m {
+            g.set_shutter(camera.shutter, camera_desc.fps);
+        }
+    }
     let bounds = scene_bounds(&camera, &objects, &lights, &media);
 
     let mut scene = Scene {
@@ -376,7 +384,7 @@ pub(super) fn build_simple_light(l: &LightDesc, path: &str, source: &str) -> Res
 /// The camera of a scene description (errors at `camera`).
 pub(super) fn build_camera(desc: &CameraDesc, source: &str) -> Result<PerspectiveCamera, SceneError> {
     let CameraDesc::Perspective(c) = desc;
-    PerspectiveCamera::look_at(
+    let mut camera = PerspectiveCamera::look_at(
         Vec3::from(c.position),
         Vec3::from(c.target),
         Vec3::from(c.up),
@@ -386,7 +394,13 @@ pub(super) fn build_camera(desc: &CameraDesc, source: &str) -> Result<Perspectiv
     )
     .ok_or_else(|| {
         SceneError::new(source, "camera", "position, target and up do not define a view (parallel or equal)")
-    })
+    })?;
+    camera.shutter = [c.shutter_open, c.shutter_close];
+    camera.motion = c.motion.as_ref().map(|m| {
+        let pair = |at0: [f32; 3], at1: Option<[f32; 3]>| [Vec3::from(at0), Vec3::from(at1.unwrap_or(at0))];
+        CameraMotion { position: pair(c.position, m.position), target: pair(c.target, m.target), up: pair(c.up, m.up) }
+    });
+    Ok(camera)
 }
 
 /// Bounds of everything positioned: the camera, the shapes, the lights with

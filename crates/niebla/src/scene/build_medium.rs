@@ -24,7 +24,7 @@ use super::desc::*;
 use super::SceneError;
 use crate::color::{BlackbodyTable, Rgb};
 use crate::limits::{format_bytes, MemoryBudget};
-use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, HomogeneousMedium, Medium};
+use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, GridMotion, HomogeneousMedium, Medium};
 use crate::phase::PhaseFunction;
 
 mod pyro;
@@ -139,8 +139,112 @@ fn build_grid_medium(
         }
     };
 
+    let motion = match &desc.velocity {
+        None => None,
+        Some(name) => Some(build_motion(desc, path, name, loader, &density, &to_world, &world_to_grid)?),
+    };
+
     let (sigma_a, sigma_s) = desc.sigma_a_sigma_s();
-    Ok(GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, minorant, emission, phase))
+    let mut medium = GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, minorant, emission, phase);
+    // Until the shutter is set, the moving medium is bounded by the static
+    // majorant (valid at time 0).
+    medium.motion = motion.map(|m| GridMotion { majorant: medium.majorant.clone(), ..m });
+    Ok(medium)
+}
+
+/// The Eulerian motion of a grid medium from the Vec3 grid `name` of its
+/// density's VDB file (errors at `{path}.velocity`); its majorant is the
+/// static one until the scene's shutter is known
+/// ([`GridMedium::set_shutter`]).
+fn build_motion(
+    desc: &GridMediumDesc,
+    path: &str,
+    name: &str,
+    loader: &mut Loader,
+    density: &DensityGrid,
+    to_world: &Affine3A,
+    world_to_grid: &Affine3A,
+) -> Result<GridMotion, SceneError> {
+    let at = format!("{path}.velocity");
+    let (DensitySourceDesc::Vdb { file, .. }, DensityGrid::Sparse(_)) = (&desc.density, density) else {
+        return Err(loader.error(
+            &at,
+            "a velocity grid is read from the density's OpenVDB file: it needs a density of \
+             \"type\": \"vdb\""
+                .into(),
+        ));
+    };
+    let full = loader.base_dir.join(file);
+    let kinds = loader.vdb_grid_kinds(&at, &full)?;
+    match kinds.iter().find(|(n, _)| n == name) {
+        None => {
+            let names: Vec<&str> = kinds.iter().map(|(n, _)| n.as_str()).collect();
+            return Err(loader.error(
+                &at,
+                format!("{}: no grid named {name:?} (the file holds: {})", full.display(), names.join(", ")),
+            ));
+        }
+        Some((_, kind)) if !kind.is_vec3() => {
+            return Err(loader.error(
+                &at,
+                format!(
+                    "{}: grid {name:?} is not a Vec3 grid ({}); a velocity grid must be a Vec3 grid",
+                    full.display(),
+                    if kind.is_scalar() { "it holds scalars" } else { "its values are of another type" }
+                ),
+            ));
+        }
+        Some(_) => {}
+    }
+    let index = loader.open_vdb(&at, &full)?;
+    let left = loader.budget.left();
+    let velocity = loader.vdb_files[index]
+        .1
+        .read_vec3_grid_limited(name, left)
+        .map_err(|e| loader.error(&at, format!("{}: grid {name:?}: {e}", full.display())))?;
+    let bytes = 3 * (velocity.leaf_count() as u64 * std::mem::size_of::<Leaf>() as u64);
+    loader.charge(&at, bytes, &format!("velocity grid {name:?}"))?;
+
+    // Largest |component| over everything interpolation reads; NaN or
+    // infinite velocities are errors.
+    let mut max_abs = [0.0f32; 3];
+    for (c, m) in max_abs.iter_mut().enumerate() {
+        let g = velocity.component(c);
+        let values = std::iter::once(g.background())
+            .chain(g.tiles().iter().map(|t| t.value))
+            .chain(g.leaves().iter().flat_map(|l| l.values.iter().copied()));
+        for v in values {
+            if !v.is_finite() {
+                return Err(loader.error(
+                    &at,
+                    format!("{}: grid {name:?} holds the value {v}; velocities must be finite", full.display()),
+                ));
+            }
+            *m = m.max(v.abs());
+        }
+    }
+
+    // Spaces: density grid (index) -> scene world -> velocity index.
+    let to_world_f64 = affine_f64(to_world);
+    let velocity_to_world = to_world_f64.compose(velocity.transform());
+    let world_to_velocity = velocity_to_world.inverse().ok_or_else(|| {
+        loader.error(&at, "the velocity grid's index-to-world transform followed by `to_world` is singular".into())
+    })?;
+    let grid_to_velocity = affine_f32(&world_to_velocity) * world_to_grid.inverse();
+    // A stored vector to a scene-world displacement per unit of time.
+    let units = desc.velocity_units;
+    let stored_to_world = if units.in_voxels() { affine_f32(&velocity_to_world).matrix3 } else { to_world.matrix3 };
+    let stored_to_world = glam::Mat3::from(stored_to_world);
+    let to_grid = glam::Mat3::from(world_to_grid.matrix3) * stored_to_world;
+    Ok(GridMotion {
+        velocity: Arc::new(velocity),
+        grid_to_velocity,
+        to_grid_per_frame: to_grid,
+        to_world_per_frame: stored_to_world,
+        max_abs_velocity: max_abs,
+        per_second: units.per_second(),
+        majorant: MajorantGrid::new([1, 1, 1], [0.0; 3], [1.0; 3], vec![0.0]).expect("a 1-cell grid"),
+    })
 }
 
 /// What a field means, for messages.

@@ -380,13 +380,63 @@ pub(super) fn resolve_frame(
             }
         }
         for (path, list) in &lists {
-            apply_keyframes(object_at(value, path), list, frame.map(f64::from));
+            let object = object_at(value, path);
+            let motion = match frame {
+                Some(f) if path == "camera" => keyframed_motion(object, list, f64::from(f)),
+                _ => Vec::new(),
+            };
+            apply_keyframes(object, list, frame.map(f64::from));
+            if !motion.is_empty() {
+                let mut end = Map::new();
+                for (name, base, one) in motion {
+                    object.insert(name.to_string(), base);
+                    end.insert(name.to_string(), one);
+                }
+                object.insert("motion".to_string(), Value::Object(end));
+            }
         }
     }
     if let Some(frame) = frame {
         substitute_files(value, "", frame).map_err(err)?;
     }
     Ok(())
+}
+
+/// The motion blur of a keyframed camera at `frame`: when its shutter is
+/// open over an interval (`shutter_open < shutter_close`, frames) and it
+/// has no `motion` of its own, the camera moves on the straight line
+/// between its keyframed poses at `frame + shutter_open` and `frame +
+/// shutter_close`. Returns, per keyframed field of `position`, `target` and
+/// `up`, the value at time 0 and at time 1 on that line (the camera's field
+/// and its `motion` field); empty when nothing moves this way.
+fn keyframed_motion(
+    object: &Map<String, Value>,
+    keyframes: &[Keyframe],
+    frame: f64,
+) -> Vec<(&'static str, Value, Value)> {
+    let number = |key: &str| object.get(key).and_then(Value::as_f64).unwrap_or(0.0);
+    let (open, close) = (number("shutter_open"), number("shutter_close"));
+    if !(open < close) || object.contains_key("motion") {
+        return Vec::new();
+    }
+    let mut at_open = object.clone();
+    let mut at_close = object.clone();
+    apply_keyframes(&mut at_open, keyframes, Some(frame + open));
+    apply_keyframes(&mut at_close, keyframes, Some(frame + close));
+    let mut out = Vec::new();
+    for name in ["position", "target", "up"] {
+        if !keyframes.iter().any(|k| k.fields.iter().any(|(n, _)| *n == name)) {
+            continue;
+        }
+        let (Some(a), Some(b)) = (at_open.get(name), at_close.get(name)) else { continue };
+        let (a, b) = (components(a, 3), components(b, 3));
+        let slope: Vec<f64> = a.iter().zip(&b).map(|(a, b)| (b - a) / (close - open)).collect();
+        let base: Vec<f64> = a.iter().zip(&slope).map(|(a, s)| a - s * open).collect();
+        let one: Vec<f64> = base.iter().zip(&slope).map(|(b, s)| b + s).collect();
+        let to_value = |v: Vec<f64>| Value::Array(v.into_iter().map(Value::from).collect());
+        out.push((name, to_value(base), to_value(one)));
+    }
+    out
 }
 
 /// The object at `path` (`camera` or `lights[i]`), known to exist.

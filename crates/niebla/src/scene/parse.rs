@@ -244,11 +244,16 @@ struct RawGrid {
     majorant_resolution: Option<ResolutionDesc>,
     #[serde(default)]
     storage: GridStorageDesc,
+    #[serde(default)]
+    velocity: Option<String>,
+    #[serde(default)]
+    velocity_units: VelocityUnitsDesc,
 }
 
 /// Fields only a grid medium accepts; a homogeneous medium with one of them
 /// gets an error that says so (rather than a bare "unknown field").
-const GRID_ONLY_FIELDS: &[&str] = &["density", "to_world", "majorant_resolution", "storage"];
+const GRID_ONLY_FIELDS: &[&str] =
+    &["density", "to_world", "majorant_resolution", "storage", "velocity", "velocity_units"];
 
 fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
     // Without a `type`, a medium with a `density` is a grid medium, any
@@ -289,6 +294,8 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                 emission: raw.emission,
                 majorant_resolution: raw.majorant_resolution,
                 storage: raw.storage,
+                velocity: raw.velocity,
+                velocity_units: raw.velocity_units,
             }))
         }
         "pyro" => {

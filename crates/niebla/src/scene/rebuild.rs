@@ -135,6 +135,12 @@ pub fn rebuild_scene(
     source: &str,
     base_dir: &Path,
 ) -> Option<Result<(BuiltScene, SceneEdit), SceneError>> {
+    // A moving medium's majorant depends on the shutter: build afresh.
+    let (CameraDesc::Perspective(a), CameraDesc::Perspective(b)) = (&old_desc.camera, &desc.camera);
+    let moving = desc.media.values().any(|m| matches!(m, MediumDesc::Grid(g) if g.velocity.is_some()));
+    if moving && (a.shutter_open != b.shutter_open || a.shutter_close != b.shutter_close || a.fps != b.fps) {
+        return None;
+    }
     let mut probe = desc.clone();
     probe.camera = old_desc.camera.clone();
     probe.render = old_desc.render.clone();

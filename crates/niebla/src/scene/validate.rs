@@ -219,9 +219,56 @@ fn validate_camera(camera: &CameraDesc) -> Check {
             if length(cross) <= 1e-6 * length(view) * length(up) {
                 return fail("camera.up", "must not be parallel to the view direction (target - position)");
             }
-            Ok(())
+            validate_shutter(c)
         }
     }
+}
+
+/// The shutter interval, the frame rate and the camera's motion: the pose
+/// must be a view at both ends of the shutter.
+fn validate_shutter(c: &PerspectiveCameraDesc) -> Check {
+    finite("camera.shutter_open", c.shutter_open)?;
+    finite("camera.shutter_close", c.shutter_close)?;
+    if c.shutter_close < c.shutter_open {
+        return fail(
+            "camera.shutter_close",
+            format!(
+                "the shutter must close at or after it opens (frames relative to the frame), got shutter_open {} \
+                 and shutter_close {}",
+                c.shutter_open, c.shutter_close
+            ),
+        );
+    }
+    if !(c.fps.is_finite() && c.fps > 0.0) {
+        return fail("camera.fps", format!("expected frames per second > 0, got {}", c.fps));
+    }
+    let Some(m) = &c.motion else { return Ok(()) };
+    for (name, v) in [("position", &m.position), ("target", &m.target), ("up", &m.up)] {
+        if let Some(v) = v {
+            vector(&format!("camera.motion.{name}"), v)?;
+        }
+    }
+    let lerp = |a: &[f32; 3], b: &Option<[f32; 3]>, t: f32| {
+        let b = b.unwrap_or(*a);
+        [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
+    };
+    for t in [c.shutter_open, c.shutter_close] {
+        let (p, target, up) = (lerp(&c.position, &m.position, t), lerp(&c.target, &m.target, t), lerp(&c.up, &m.up, t));
+        let view = difference(&target, &p);
+        let up = up.map(f64::from);
+        let cross =
+            [view[1] * up[2] - view[2] * up[1], view[2] * up[0] - view[0] * up[2], view[0] * up[1] - view[1] * up[0]];
+        if length(view) == 0.0 || length(cross) <= 1e-6 * length(view) * length(up) {
+            return fail(
+                "camera.motion",
+                format!(
+                    "at time {t} (frames) the moving camera's position, target and up do not define a view \
+                     (equal or parallel)"
+                ),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn image_side(path: &str, pixels: u32) -> Check {

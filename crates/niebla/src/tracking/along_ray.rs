@@ -8,6 +8,7 @@ use std::ops::ControlFlow;
 use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseAccessor, SparseGrid};
 
 use crate::math::Vec3;
+use crate::medium::GridMotion;
 
 /// A piece `[t0, t1]` of a ray with bounds on the density inside it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,7 +81,9 @@ impl GridLookup for SparseAccessor<'_> {
 }
 
 /// A grid seen along a ray given in the grid's space (`o + t d`, `d` not unit,
-/// `t` the world ray's parameter), restricted to `[t0, t1]`.
+/// `t` the world ray's parameter), restricted to `[t0, t1]`, at one instant:
+/// with `motion`, the density at a point is the grid's at the point the
+/// motion brings there ([`GridMotion::source_point`]).
 pub struct GridAlongRay<'a, G: GridLookup> {
     /// The voxels.
     pub grid: &'a G,
@@ -96,12 +99,19 @@ pub struct GridAlongRay<'a, G: GridLookup> {
     pub t0: f32,
     /// End of the range.
     pub t1: f32,
+    /// The medium's motion and the ray's time (frames), if it moves and the
+    /// time is not 0; `majorant` then bounds the moving density.
+    pub motion: Option<(&'a GridMotion, f32)>,
 }
 
 impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
     #[inline]
     fn density(&self, t: f32) -> f32 {
-        self.grid.lookup_grid(self.o + self.d * t)
+        let p = self.o + self.d * t;
+        match self.motion {
+            None => self.grid.lookup_grid(p),
+            Some((m, time)) => self.grid.lookup_grid(m.source_point(p, time)),
+        }
     }
 
     #[inline]

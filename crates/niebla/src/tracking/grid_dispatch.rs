@@ -22,27 +22,32 @@ pub trait GridRayVisitor {
 
 /// Run `visitor` on the grid of `g` along the grid-space ray `o + t d`
 /// (`t` the world ray's parameter, see [`GridMedium::ray_to_grid`]) over the
-/// parameter range `[t0, t1]` (already clipped to the grid box). Per-cell
-/// minima are passed along when `with_minorant` is set and the medium has them.
+/// parameter range `[t0, t1]` (already clipped to the grid box) at `time`
+/// (frames, the camera sample's [`crate::sampling::PixelSampler::time`]):
+/// a moving medium is seen at that instant, bounded by its dilated majorant.
+/// Per-cell minima are passed along when `with_minorant` is set and the
+/// medium has them.
 #[inline]
 pub fn with_grid_along_ray<V: GridRayVisitor>(
     g: &GridMedium,
     (o, d): (Vec3, Vec3),
     (t0, t1): (f32, f32),
+    time: f32,
     with_minorant: bool,
     visitor: V,
 ) -> V::Output {
-    let majorant = &g.majorant;
+    let majorant = g.tracking_majorant();
     let minorant = if with_minorant { g.minorant.as_ref() } else { None };
+    let motion = g.motion.as_ref().filter(|_| time != 0.0).map(|m| (m, time));
     match &g.density {
         DensityGrid::Dense(grid) => {
-            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1 })
+            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1, motion })
         }
         DensityGrid::Sparse(grid) => {
             // One cached accessor per ray: consecutive lookups along the ray
             // mostly stay in one leaf and skip the tree descent.
             let accessor = grid.accessor();
-            visitor.visit(&GridAlongRay { grid: &accessor, majorant, minorant, o, d, t0, t1 })
+            visitor.visit(&GridAlongRay { grid: &accessor, majorant, minorant, o, d, t0, t1, motion })
         }
     }
 }

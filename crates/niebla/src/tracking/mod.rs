@@ -106,7 +106,8 @@ fn grid_transmittance(
             run_tracker(r, self.sigma_t, r.t0, r.t1, self.method, self.sampler)
         }
     }
-    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), true, Track { sigma_t: g.sigma_t(), method, sampler })
+    let time = sampler.time();
+    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, true, Track { sigma_t: g.sigma_t(), method, sampler })
 }
 
 #[inline]
@@ -147,7 +148,7 @@ pub fn majorant_profile(medium: &Medium, ray: &Ray, t0: f32, t1: f32, rate_per_d
                     MajorantProfile::new(r, self.0)
                 }
             }
-            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), false, Profile(rate_per_density))
+            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), 0.0, false, Profile(rate_per_density))
         }
     }
 }

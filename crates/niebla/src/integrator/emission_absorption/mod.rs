@@ -124,7 +124,7 @@ pub(crate) fn march_segment(
     for i in 0..n {
         let t = t_a + (i as f32 + u) * dt;
         let p = ray.at(t);
-        let mp = m.at(p);
+        let mp = m.at_time(p, sampler.time());
         sigma_t = mp.sigma_t();
         tr *= step_transmittance(m, ray, t_prev, t, sigma_t, method, sampler);
         if tr.max_channel() <= 0.0 {

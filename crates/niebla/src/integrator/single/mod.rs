@@ -205,7 +205,7 @@ impl SingleIntegrator {
             let pdf = profile.pdf(t);
             if pdf > 0.0 && pdf.is_finite() {
                 let p = ray.at(t);
-                let mp = m.at(p);
+                let mp = m.at_time(p, sampler.time());
                 if !mp.sigma_s.is_black() {
                     let tr = segment_transmittance(m, ray, 0.0, t, self.transmittance, sampler);
                     let mut li = Rgb::ZERO;
@@ -253,7 +253,7 @@ impl SingleIntegrator {
             }
             let weight = if mis && can_distance_sample { balance_heuristic(pdf, profile.pdf(t)) } else { 1.0 };
             let p = ray.at(t);
-            let mp = m.at(p);
+            let mp = m.at_time(p, sampler.time());
             if mp.sigma_s.is_black() {
                 continue;
             }

@@ -133,7 +133,7 @@ fn equiangular_ld_light(
         return Rgb::ZERO;
     }
     let p = ray.at(t);
-    let sigma_s = m.at(p).sigma_s;
+    let sigma_s = m.at_time(p, sampler.time()).sigma_s;
     if sigma_s.is_black() {
         return Rgb::ZERO;
     }

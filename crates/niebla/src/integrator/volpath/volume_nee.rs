@@ -51,7 +51,7 @@ pub(super) fn sample_volume_ld(
     let dist = dist2.sqrt();
     let wi = d / dist;
     let emitter = scene.medium(s.medium);
-    let l_ve = emitter.at(s.p).l_ve;
+    let l_ve = emitter.at_time(s.p, sampler.time()).l_ve;
     if l_ve.is_black() {
         return Rgb::ZERO;
     }

@@ -141,6 +141,45 @@ pub struct GridMediumDesc {
     /// Precision of dense voxel storage: `"f32"` (default) or `"f16"` (half
     /// the memory, about 3 significant digits; sparse VDB grids keep f32).
     pub storage: GridStorageDesc,
+    /// Name of a Vec3 velocity grid in the density's VDB file, for Eulerian
+    /// motion blur (the density at `x` and time `t` is the density at
+    /// `x - v(x) t`); `None`: the medium does not move.
+    pub velocity: Option<String>,
+    /// Units of the velocity grid's values; default
+    /// [`VelocityUnitsDesc::WorldPerSecond`].
+    pub velocity_units: VelocityUnitsDesc,
+}
+
+/// Units of a velocity grid (`"velocity_units"`). "world" is the VDB file's
+/// world space (after the grid's index-to-world map), which the medium's
+/// `to_world` places in the scene like the density; "voxel" is the velocity
+/// grid's own voxels. Per-second values are turned into per-frame ones by
+/// the camera's `fps`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityUnitsDesc {
+    /// World units per second: what Houdini, Blender (Cycles' default
+    /// velocity unit, "Second") and OpenVDB's tools write.
+    #[default]
+    WorldPerSecond,
+    /// World units per frame.
+    WorldPerFrame,
+    /// Voxels of the velocity grid per second.
+    VoxelPerSecond,
+    /// Voxels of the velocity grid per frame.
+    VoxelPerFrame,
+}
+
+impl VelocityUnitsDesc {
+    /// Whether the values are per second (else per frame).
+    pub fn per_second(self) -> bool {
+        matches!(self, VelocityUnitsDesc::WorldPerSecond | VelocityUnitsDesc::VoxelPerSecond)
+    }
+
+    /// Whether the values are in voxels of the velocity grid (else world units).
+    pub fn in_voxels(self) -> bool {
+        matches!(self, VelocityUnitsDesc::VoxelPerSecond | VelocityUnitsDesc::VoxelPerFrame)
+    }
 }
 
 /// Precision in which a dense density grid is stored (`storage` in the file).

@@ -324,6 +324,47 @@ pub struct PerspectiveCameraDesc {
     pub width: u32,
     /// Image height in pixels, 1 to 16384.
     pub height: u32,
+    /// When the shutter opens, in frames relative to the rendered frame's
+    /// instant (e.g. -0.25 with `shutter_close` 0.25 is Blender's shutter
+    /// 0.5 centred on the frame); finite, default 0.
+    #[serde(default)]
+    pub shutter_open: f32,
+    /// When the shutter closes, in frames relative to the frame, at least
+    /// `shutter_open`; default 0. With `shutter_open == shutter_close`
+    /// nothing moves during the exposure (no motion blur, the scene renders
+    /// as without these keys); otherwise each camera sample is taken at a
+    /// time uniform in `[shutter_open, shutter_close]`.
+    #[serde(default)]
+    pub shutter_close: f32,
+    /// Frames per second of the sequence, > 0; converts velocities given per
+    /// second into frames (`"velocity_units"` of grid media). Default 24.
+    #[serde(default = "default_fps")]
+    pub fps: f32,
+    /// The camera's pose one frame later (time 1): the pose at a sample's
+    /// time is interpolated linearly between the camera's own fields (time
+    /// 0) and these. Fields left out keep the camera's own value. Default:
+    /// the camera does not move.
+    #[serde(default)]
+    pub motion: Option<CameraMotionDesc>,
+}
+
+/// `"motion"` of a camera: where it is one frame after the rendered frame.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraMotionDesc {
+    /// Eye point at time 1 (default: the camera's `position`).
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub position: Option<[f32; 3]>,
+    /// Target at time 1 (default: the camera's `target`).
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub target: Option<[f32; 3]>,
+    /// Approximate up at time 1 (default: the camera's `up`).
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub up: Option<[f32; 3]>,
+}
+
+fn default_fps() -> f32 {
+    24.0
 }
 
 fn default_up() -> [f32; 3] {

@@ -19,7 +19,7 @@
 
 use serde::Deserialize;
 
-use super::{ColorDesc, PhaseDesc, ResolutionDesc, TransformDesc};
+use super::{ColorDesc, PhaseDesc, ResolutionDesc, TransformDesc, VelocityUnitsDesc};
 
 /// Grid names read by default for the density, in order of preference:
 /// Houdini, Blender (Mantaflow) and EmberGen all write `density`; some
@@ -97,6 +97,15 @@ pub struct PyroMediumDesc {
     /// Majorant cell budget, as for a grid medium.
     #[serde(default)]
     pub majorant_resolution: Option<ResolutionDesc>,
+    /// Name of a Vec3 velocity grid in the file, for Eulerian motion blur
+    /// (as a grid medium's `velocity`; Mantaflow and Houdini call it
+    /// `vel`); default none: the medium does not move.
+    #[serde(default)]
+    pub velocity: Option<String>,
+    /// Units of the velocity grid, as a grid medium's; default
+    /// `world_per_second`.
+    #[serde(default)]
+    pub velocity_units: VelocityUnitsDesc,
     /// The phase function implied by `anisotropy` (filled in by the parser).
     #[serde(skip)]
     pub phase: PhaseDesc,
