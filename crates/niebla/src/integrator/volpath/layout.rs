@@ -97,8 +97,9 @@ impl Block {
     }
 }
 
-/// Counts the segments of each bounce: [`SegmentCounter::next`] gives the
-/// block of the segment that starts now.
+/// Counts the segments of each bounce that draw numbers (segments through
+/// vacuum draw none and are not counted): [`SegmentCounter::next`] gives
+/// the block of such a segment.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct SegmentCounter {
     last: Block,
@@ -111,7 +112,7 @@ impl Default for SegmentCounter {
 }
 
 impl SegmentCounter {
-    /// The block of a segment that starts after `depth` scattering events.
+    /// The block of a segment that draws numbers after `depth` scattering events.
     #[inline]
     pub(super) fn next(&mut self, depth: u32) -> Block {
         self.last = if self.last.bounce == depth {

@@ -60,18 +60,21 @@ impl VolPathIntegrator {
         let mut eta_scale = 1.0f32;
         let mut previous = PreviousVertex { p: ray.o, normal: None, sampled_volume_lights: false };
         let mut path = PathRay::new(ray, medium, 0.0);
-        // Which block of the Sobol dimension layout each segment uses.
+        // Which block of the Sobol dimension layout each segment uses; only
+        // segments that draw numbers (in a medium, or ending on a pane)
+        // count as uses of their bounce's block.
         let mut segments = SegmentCounter::default();
 
         loop {
             let (ray, medium) = (path.ray, path.medium);
-            let block = segments.next(depth);
+            let mut block = None;
             let hit = path.intersect(scene);
             let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
 
             // Free flight through the medium up to the surface.
             if let Some(id) = medium {
                 let m = scene.medium(id);
+                let block = *block.insert(segments.next(depth));
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
@@ -268,7 +271,7 @@ impl VolPathIntegrator {
                 let ns = hit.surface.shading_normal(wo);
                 let cos = ns.dot(wo);
                 let pass = pane.pass_probability(cos);
-                block.enter(sampler, layout::PANE);
+                block.unwrap_or_else(|| segments.next(depth)).enter(sampler, layout::PANE);
                 if sampler.next_1d() < pass {
                     beta *= pane.specular_transmittance;
                     r_l /= pass;
