@@ -47,7 +47,7 @@ pub struct SamplerBenchArgs {
 pub fn run(args: &SamplerBenchArgs) -> Result<(), CliError> {
     let threads = args.threads.get()?;
     let (built, _) = crate::load::load(Some(&args.scene))?;
-    let settings = built.settings.integrator.clone();
+    let settings = built.settings.integrator;
     let mut scene = built.scene;
     if args.width == 0 || args.width > 16384 {
         return Err(CliError::invalid_option("--width", "must be between 1 and 16384"));
