@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Relative MSE (niebla::film::Image::relative_mse) of the independent and
-# Sobol samplers at 16, 64 and 256 spp on bench/scenes and the default scene,
+# Relative MSE (niebla::film::Image::relative_mse) of the independent,
+# sequential Sobol and laid-out Sobol samplers at 16, 64 and 256 spp on bench/scenes and the default scene,
 # at 1/DIV of their resolution, against a reference of REF spp (Sobol, seed
 # 1000, independent of the seeds measured); the mean over SEEDS seeds.
 #   bash scripts/sampler_error.sh BIN [REF] [SEEDS] [DIV] [SCENES...]
@@ -44,7 +44,7 @@ absolute(d)
 json.dump(d, open(dst, "w"))
 PY
   "$bin" render "$small" --spp "$ref" --seed 1000 --sampler sobol --quiet -o "$out/ref.exr" > /dev/null
-  for sampler in independent sobol; do
+  for sampler in independent sobol_sequential sobol; do
     row=()
     for spp in 16 64 256; do
       sum=0

@@ -7,6 +7,7 @@ mod bench_emission;
 mod bench_geometry;
 mod bench_interactive;
 mod bench_photons;
+mod bench_sampler;
 mod bench_trackers;
 mod compare;
 mod convert_cmd;
@@ -83,6 +84,9 @@ enum BenchCommand {
     /// Relative MSE x time of volpath with and without light sampling of
     /// emissive media, on the pixels lit by the fire and those that see it.
     Emission(bench_emission::EmissionBenchArgs),
+    /// Relative MSE at 16, 64, 256 spp of the scene's integrator with each
+    /// sampler kind (independent, Sobol in draw order, Sobol laid out).
+    Sampler(bench_sampler::SamplerBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -101,6 +105,7 @@ fn main() -> ExitCode {
         Command::Bench(BenchCommand::Photons(args)) => bench_photons::run(&args),
         Command::Bench(BenchCommand::Geometry(args)) => bench_geometry::run(&args),
         Command::Bench(BenchCommand::Emission(args)) => bench_emission::run(&args),
+        Command::Bench(BenchCommand::Sampler(args)) => bench_sampler::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

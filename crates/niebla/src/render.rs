@@ -38,27 +38,46 @@ pub struct RenderOptions {
 
 /// The text a checkpoint records for a render's integrator settings and
 /// sampler: the settings' stable key, followed by `"; sampler=sobol"` for
-/// Sobol renders (independent renders record the bare key, as checkpoints
-/// written before samplers had kinds do).
+/// Sobol renders with dimensions in draw order ([`SamplerKind::SobolSequential`],
+/// which is what `sobol` meant in checkpoints written before integrators had
+/// a dimension layout) and `"; sampler=sobol; layout=per-vertex"` for
+/// [`SamplerKind::Sobol`]. Independent renders record the bare key, as
+/// checkpoints written before samplers had kinds do. So an old Sobol
+/// checkpoint continues only with the sampler whose numbers it was made with.
 ///
 /// ```
 /// use niebla::render::{recorded_key, split_recorded_key};
 /// use niebla::sampling::SamplerKind;
 /// let s = niebla::integrator::registry::defaults("volpath").unwrap();
-/// assert_eq!(recorded_key(&s, SamplerKind::Sobol), "volpath(max_depth=1024); sampler=sobol");
+/// let key = recorded_key(&s, SamplerKind::Sobol);
+/// assert_eq!(key, "volpath(max_depth=1024); sampler=sobol; layout=per-vertex");
+/// assert_eq!(split_recorded_key(&key), ("volpath(max_depth=1024)", Some(SamplerKind::Sobol)));
+/// assert_eq!(split_recorded_key("volpath(max_depth=1024); sampler=sobol"), ("volpath(max_depth=1024)", Some(SamplerKind::SobolSequential)));
 /// assert_eq!(split_recorded_key("volpath(max_depth=1024)"), ("volpath(max_depth=1024)", Some(SamplerKind::Independent)));
 /// ```
 pub fn recorded_key(settings: &IntegratorSettings, sampler: SamplerKind) -> String {
     match sampler {
         SamplerKind::Independent => settings.key(),
-        _ => format!("{}; sampler={}", settings.key(), sampler.name()),
+        SamplerKind::SobolSequential => format!("{}; sampler=sobol", settings.key()),
+        SamplerKind::Sobol => format!("{}; sampler=sobol{LAYOUT_SUFFIX}", settings.key()),
     }
 }
+
+/// What [`recorded_key`] appends to a laid-out Sobol sampler's name.
+const LAYOUT_SUFFIX: &str = "; layout=per-vertex";
 
 /// The integrator key and sampler of a [`recorded_key`] (`None`: a sampler
 /// name this build does not know).
 pub fn split_recorded_key(recorded: &str) -> (&str, Option<SamplerKind>) {
+    if let Some(rest) = recorded.strip_suffix(LAYOUT_SUFFIX) {
+        return match rest.rsplit_once("; sampler=") {
+            Some((key, "sobol")) => (key, Some(SamplerKind::Sobol)),
+            Some((key, _)) => (key, None),
+            None => (rest, None),
+        };
+    }
     match recorded.rsplit_once("; sampler=") {
+        Some((key, "sobol")) => (key, Some(SamplerKind::SobolSequential)),
         Some((key, name)) => (key, SamplerKind::parse(name)),
         None => (recorded, Some(SamplerKind::Independent)),
     }

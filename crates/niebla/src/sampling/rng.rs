@@ -24,16 +24,23 @@ pub fn hash_u64(mut z: u64) -> u64 {
 pub enum SamplerKind {
     /// Independent uniform numbers: a hash of `(seed, x, y, s, dimension)`.
     Independent,
-    /// Owen-scrambled Sobol points (Burley 2020), see [`crate::sampling::sobol`].
+    /// Owen-scrambled Sobol points (Burley 2020), see [`crate::sampling::sobol`],
+    /// with the integrator's fixed dimension layout where it has one
+    /// ([`PixelSampler::use_slots`]: `volpath` gives every decision of a
+    /// path vertex its own dimensions).
     #[default]
     Sobol,
+    /// Owen-scrambled Sobol points with dimensions taken in the order the
+    /// integrator draws them, ignoring its layout (the `sobol` of earlier
+    /// versions; kept to measure the layout against).
+    SobolSequential,
 }
 
 impl SamplerKind {
     /// Every kind, in the order of [`SamplerKind::NAMES`].
-    pub const ALL: [SamplerKind; 2] = [SamplerKind::Independent, SamplerKind::Sobol];
+    pub const ALL: [SamplerKind; 3] = [SamplerKind::Independent, SamplerKind::Sobol, SamplerKind::SobolSequential];
     /// The names scene files and the command line use.
-    pub const NAMES: [&'static str; 2] = ["independent", "sobol"];
+    pub const NAMES: [&'static str; 3] = ["independent", "sobol", "sobol_sequential"];
 
     /// The kind called `name`, if any.
     pub fn parse(name: &str) -> Option<SamplerKind> {
@@ -69,20 +76,22 @@ enum Mode {
 /// `s` of a sequence scrambled per `(seed, pixel)`, so that a pixel's first
 /// `2^k` samples are stratified in every pair of dimensions `(2j, 2j+1)`.
 ///
-/// **Dimension layout** (the same for both kinds): dimensions are drawn in
-/// the order the integrator asks for them. [`PixelSampler::next_2d`] of a
+/// **Dimension layout.** Without a layout, dimensions are drawn in the
+/// order the integrator asks for them (independent samplers always, and
+/// [`SamplerKind::SobolSequential`]): the render loop draws the pixel
+/// position first (dimensions 0 and 1), and [`PixelSampler::next_2d`] of a
 /// Sobol sampler first skips to an even dimension, so every 2D decision gets
-/// a stratified pair: the render loop draws the pixel position first
-/// (dimensions 0 and 1); then, per path segment and vertex, in this order:
-/// equiangular sampling toward lights (light choice, distance, light point),
-/// at each tentative collision the free-flight distance and the
-/// real/null/absorption choice (consecutive 1D draws, so often one pair),
-/// next-event estimation (light choice, then the light point pair per light),
-/// the phase or BSDF direction (lobe choice, then the direction pair; guided
-/// sampling draws choice, light, direction pair, radius), Russian roulette.
-/// The number of dimensions a path uses depends on its events, so the
-/// dimension of a given decision varies between samples; each dimension is
-/// uniform all the same, so estimates stay unbiased.
+/// a stratified pair; since the number of dimensions a path uses depends on
+/// its events, the dimension of a given decision then varies between
+/// samples (each dimension is uniform all the same, so estimates stay
+/// unbiased). An integrator with a fixed layout (`volpath`) calls
+/// [`PixelSampler::use_slots`] before each decision: a [`SamplerKind::Sobol`]
+/// sampler then takes that decision's numbers from fixed dimensions (its
+/// slot), the same in every sample of the pixel, so that the decision is
+/// stratified over the pixel's samples; draws beyond the slot (a decision
+/// repeated an unbounded number of times, such as the null collisions of
+/// delta tracking) are independent numbers keyed by the slot and a counter.
+/// Independent and sequential samplers ignore slots.
 /// [`PixelSampler::stratified_choice`] does not use a dimension.
 ///
 /// Streams that are not per-pixel camera samples (photons, tests:
@@ -100,6 +109,14 @@ enum Mode {
 pub struct PixelSampler {
     key: u64,
     dimension: u64,
+    /// The dimensions of the current slot end here: draws from here on are
+    /// independent numbers keyed by `slot_key` (`u64::MAX`: no slot, the
+    /// dimensions in draw order).
+    slot_end: u64,
+    /// Key of the current slot's independent numbers.
+    slot_key: u64,
+    /// Whether [`PixelSampler::use_slots`] acts (Sobol with layout).
+    laid_out: bool,
     /// Sample index and pixel hash, for choices stratified across samples.
     stratum: u64,
     mode: Mode,
@@ -115,7 +132,13 @@ impl PixelSampler {
         let pixel = ((y as u64) << 32) | x as u64;
         let key = hash_u64(hash_u64(hash_u64(seed) ^ pixel) ^ sample_index.wrapping_mul(0xD1B5_4A32_D192_ED03));
         let stratum = sample_index.wrapping_add(hash_u64(hash_u64(seed) ^ pixel) % 1_000_003);
-        PixelSampler { key, dimension: 0, stratum, mode: Mode::Independent, time: 0.0 }
+        PixelSampler::with(key, stratum, Mode::Independent, false)
+    }
+
+    /// A sampler at dimension 0, without a slot.
+    #[inline]
+    fn with(key: u64, stratum: u64, mode: Mode, laid_out: bool) -> PixelSampler {
+        PixelSampler { key, dimension: 0, slot_end: u64::MAX, slot_key: 0, laid_out, stratum, mode, time: 0.0 }
     }
 
     /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with
@@ -128,7 +151,7 @@ impl PixelSampler {
     pub fn for_pixel(kind: SamplerKind, seed: u64, x: u32, y: u32, sample_index: u64) -> PixelSampler {
         match kind {
             SamplerKind::Independent => PixelSampler::new(seed, x, y, sample_index),
-            SamplerKind::Sobol => {
+            SamplerKind::Sobol | SamplerKind::SobolSequential => {
                 let pixel = ((y as u64) << 32) | x as u64;
                 let pixel_hash = hash_u64(hash_u64(seed) ^ pixel);
                 let key = hash_u64(pixel_hash ^ hash_u64(0x5EED_50B0 ^ (sample_index >> 32)));
@@ -138,14 +161,14 @@ impl PixelSampler {
                     pair: u64::MAX,
                     values: [0; 2],
                 };
-                PixelSampler { key, dimension: 0, stratum, mode, time: 0.0 }
+                PixelSampler::with(key, stratum, mode, kind == SamplerKind::Sobol)
             }
         }
     }
 
     /// A stream keyed by an arbitrary 64-bit value (photon index, test seed, ...).
     pub fn from_key(key: u64) -> PixelSampler {
-        PixelSampler { key: hash_u64(key), dimension: 0, stratum: key, mode: Mode::Independent, time: 0.0 }
+        PixelSampler::with(hash_u64(key), key, Mode::Independent, false)
     }
 
     /// Stratified choice of one of `n` options: consecutive sample indices of a
@@ -160,8 +183,15 @@ impl PixelSampler {
     /// 64-bit hash; Sobol: the scrambled fixed-point value).
     #[inline]
     fn next_u32(&mut self) -> u32 {
+        let beyond_slot = self.dimension >= self.slot_end;
         let bits = match &mut self.mode {
             Mode::Independent => (hash_u64(self.key ^ hash_u64(self.dimension)) >> 32) as u32,
+            // The key is the pixel's: the sample index makes the numbers
+            // independent between samples.
+            Mode::Sobol { index_reversed, .. } if beyond_slot => {
+                let sample = hash_u64(((*index_reversed as u64) << 32) | 0x5A4D);
+                (hash_u64(self.key ^ hash_u64(self.slot_key ^ sample ^ hash_u64(self.dimension))) >> 32) as u32
+            }
             Mode::Sobol { index_reversed, pair, values } => {
                 if *pair != self.dimension >> 1 {
                     *pair = self.dimension >> 1;
@@ -208,6 +238,20 @@ impl PixelSampler {
                 let a = self.next_1d();
                 Vec2::new(a, self.next_1d())
             }
+            Mode::Sobol { .. } if self.slot_end != u64::MAX => {
+                // A slot's pairs start at even dimensions.
+                self.dimension += self.dimension & 1;
+                if self.dimension + 1 < self.slot_end {
+                    if let Mode::Sobol { index_reversed, .. } = self.mode {
+                        let [a, b] = owen_scrambled_sobol_pair(self.key, index_reversed, self.dimension >> 1);
+                        self.dimension += 2;
+                        let scale = 1.0 / (1u64 << 24) as f32;
+                        return Vec2::new((a >> 8) as f32 * scale, (b >> 8) as f32 * scale);
+                    }
+                }
+                let a = self.next_1d();
+                Vec2::new(a, self.next_1d())
+            }
             Mode::Sobol { index_reversed, .. } => {
                 let pair = self.dimension.div_ceil(2);
                 self.dimension = 2 * pair + 2;
@@ -245,6 +289,24 @@ impl PixelSampler {
         self.dimension
     }
 
+    /// Take the next numbers from the slot of dimensions `start .. start +
+    /// len` (a [`SamplerKind::Sobol`] sampler; others ignore it): the draws
+    /// that follow use those dimensions in order ([`PixelSampler::next_2d`]
+    /// first skips to an even one), and any beyond them are independent
+    /// numbers keyed by `(start, repeat)` and their count. `repeat` counts
+    /// earlier uses of the same slot by the same estimate: 0 for the first,
+    /// which gets the slot's dimensions; every later one gets independent
+    /// numbers only, since two decisions of one path must not share a
+    /// number. Slots of one estimate must not overlap.
+    #[inline]
+    pub fn use_slots(&mut self, start: u64, len: u64, repeat: u32) {
+        if self.laid_out {
+            self.dimension = start;
+            self.slot_end = if repeat == 0 { start + len } else { start };
+            self.slot_key = hash_u64(0x510B_5EED ^ start ^ ((repeat as u64) << 40));
+        }
+    }
+
     /// Draw again from `dimension` on (an earlier [`PixelSampler::dimension`]),
     /// for estimates that may share their numbers because each is unbiased
     /// alone and they add up different things (the paths of `volpath`'s
@@ -256,6 +318,7 @@ impl PixelSampler {
     pub fn rewind_for_another_estimate(&mut self, dimension: u64) {
         if let Mode::Sobol { .. } = self.mode {
             self.dimension = dimension;
+            self.slot_end = u64::MAX;
         }
     }
 }

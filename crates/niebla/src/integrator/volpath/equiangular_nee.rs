@@ -12,6 +12,7 @@ use crate::tracking::{majorant_profile, segment_transmittance, TransmittanceMeth
 use crate::world::Scene;
 
 use super::channels::{per_channel, Channels};
+use super::layout::{self, Block};
 use super::nee::LightChoice;
 use crate::integrator::equiangular::{equiangular_target, PointLightTarget};
 
@@ -79,6 +80,8 @@ pub(super) struct EquiangularSegment<'a> {
     pub(super) id: MediumId,
     /// MIS-normalized path throughput at the segment's start.
     pub(super) throughput: Rgb,
+    /// The segment's block of the Sobol dimension layout.
+    pub(super) block: Block,
 }
 
 /// Equiangular next-event estimation on a medium segment (Kulla and Fajardo
@@ -105,6 +108,7 @@ pub(super) fn equiangular_ld(
         }
         return l;
     }
+    segment.block.enter(sampler, layout::EQUIANGULAR_CHOICE);
     let u_light = sampler.next_1d();
     let k = ((u_light * count as f32) as usize).min(count - 1);
     let Some(light) = point_lights.nth(k) else {
@@ -122,7 +126,8 @@ fn equiangular_ld_light(
     light: &Light,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let EquiangularSegment { ray, t_end, medium: m, id, throughput } = *segment;
+    let EquiangularSegment { ray, t_end, medium: m, id, throughput, block } = *segment;
+    block.enter(sampler, layout::EQUIANGULAR);
     let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
     let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
         return Rgb::ZERO;

@@ -7,6 +7,7 @@ use crate::math::Vec3;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
 
+use super::layout::{self, Block};
 use super::light_guide::LightGuide;
 
 /// Direction guiding at a vertex: the guide and the probability of using it.
@@ -34,12 +35,14 @@ pub(super) fn sample_phase(
     x: Vec3,
     wo: Vec3,
     guiding: Option<Guiding>,
+    block: Block,
     sampler: &mut PixelSampler,
 ) -> Option<crate::phase::PhaseSample> {
     let Some(g) = guiding else {
+        block.enter(sampler, layout::DIRECTION);
         return phase.sample(wo, sampler.next_2d());
     };
-    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let (u_choice, u_light, u_dir, u_r) = guided_numbers(block, sampler);
     let wi = if u_choice < g.fraction { g.guide.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
     let pdf = g.mix(x, wi, phase.pdf(wo, wi));
     (pdf > 0.0).then(|| crate::phase::PhaseSample { wi, value: phase.eval(wo, wi), pdf })
@@ -56,13 +59,16 @@ pub(super) fn sample_bsdf(
     p: Vec3,
     wo: Vec3,
     guiding: Option<Guiding>,
+    block: Block,
     sampler: &mut PixelSampler,
 ) -> Option<crate::bsdf::BsdfSample> {
+    block.enter(sampler, layout::LOBE);
     let u_lobe = sampler.next_1d();
     let Some(g) = guiding else {
+        block.enter(sampler, layout::DIRECTION);
         return bsdf.sample(n, wo, u_lobe, sampler.next_2d());
     };
-    let (u_choice, u_light, u_dir, u_r) = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d(), sampler.next_1d());
+    let (u_choice, u_light, u_dir, u_r) = guided_numbers(block, sampler);
     let wi = if u_choice < g.fraction {
         g.guide.sample(p, u_light, u_dir, u_r)?
     } else {
@@ -74,4 +80,17 @@ pub(super) fn sample_bsdf(
     }
     let pdf = g.mix(p, wi, bsdf.pdf(n, wo, wi));
     Some(crate::bsdf::BsdfSample { wi, f, pdf, is_specular: false, is_transmission: false, eta: 1.0 })
+}
+
+/// The numbers of a guided direction: strategy choice, light choice,
+/// direction pair (shared by both strategies) and radius, drawn in that
+/// order from their slots of `block`.
+#[inline]
+fn guided_numbers(block: Block, sampler: &mut PixelSampler) -> (f32, f32, glam::Vec2, f32) {
+    block.enter(sampler, layout::GUIDE);
+    let (u_choice, u_light) = (sampler.next_1d(), sampler.next_1d());
+    block.enter(sampler, layout::DIRECTION);
+    let u_dir = sampler.next_2d();
+    block.enter(sampler, layout::GUIDE_RADIUS);
+    (u_choice, u_light, u_dir, sampler.next_1d())
 }

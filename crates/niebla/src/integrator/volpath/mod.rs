@@ -27,6 +27,7 @@
 mod channels;
 mod equiangular_nee;
 mod guiding;
+mod layout;
 mod light_guide;
 mod nee;
 mod path;

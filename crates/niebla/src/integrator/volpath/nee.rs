@@ -18,6 +18,7 @@ use crate::world::{surface_epsilon, walk_shadow_ray, Scene};
 use super::channels::Channels;
 use super::equiangular_nee::{light_weight_against_equiangular, point_light_count, Segment};
 use super::guiding::Guiding;
+use super::layout::{self, Block};
 
 /// The scattering function at a vertex, for next-event estimation.
 #[derive(Clone, Copy)]
@@ -148,6 +149,8 @@ pub(super) struct NeeVertex<'a> {
     pub(super) segment: Option<Segment<'a>>,
     /// Guiding, when the vertex's own direction sampling mixes it in.
     pub(super) guiding: Option<Guiding<'a>>,
+    /// The vertex's block of the Sobol dimension layout.
+    pub(super) block: Block,
 }
 
 /// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
@@ -174,6 +177,7 @@ pub(super) fn sample_ld(
         }
         return l;
     }
+    vertex.block.enter(sampler, layout::LIGHT_CHOICE);
     let u_light = sampler.next_1d();
     let k = ((u_light * n_lights as f32) as usize).min(n_lights - 1);
     let Some(index) = sampled.nth(k) else {
@@ -192,7 +196,10 @@ fn sample_ld_light(
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding, block } = *vertex;
+    // Every light of `lights.all()` takes the same slot: each light's
+    // estimate is unbiased alone, and they are added.
+    block.enter(sampler, layout::LIGHT_POINT);
     let u_dir = sampler.next_2d();
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();

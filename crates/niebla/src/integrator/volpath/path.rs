@@ -15,6 +15,7 @@ use crate::world::{PathRay, Scene};
 use super::channels::Channels;
 use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment};
 use super::guiding::{sample_bsdf, sample_phase};
+use super::layout::{self, Block, SegmentCounter};
 use super::nee::{sample_ld, NeeVertex, Scatter};
 use super::volume_nee::sample_volume_ld;
 use super::{LightSampling, VolPathIntegrator};
@@ -59,20 +60,26 @@ impl VolPathIntegrator {
         let mut eta_scale = 1.0f32;
         let mut previous = PreviousVertex { p: ray.o, normal: None, sampled_volume_lights: false };
         let mut path = PathRay::new(ray, medium, 0.0);
+        // Which block of the Sobol dimension layout each segment uses; only
+        // segments that draw numbers (in a medium, or ending on a pane)
+        // count as uses of their bounce's block.
+        let mut segments = SegmentCounter::default();
 
         loop {
             let (ray, medium) = (path.ray, path.medium);
+            let mut block = None;
             let hit = path.intersect(scene);
             let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
 
             // Free flight through the medium up to the surface.
             if let Some(id) = medium {
                 let m = scene.medium(id);
+                let block = *block.insert(segments.next(depth));
                 // Equiangular sampling toward point and spot lights along this
                 // segment, MIS-weighted against the free-flight vertices' NEE.
                 if depth < self.max_depth {
-                    let segment =
-                        EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput: beta / group.average(r_u) };
+                    let throughput = beta / group.average(r_u);
+                    let segment = EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput, block };
                     let v = equiangular_ld(scene, &segment, group, lights, sampler);
                     let at = if depth == 0 { FirstVertex::Medium } else { first };
                     l.add(v, || PathClass::of(at, depth + 1));
@@ -80,6 +87,7 @@ impl VolPathIntegrator {
                 let mut scattered: Option<(Vec3, Vec3)> = None;
                 let mut terminated = false;
                 let wo = -ray.d;
+                block.enter(sampler, layout::FREE_FLIGHT);
                 let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
                     // Medium emission, a collision estimator at every tentative collision.
                     if depth < self.max_depth && !c.point.l_ve.is_black() {
@@ -135,6 +143,7 @@ impl VolPathIntegrator {
                             r_p: r_u,
                             segment: Some(segment),
                             guiding,
+                            block: Block::vertex(depth),
                         };
                         let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                         l.add(v, || PathClass::of(first, depth));
@@ -143,7 +152,7 @@ impl VolPathIntegrator {
                             let v = sample_volume_ld(scene, volume_lights, &vertex, group, hero, sampler);
                             l.add(v, || PathClass::of(first, depth));
                         }
-                        let Some(ps) = sample_phase(phase, c.p, wo, guiding, sampler) else {
+                        let Some(ps) = sample_phase(phase, c.p, wo, guiding, vertex.block, sampler) else {
                             terminated = true;
                             return false;
                         };
@@ -152,6 +161,7 @@ impl VolPathIntegrator {
                         // Russian roulette on the MIS-normalized throughput,
                         // after this vertex's light sample.
                         let rr_beta = beta * eta_scale / group.average(r_u);
+                        vertex.block.enter(sampler, layout::ROULETTE);
                         let u = sampler.next_1d();
                         if let Some(q) = roulette_survival(rr_beta.max_channel(), depth) {
                             if u >= q {
@@ -261,6 +271,7 @@ impl VolPathIntegrator {
                 let ns = hit.surface.shading_normal(wo);
                 let cos = ns.dot(wo);
                 let pass = pane.pass_probability(cos);
+                block.unwrap_or_else(|| segments.next(depth)).enter(sampler, layout::PANE);
                 if sampler.next_1d() < pass {
                     beta *= pane.specular_transmittance;
                     r_l /= pass;
@@ -309,6 +320,7 @@ impl VolPathIntegrator {
                     r_p: r_u,
                     segment: None,
                     guiding: surface_guiding,
+                    block: Block::vertex(depth),
                 };
                 let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                 l.add(v, || PathClass::of(first, depth));
@@ -317,7 +329,10 @@ impl VolPathIntegrator {
                     l.add(v, || PathClass::of(first, depth));
                 }
             }
-            let Some(bs) = pane_reflection.or_else(|| sample_bsdf(&bsdf, ns, p, wo, surface_guiding, sampler)) else {
+            let vertex_block = Block::vertex(depth);
+            let Some(bs) =
+                pane_reflection.or_else(|| sample_bsdf(&bsdf, ns, p, wo, surface_guiding, vertex_block, sampler))
+            else {
                 return l;
             };
             if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
@@ -341,6 +356,7 @@ impl VolPathIntegrator {
 
             // Russian roulette on the MIS-normalized throughput.
             let rr_beta = beta * eta_scale / group.average(r_u);
+            vertex_block.enter(sampler, layout::ROULETTE);
             let u = sampler.next_1d();
             if let Some(q) = roulette_survival(rr_beta.max_channel(), depth) {
                 if u >= q {

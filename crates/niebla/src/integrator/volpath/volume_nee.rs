@@ -23,6 +23,7 @@ use crate::sampling::PixelSampler;
 use crate::world::{surface_epsilon, Scene};
 
 use super::channels::Channels;
+use super::layout;
 use super::nee::{shadow_transmittance, NeeVertex, Scatter};
 
 /// Light sampling of emissive media from `vertex`: one point from
@@ -36,7 +37,8 @@ pub(super) fn sample_volume_ld(
     hero: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, guiding, .. } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, guiding, block, .. } = *vertex;
+    block.enter(sampler, layout::VOLUME_LIGHT);
     let u = sampler.next_1d();
     let v = sampler.next_2d();
     let w = sampler.next_1d();
