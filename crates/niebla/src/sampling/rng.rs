@@ -222,7 +222,9 @@ impl PixelSampler {
                 bits
             }
             Mode::Sobol { .. } => {
-                let low = hash_u64(self.key ^ hash_u64(!self.dimension)) >> 43;
+                // The key is per pixel in Sobol mode: the sample's stratum makes the
+                // low bits differ between samples too.
+                let low = hash_u64(self.key ^ hash_u64(!self.dimension) ^ hash_u64(self.stratum)) >> 43;
                 ((self.next_u32() as u64) << 21) | low
             }
         };
