@@ -26,17 +26,7 @@ impl Rectangle {
     /// Parameter of the intersection if it lies in `(t_min, t_max)`.
     #[inline]
     pub fn hit_t(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
-        // An affine map preserves the ray parameter: o + t d maps to o' + t d'.
-        let o = self.transform.to_local.transform_point3(ray.o);
-        let d = self.transform.to_local.transform_vector3(ray.d);
-        if d.z == 0.0 {
-            return None;
-        }
-        let t = -o.z / d.z;
-        if !(t > t_min && t < t_max) {
-            return None;
-        }
-        let q = o + d * t;
+        let (t, q) = self.transform.local_plane_crossing(ray, t_min, t_max)?;
         if q.x.abs() > 1.0 || q.y.abs() > 1.0 {
             return None;
         }

@@ -1,5 +1,7 @@
 use glam::{Affine3A, Mat3, Vec3};
 
+use crate::math::Ray;
+
 /// An affine map from an object's local space to world space, with its inverse.
 #[derive(Clone, Copy, Debug)]
 pub struct Transform {
@@ -47,5 +49,24 @@ impl Transform {
     #[inline]
     pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
         Mat3::from(self.to_local.matrix3).transpose().mul_vec3(n).normalize()
+    }
+
+    /// Where `ray` (world space) crosses the local plane `z = 0` with its
+    /// parameter in `(t_min, t_max)`: the parameter `t` (an affine map keeps
+    /// it: `o + t d` maps to `o' + t d'`) and the local crossing point.
+    /// `None` for a ray parallel to the plane. Planar shapes test the point
+    /// against their outline.
+    #[inline]
+    pub fn local_plane_crossing(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<(f32, Vec3)> {
+        let o = self.to_local.transform_point3(ray.o);
+        let d = self.to_local.transform_vector3(ray.d);
+        if d.z == 0.0 {
+            return None;
+        }
+        let t = -o.z / d.z;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        Some((t, o + d * t))
     }
 }
