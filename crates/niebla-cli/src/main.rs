@@ -3,6 +3,7 @@
 mod adaptive_cmd;
 mod aov_flags;
 mod bench;
+mod bench_adaptive;
 mod bench_emission;
 mod bench_geometry;
 mod bench_interactive;
@@ -87,6 +88,10 @@ enum BenchCommand {
     /// Relative MSE at 16, 64, 256 spp of the scene's integrator with each
     /// sampler kind (independent, Sobol in draw order, Sobol laid out).
     Sampler(bench_sampler::SamplerBenchArgs),
+    /// Samples and seconds to a relative MSE of 1e-2, plain and with
+    /// adaptive sampling at each threshold, next to the most any sample
+    /// allocation could gain.
+    Adaptive(bench_adaptive::AdaptiveBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -106,6 +111,7 @@ fn main() -> ExitCode {
         Command::Bench(BenchCommand::Geometry(args)) => bench_geometry::run(&args),
         Command::Bench(BenchCommand::Emission(args)) => bench_emission::run(&args),
         Command::Bench(BenchCommand::Sampler(args)) => bench_sampler::run(&args),
+        Command::Bench(BenchCommand::Adaptive(args)) => bench_adaptive::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

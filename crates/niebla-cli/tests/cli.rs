@@ -142,3 +142,79 @@ fn a_medium_nothing_refers_to_is_warned_about_by_info_and_render() {
     assert!(out.status.success());
     assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+/// `niebla bench adaptive` on a tiny image: the table's columns parse, and
+/// the sample counts agree with the sweep lines and with what the adaptive
+/// schedule allows (no pixel stops before 16 samples, so up to 16 spp the
+/// adaptive render takes every sample and is the plain render of the same
+/// seed); times are not checked.
+#[test]
+fn bench_adaptive_prints_a_consistent_table() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/scenes/fog_spot.json");
+    let output = niebla()
+        .args(["bench", "adaptive"])
+        .arg(&scene)
+        .args(["--width", "8", "--reference-spp", "1024", "--variance-spp", "16", "--spp", "4,16,64,256"])
+        .args(["--thresholds", "0.3,0.2", "--target", "0.05", "--threads", "2"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{text}\n{}", String::from_utf8_lossy(&output.stderr));
+    // Sweep lines: "plain <spp> spp: rel MSE <e> ..." and
+    // "adaptive <threshold> <spp> spp: rel MSE <e> in <t> s, <taken> spp taken".
+    let mut plain = Vec::new();
+    let mut adaptive = Vec::new();
+    for line in text.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.first() {
+            Some(&"plain") => plain.push((words[1].parse::<f64>().unwrap(), words[5].parse::<f64>().unwrap())),
+            Some(&"adaptive") => adaptive.push((
+                words[2].parse::<f64>().unwrap(),
+                words[6].parse::<f64>().unwrap(),
+                words[10].parse::<f64>().unwrap(),
+            )),
+            _ => {}
+        }
+    }
+    assert_eq!(plain.iter().map(|p| p.0).collect::<Vec<_>>(), [4.0, 16.0, 64.0, 256.0], "{text}");
+    assert_eq!(adaptive.len(), 8, "{text}");
+    for &(spp, error, taken) in &adaptive {
+        assert!(taken <= spp && taken >= spp.min(16.0), "{spp} spp scheduled, {taken} taken\n{text}");
+        if spp <= 16.0 {
+            assert_eq!(taken, spp, "{text}");
+            let plain_error = plain.iter().find(|p| p.0 == spp).unwrap().1;
+            assert_eq!(error, plain_error, "the adaptive render that stops nothing is the plain one\n{text}");
+        }
+    }
+    // The table: a header and one row of 6 + 2 columns.
+    let lines: Vec<&str> = text.lines().collect();
+    let h = lines.iter().position(|l| l.starts_with("scene")).unwrap_or_else(|| panic!("{text}"));
+    let header: Vec<&str> = lines[h].split_whitespace().collect();
+    assert_eq!(header, ["scene", "bound", "plain_spp", "plain_s", "a0.3_spp", "a0.3_s", "a0.2_spp", "a0.2_s"]);
+    let row: Vec<&str> = lines[h + 1].split_whitespace().collect();
+    assert_eq!(row.len(), header.len(), "{text}");
+    assert_eq!(row[0], "fog_spot");
+    let bound: f64 = row[1].trim_end_matches('x').parse().unwrap();
+    assert!(bound >= 1.0, "{text}");
+    for cell in &row[2..] {
+        assert!(*cell == "-" || cell.trim_start_matches('<').parse::<f64>().is_ok(), "{cell}\n{text}");
+    }
+    // Plain samples to the target lie between the sweep points that bracket it.
+    let first_below = plain.iter().position(|p| p.1 < 0.05);
+    match (first_below, row[2]) {
+        (None, cell) => assert_eq!(cell, "-", "{text}"),
+        (Some(0), cell) => assert!(cell.starts_with('<'), "{text}"),
+        (Some(i), cell) => {
+            let spp: f64 = cell.parse().unwrap();
+            assert!(spp >= plain[i - 1].0 && spp <= plain[i].0, "{spp} not in the bracket\n{text}");
+        }
+    }
+    for (k, &threshold) in [0.3, 0.2].iter().enumerate() {
+        let sweep: Vec<_> = adaptive.iter().skip(4 * k).take(4).collect();
+        assert!(sweep.iter().all(|a| a.0 <= 256.0));
+        let cell = row[4 + 2 * k];
+        if let Ok(spp) = cell.parse::<f64>() {
+            assert!(spp > 0.0 && spp <= 256.0, "threshold {threshold}: {spp}\n{text}");
+        }
+    }
+}

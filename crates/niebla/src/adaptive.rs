@@ -357,6 +357,39 @@ pub fn write_adaptive_exr(
     crate::film::write_atomically(path, &bytes)
 }
 
+/// Per-sample relative variance of each pixel: `spp * var_c / (r_c^2 + eps)`
+/// averaged over the channels, with `var_c` the variance of the pixel's value
+/// in a render of `spp` samples (`variance(i)`), `r` the `reference` pixel
+/// and `eps = (0.01 mean(reference))^2` (the weights of
+/// [`Image::relative_mse`]). Its mean over the pixels is the relative MSE of
+/// a one-sample render.
+pub fn per_sample_relative_variance(reference: &Image, spp: u64, variance: impl Fn(usize) -> Rgb) -> Vec<f64> {
+    let eps = (0.01 * reference.mean().average() as f64).powi(2).max(f64::MIN_POSITIVE);
+    (0..reference.pixels.len())
+        .map(|i| {
+            let (r, v) = (reference.pixels[i], variance(i));
+            (0..3).map(|c| spp as f64 * v[c] as f64 / ((r[c] as f64).powi(2) + eps)).sum::<f64>() / 3.0
+        })
+        .collect()
+}
+
+/// The most any allocation of samples over the pixels can gain over a
+/// uniform one for relative MSE (ratio of total samples to reach equal
+/// error): `mean(v) / mean(sqrt v)^2` for per-sample relative variances `v`
+/// ([`per_sample_relative_variance`]). Minimising `sum v_p / n_p` at a fixed
+/// `sum n_p` gives `n_p` proportional to `sqrt v_p` (Cauchy-Schwarz). At
+/// least 1; 1 for empty or all-zero input.
+pub fn allocation_bound(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let mean_sqrt = v.iter().map(|x| x.max(0.0).sqrt()).sum::<f64>() / n;
+    if v.is_empty() || mean_sqrt <= 0.0 {
+        1.0
+    } else {
+        mean / (mean_sqrt * mean_sqrt)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -393,5 +426,32 @@ mod tests {
         // Sample variance of four 1s and four 3s: 8 / 7; factor (4 + 144 / 4) / 256.
         let expected = 8.0 / 7.0 * 40.0 / 256.0;
         assert!((variance[1] as f64 - expected).abs() < 1e-6, "{variance:?}");
+    }
+
+    #[test]
+    fn allocation_bound_is_the_cauchy_schwarz_ratio() {
+        // Equal variances: nothing to gain.
+        assert!((allocation_bound(&[2.0; 10]) - 1.0).abs() < 1e-15);
+        // v = 1 and 4: mean 2.5, mean sqrt 1.5, bound 2.5 / 2.25.
+        assert!((allocation_bound(&[1.0, 4.0]) - 2.5 / 2.25).abs() < 1e-15);
+        // Brute force over allocations n_1 + n_2 = 3000 for v = (1, 4):
+        // uniform error (1 + 4) / 1500; the best allocation's error times
+        // the bound equals it.
+        let (v1, v2, total) = (1.0f64, 4.0f64, 3000u32);
+        let best = (1..total).map(|n1| v1 / n1 as f64 + v2 / (total - n1) as f64).fold(f64::INFINITY, f64::min);
+        let uniform = (v1 + v2) / (total as f64 / 2.0);
+        assert!((uniform / best - allocation_bound(&[v1, v2])).abs() < 1e-5, "{}", uniform / best);
+        assert_eq!(allocation_bound(&[]), 1.0);
+        assert_eq!(allocation_bound(&[0.0, 0.0]), 1.0);
+    }
+
+    #[test]
+    fn per_sample_relative_variance_of_a_flat_image() {
+        // Reference 2 in every channel, variance of the value 0.04 at 16 spp:
+        // 16 * 0.04 / (4 + (0.02)^2).
+        let reference = Image { width: 2, height: 1, pixels: vec![Rgb::splat(2.0); 2] };
+        let v = per_sample_relative_variance(&reference, 16, |_| Rgb::splat(0.04));
+        let expected = 16.0 * 0.04f32 as f64 / (4.0 + 0.0004);
+        assert!(v.iter().all(|x| (x - expected).abs() < 1e-9), "{v:?}");
     }
 }
