@@ -469,7 +469,7 @@ const RENDER_AND_INTEGRATOR: &[ErrorCase] = &[
         from: r#""seed": 7"#,
         to: r#""seed": 7, "sampler": "halton""#,
         path: "render.sampler",
-        message: "unknown value `halton`, expected `independent` or `sobol`",
+        message: "unknown value `halton`, expected one of `independent`, `sobol`, `sobol_sequential`",
         also: &[],
     },
     ErrorCase {
