@@ -73,8 +73,11 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
         transmittance: TransmittanceMethod::Analytic,
         volume_lights: false,
     };
-    let (a, sa) = batch_stats(&s, single, 64, 8);
-    let (b, sb) = batch_stats(&s, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }, 4096, 8);
+    // 32 batches, so that each pixel's standard error is estimated with 31
+    // degrees of freedom (with 8 batches, Student's t with 7 degrees of
+    // freedom put one of the 48 checked pixels past 4.5 "SE" by chance).
+    let (a, sa) = batch_stats(&s, single, 16, 32);
+    let (b, sb) = batch_stats(&s, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }, 1024, 32);
     let mut checked = 0;
     let brightest = a.pixels.iter().map(|p| p.g()).fold(0.0f32, f32::max) as f64;
     for i in 0..64 {
@@ -86,8 +89,9 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
         }
         let se = (sa[i][1].powi(2) + sb[i][1].powi(2)).sqrt();
         // Multiple scattering adds at most about albedo * tau = 0.8% here.
+        // Bound: P(|t_31| > 5) is about 2e-5 per pixel, 1e-3 over 48 pixels.
         let z = (y - x - 0.004 * x) / (se + 1e-9);
-        assert!(z.abs() < 4.5, "pixel {i}: single {x:.5e} vs volpath {y:.5e} +- {se:.1e}");
+        assert!(z.abs() < 5.0, "pixel {i}: single {x:.5e} vs volpath {y:.5e} +- {se:.1e}");
         checked += 1;
     }
     assert!(checked > 20);
