@@ -99,16 +99,21 @@ class Scene:
     # ----------------------------------------------------------------- making
 
     @classmethod
-    def from_file(cls, path: PathLike, defines: Optional[Mapping[str, Any]] = None) -> "Scene":
+    def from_file(
+        cls, path: PathLike, defines: Optional[Mapping[str, Any]] = None, frame: Optional[int] = None
+    ) -> "Scene":
         """Load a scene file: niebla JSON (version 1), or a Mitsuba 3 XML
         scene (``.xml``, converted as ``niebla convert`` does; ``defines``
         sets its ``<default>`` parameters like ``-D name=value``, and what it
         accepts without effect is raised as ``UserWarning``). Relative paths
         inside it resolve against the file's folder. Raises
         :class:`SceneError` (with the file, the JSON path or XML line, and
-        the message of the ``niebla`` command)."""
+        the message of the ``niebla`` command). With ``frame``, the scene of
+        that frame of a sequence as ``niebla render --frames`` renders it:
+        keyframed camera and lights at that frame, and frame patterns in file
+        names (``smoke.####.vdb``, ``{frame:04}``) replaced."""
         d = {str(k): str(v) for k, v in (defines or {}).items()}
-        return cls(_niebla.Scene.from_file(os.fspath(path), d))
+        return cls(_niebla.Scene.from_file(os.fspath(path), d, frame))
 
     @classmethod
     def from_dict(cls, desc: Mapping[str, Any], base_dir: PathLike = ".", name: str = "<dict>") -> "Scene":
