@@ -29,22 +29,20 @@ pub fn direct_surface_radiance(
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let p = surface.p;
-    let ns = surface.shading_normal(wo);
-    let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -surface.n) } else { (ns, surface.n) };
+    let frame = ShadingFrame::new(surface, wo);
+    let ng = frame.ng;
     let mut l = Rgb::ZERO;
     for (index, light) in scene.lights.iter().enumerate() {
         let u = sampler.next_2d();
         let Some(ls) = light.sample_li(p, Some(ng), u) else {
             continue;
         };
-        let cos = ls.wi.dot(n);
-        if cos <= 0.0 || ls.wi.dot(ng) <= 0.0 || ls.pdf == 0.0 {
+        if ls.pdf == 0.0 || ls.li.is_black() {
             continue;
         }
-        let f = bsdf.eval(ns, wo, ls.wi);
-        if f.is_black() || ls.li.is_black() {
+        let Some(f_cos) = frame.response(bsdf, wo, ls.wi) else {
             continue;
-        }
+        };
         let origin = offset_origin(p, ng);
         let tr = scene.transmittance_ignoring(
             origin,
@@ -55,7 +53,7 @@ pub fn direct_surface_radiance(
             method,
             sampler,
         );
-        l += f * ls.li * tr * (cos / ls.pdf);
+        l += f_cos * ls.li * tr / ls.pdf;
     }
     l
 }
@@ -231,20 +229,49 @@ pub fn volume_light_surface_radiance(
     let Some(y) = sample_volume_light(scene, lights, p, sampler) else {
         return Rgb::ZERO;
     };
-    let ns = surface.shading_normal(wo);
-    let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -surface.n) } else { (ns, surface.n) };
-    let cos = y.wi.dot(n);
-    if cos <= 0.0 || y.wi.dot(ng) <= 0.0 {
+    let frame = ShadingFrame::new(surface, wo);
+    let Some(f_cos) = frame.response(bsdf, wo, y.wi) else {
         return Rgb::ZERO;
-    }
-    let f = bsdf.eval(ns, wo, y.wi);
-    if f.is_black() {
-        return Rgb::ZERO;
-    }
-    let origin = offset_origin(p, ng);
+    };
+    let origin = offset_origin(p, frame.ng);
     let distance = (p + y.wi * y.distance - origin).length();
     let tr = transmittance_into_medium(scene, origin, medium, y.wi, distance, y.medium, method, sampler);
-    f * y.le_over_pdf * tr * cos
+    f_cos * y.le_over_pdf * tr
+}
+
+/// The normals of a surface point as seen from `wo`: the shading normal
+/// `ns` (as the BSDF takes it), and the shading and geometric normals `n`,
+/// `ng` flipped to the side of `wo`.
+struct ShadingFrame {
+    ns: Vec3,
+    n: Vec3,
+    ng: Vec3,
+}
+
+impl ShadingFrame {
+    #[inline]
+    fn new(surface: &SurfaceHit, wo: Vec3) -> ShadingFrame {
+        let ns = surface.shading_normal(wo);
+        let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -surface.n) } else { (ns, surface.n) };
+        ShadingFrame { ns, n, ng }
+    }
+
+    /// `f(wo, wi) |cos|` about the shading normal for light arriving from
+    /// `wi`; `None` when `wi` lies below the shading or the geometric
+    /// surface on the side of `wo` (no leaks through smooth meshes) or the
+    /// BSDF gives nothing.
+    #[inline]
+    fn response(&self, bsdf: &crate::bsdf::Bsdf, wo: Vec3, wi: Vec3) -> Option<Rgb> {
+        let cos = wi.dot(self.n);
+        if cos <= 0.0 || wi.dot(self.ng) <= 0.0 {
+            return None;
+        }
+        let f = bsdf.eval(self.ns, wo, wi);
+        if f.is_black() {
+            return None;
+        }
+        Some(f * cos)
+    }
 }
 
 #[cfg(test)]
