@@ -364,9 +364,7 @@ impl GridMedium {
             None => (self.sigma_a * density, self.sigma_s * density),
             Some(field) => {
                 let source = match &self.motion {
-                    Some(m) if time != 0.0 => {
-                        m.source_world_point(p, self.world_to_grid.transform_point3(p), time)
-                    }
+                    Some(m) if time != 0.0 => m.source_world_point(p, self.world_to_grid.transform_point3(p), time),
                     _ => p,
                 };
                 let sigma_t = self.sigma_t() * density;

@@ -156,10 +156,8 @@ fn build_grid_medium(
                 Some(t) => {
                     build_transform(t)
                         .ok_or_else(|| {
-                            loader.error(
-                                &format!("{path}.albedo_to_world"),
-                                "transform is singular (zero scale?)".into(),
-                            )
+                            loader
+                                .error(&format!("{path}.albedo_to_world"), "transform is singular (zero scale?)".into())
                         })?
                         .to_world
                 }
@@ -402,7 +400,11 @@ impl Loader<'_> {
                 let label = self.base_dir.join(desc.file().unwrap_or_default()).display().to_string();
                 let grid = match volume {
                     DenseVolume::Scalar(g) => {
-                        self.charge(&file_path, g.storage().len() as u64 * 4, &format!("the {nx} x {ny} x {nz} albedo grid"))?;
+                        self.charge(
+                            &file_path,
+                            g.storage().len() as u64 * 4,
+                            &format!("the {nx} x {ny} x {nz} albedo grid"),
+                        )?;
                         AlbedoGrid::Grey(Arc::new(g))
                     }
                     DenseVolume::Rgb(g) => {
@@ -434,7 +436,9 @@ impl Loader<'_> {
             let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
             return Err(self.error(
                 &at,
-                format!("{label}: voxel (x, y, z) = ({x}, {y}, {z}) has value {value}; albedo values must be in [0, 1]"),
+                format!(
+                    "{label}: voxel (x, y, z) = ({x}, {y}, {z}) has value {value}; albedo values must be in [0, 1]"
+                ),
             ));
         }
         Ok(AlbedoField::new(grid, to_world.inverse(), scale))
