@@ -153,6 +153,8 @@ def _medium(mi, name, m, scene_dir):
         raise Unsupported(f"media.{name}: type {kind!r}")
     if m.get("to_world"):
         raise Unsupported(f"media.{name}: to_world on a grid medium")
+    if m.get("albedo_grid"):
+        raise Unsupported(f"media.{name}: albedo_grid (not converted yet)")
     d = m["density"]
     if d["type"] == "npy":
         # The .vol with the same stem holds the same voxels (volumes.py writes both).

@@ -75,6 +75,9 @@ FILES = {
     "xform_affine_rotated.vdb": "target/tmp/niebla_test_vdbs/xform_affine_rotated.vdb",
     "mie.csv": "crates/niebla/data/mie_fog_phase.csv",
     "sky.exr": "target/tmp/envmap_scene/sky.exr",
+    # the Mitsuba XML seeds (scenes/mitsuba/*.xml) name their grids under data/
+    "data/smoke.vol": "scenes/mitsuba/data/smoke.vol",
+    "data/albedo_rgb.vol": "scenes/mitsuba/data/albedo_rgb.vol",
 }
 
 
@@ -86,6 +89,7 @@ def copy_files():
     for name, src in FILES.items():
         src = os.path.join(ROOT, src)
         if os.path.exists(src):
+            os.makedirs(os.path.dirname(os.path.join(d, name)), exist_ok=True)
             with open(src, "rb") as f, open(os.path.join(d, name), "wb") as g:
                 g.write(f.read())
             n += 1

@@ -6,7 +6,8 @@
 image mean needs the smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
-uniform 16x8 sky, and smoke.vol, a 16^3 smooth blob), both from fixed formulas.
+uniform 16x8 sky, smoke.vol, a 16^3 smooth blob, and albedo_rgb.vol, a 3-channel
+10 x 8 x 6 albedo ramp for grid_albedo), all from fixed formulas.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
 statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
@@ -32,7 +33,7 @@ SCENES = os.path.join(ROOT, "scenes", "mitsuba")
 OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
-         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic"]
+         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo"]
 
 
 def write_data(mi):
@@ -54,6 +55,16 @@ def write_data(mi):
         f.write(b"VOL" + struct.pack("<B", 3) + struct.pack("<iiiii", 1, n, n, n, 1))
         f.write(struct.pack("<6f", 0, 0, 0, 1, 1, 1))
         f.write(d.astype("<f4").tobytes())
+    # Albedo: 3 channels, 10 x 8 x 6 cells (x, y, z), box [0,1]^3 in the file;
+    # values in [0.2, 0.98], varying along every axis and per channel.
+    nx, ny, nz = 10, 8, 6
+    z, y, x = np.meshgrid((np.arange(nz) + 0.5) / nz, (np.arange(ny) + 0.5) / ny, (np.arange(nx) + 0.5) / nx,
+                          indexing="ij")
+    a = np.stack([0.2 + 0.78 * x, 0.98 - 0.7 * y, 0.5 + 0.45 * np.cos(2 * np.pi * (x + z))], axis=-1)
+    with open(os.path.join(SCENES, "data", "albedo_rgb.vol"), "wb") as f:
+        f.write(b"VOL" + struct.pack("<B", 3) + struct.pack("<iiiii", 1, nx, ny, nz, 3))
+        f.write(struct.pack("<6f", 0, 0, 0, 1, 1, 1))
+        f.write(a.astype("<f4").tobytes())
 
 
 def block_means(img: np.ndarray) -> np.ndarray:

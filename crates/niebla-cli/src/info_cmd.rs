@@ -64,9 +64,22 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
                             e.temperature.offset
                         ),
                     };
+                    let albedo = match &g.albedo {
+                        None => String::new(),
+                        Some(a) => {
+                            let (channels, dims) = match &a.grid {
+                                niebla::medium::AlbedoGrid::Grey(d) => ("1 channel", d.dims()),
+                                niebla::medium::AlbedoGrid::Rgb(d) => ("RGB", d.dims()),
+                            };
+                            format!(
+                                ", albedo grid {dims:?} voxels ({channels}) x {:?}; sigma_s at grid albedo 1",
+                                a.scale.0
+                            )
+                        }
+                    };
                     println!(
-                        "  {name}: grid medium, {kind}, sigma_a {:?}, sigma_s {:?} per unit density, max sigma_t {:.3}, \
-                         world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
+                        "  {name}: grid medium, {kind}{albedo}, sigma_a {:?}, sigma_s {:?} per unit density, max \
+                         sigma_t {:.3}, world bounds {:?}..{:?}, majorant grid {:?}, emission {emission}, phase {}",
                         g.sigma_a.0,
                         g.sigma_s.0,
                         g.max_sigma_t(),

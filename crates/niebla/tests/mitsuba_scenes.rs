@@ -182,3 +182,8 @@ fn tabulated_phase_function_matches_mitsuba() {
 fn disk_light_over_rough_plastics_matches_mitsuba() {
     check("disk_roughplastic");
 }
+
+#[test]
+fn sigma_t_and_rgb_albedo_grids_match_mitsuba() {
+    check("grid_albedo");
+}

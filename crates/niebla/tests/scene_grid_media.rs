@@ -521,3 +521,207 @@ fn half_precision_storage_keeps_densities_within_half_precision() {
     let err = parse_scene_str(&scene_text(&format!(r#"{{"smoke": {bad}}}"#)), FILE).unwrap_err();
     assert_eq!(err.path, "media.smoke.storage", "{err}");
 }
+
+// ---------------------------------------------------------------------------
+// Albedo grids
+// ---------------------------------------------------------------------------
+
+/// Writes a Mitsuba `.vol` file (version 3, float32) of `channels` values per
+/// voxel, `[z][y][x][channel]`, filling the box `lo..hi`.
+fn write_vol(path: &Path, dims: [usize; 3], channels: usize, lo: [f32; 3], hi: [f32; 3], data: &[f32]) {
+    assert_eq!(dims.iter().product::<usize>() * channels, data.len());
+    let mut bytes = b"VOL\x03".to_vec();
+    for v in [1, dims[0] as i32, dims[1] as i32, dims[2] as i32, channels as i32] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in lo.iter().chain(&hi).chain(data) {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// The RGB albedo of voxel `(x, y, z)` in the test grids: distinct values in
+/// (0, 1) per voxel and channel.
+fn test_albedo(x: usize, y: usize, z: usize) -> [f32; 3] {
+    [0.1 + 0.2 * x as f32, 0.9 - 0.3 * y as f32 - 0.05 * z as f32, 0.2 + 0.15 * (x + y + 2 * z) as f32]
+}
+
+#[test]
+fn rgb_albedo_grid_is_placed_by_its_own_transform_and_clamped_outside_its_box() {
+    let dir = temp_dir("albedo_rgb");
+    // 3 x 2 x 2 voxels over the file's box [0, 1]^3 (ignored placement: the
+    // source fills its box, albedo_to_world maps it to [-0.5, 1] x [-1, 0] x [0, 1]).
+    let dims = [3, 2, 2];
+    let mut data = Vec::new();
+    for z in 0..2 {
+        for y in 0..2 {
+            for x in 0..3 {
+                data.extend(test_albedo(x, y, z));
+            }
+        }
+    }
+    write_vol(&dir.join("albedo.vol"), dims, 3, [0.0; 3], [1.0; 3], &data);
+    // Density 2 everywhere in [-2, 2]^3, sigma_t 3: extinction 6; the albedo
+    // color [1, 0.5, 1] multiplies the grid.
+    let built = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 3, "albedo": [1, 0.5, 1],
+            "density": {"type": "constant", "value": 2, "bounds": {"min": [-2, -2, -2], "max": [2, 2, 2]}},
+            "albedo_grid": {"type": "vol", "file": "albedo.vol"},
+            "albedo_to_world": {"scale": [1.5, 1, 1], "translate": [-0.5, -1, 0]}}"#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let color = [1.0, 0.5, 1.0];
+    let check = |p: [f32; 3], albedo: [f32; 3]| {
+        let point = built.scene.media[0].at(Vec3::from(p));
+        for c in 0..3 {
+            // sigma_t is untouched by the albedo; sigma_s = sigma_t * color * grid.
+            assert_close(point.sigma_t()[c], 6.0, 1e-5);
+            assert_close(point.sigma_s[c], 6.0 * color[c] * albedo[c], 1e-5);
+        }
+    };
+    // Cell centers: x = -0.5 + 1.5 (i + 0.5) / 3, y = -1 + (j + 0.5) / 2, z = (k + 0.5) / 2.
+    let center = |x: usize, y: usize, z: usize| {
+        [-0.5 + 0.5 * (x as f32 + 0.5), -1.0 + 0.5 * (y as f32 + 0.5), 0.5 * (z as f32 + 0.5)]
+    };
+    for (x, y, z) in [(0, 0, 0), (2, 1, 0), (1, 0, 1), (2, 1, 1)] {
+        check(center(x, y, z), test_albedo(x, y, z));
+    }
+    // Halfway between two centers along x: the mean.
+    let (a, b) = (test_albedo(0, 1, 1), test_albedo(1, 1, 1));
+    let mid = [(center(0, 1, 1)[0] + center(1, 1, 1)[0]) / 2.0, center(0, 1, 1)[1], center(0, 1, 1)[2]];
+    check(mid, std::array::from_fn(|c| (a[c] + b[c]) / 2.0));
+    // Outside the albedo's box but inside the density: the nearest point of the box.
+    check([1.9, 1.5, 1.7], test_albedo(2, 1, 1));
+    check([-1.9, -1.9, -1.9], test_albedo(0, 0, 0));
+    check([center(1, 0, 0)[0], -1.8, center(1, 0, 0)[2]], test_albedo(1, 0, 0));
+    // Outside the density there is no medium.
+    assert_eq!(built.scene.media[0].at(Vec3::new(2.5, 0.0, 0.0)).sigma_t(), Rgb::ZERO);
+}
+
+#[test]
+fn one_channel_albedo_grid_defaults_to_the_density_placement() {
+    let dir = temp_dir("albedo_grey");
+    // Two voxels along x (values 0.2 and 0.8) over [0, 1]^3, placed like the
+    // density by the medium's to_world (scale 2): x centers at 0.5 and 1.5.
+    write_npy(&dir.join("albedo.npy"), &[1, 1, 2], &[0.2, 0.8]);
+    let built = build_in(
+        &dir,
+        r#"{"type": "grid", "sigma_t": 1,
+            "density": {"type": "constant", "value": 1},
+            "albedo_grid": {"type": "npy", "file": "albedo.npy"},
+            "to_world": {"scale": 2}}"#,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let sigma_s = |x: f32| built.scene.media[0].at(Vec3::new(x, 1.0, 1.0)).sigma_s;
+    assert_eq!(sigma_s(0.5), Rgb::splat(0.2));
+    assert_eq!(sigma_s(1.5), Rgb::splat(0.8));
+    assert_close(sigma_s(1.0).g(), 0.5, 1e-6);
+    assert_close(sigma_s(0.1).b(), 0.2, 1e-6);
+}
+
+#[test]
+fn albedo_grid_errors_name_the_field_and_what_was_expected() {
+    let dir = temp_dir("albedo_errors");
+    write_vol(&dir.join("two.vol"), [1, 1, 1], 2, [0.0; 3], [1.0; 3], &[0.5, 0.5]);
+    write_vol(&dir.join("bright.vol"), [2, 1, 1], 3, [0.0; 3], [1.0; 3], &[0.5, 0.5, 0.5, 0.5, 1.2, 0.5]);
+    let err = |medium: &str| build_in(&dir, medium).map(|_| ()).unwrap_err();
+    let density = r#""density": {"type": "constant", "value": 1}"#;
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, {density}, "albedo_grid": {{"type": "vol", "file": "bright.vol"}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.albedo_grid.file", "{e}");
+    assert!(e.message.contains("voxel (x, y, z) = (1, 0, 0)") && e.message.contains("must be in [0, 1]"), "{e}");
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, {density}, "albedo_grid": {{"type": "vol", "file": "two.vol"}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.albedo_grid.file", "{e}");
+    assert!(e.message.contains("two.vol") && e.message.contains("channel"), "{e}");
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_a": 1, "sigma_s": 1, {density}, "albedo_grid": {{"type": "constant", "value": 0.5}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.sigma_a", "{e}");
+    assert!(e.message.contains("cannot be combined with `albedo_grid`"), "{e}");
+    let e = err(&format!(r#"{{"type": "grid", {density}, "albedo_grid": {{"type": "constant", "value": 0.5}}}}"#));
+    assert_eq!(e.path, "media.smoke.sigma_t", "{e}");
+    let e =
+        err(&format!(r#"{{"type": "grid", "sigma_t": 1, "albedo": 1, {density}, "albedo_to_world": {{"scale": 2}}}}"#));
+    assert_eq!(e.path, "media.smoke.albedo_to_world", "{e}");
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, {density}, "albedo_grid": {{"type": "constant", "value": 1.5}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.albedo_grid.value", "{e}");
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, {density}, "albedo_grid": {{"type": "vdb", "file": "a.vdb"}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.albedo_grid.type", "{e}");
+    let e = err(&format!(
+        r#"{{"type": "grid", "sigma_t": 1, {density}, "albedo_grid": {{"type": "vol", "file": "missing.vol"}}}}"#
+    ));
+    assert_eq!(e.path, "media.smoke.albedo_grid.file", "{e}");
+    assert!(e.message.contains("missing.vol"), "{e}");
+    // A homogeneous medium has no albedo grid.
+    let e = err(r#"{"type": "homogeneous", "sigma_t": 1, "albedo_grid": {"type": "constant", "value": 0.5}}"#);
+    assert!(e.message.contains("albedo_grid"), "{e}");
+}
+
+/// A constant albedo grid renders what the same constant albedo renders:
+/// volpath in a lit medium, image means within 4 standard errors of their
+/// difference (per-pixel spread over 1024 pixels, 64 spp).
+#[test]
+fn constant_albedo_grid_renders_as_the_constant_albedo() {
+    let scene = |albedo: &str| {
+        format!(
+            r#"{{"version": 1,
+                "camera": {{"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "fov_y": 40,
+                            "width": 32, "height": 32}},
+                "render": {{"spp": 64}},
+                "media": {{"smoke": {{"type": "grid", "sigma_t": 2, {albedo},
+                    "density": {{"type": "grid", "dims": [2, 2, 2], "data": [0.3, 1, 0.6, 1.4, 1.2, 0.5, 0.9, 0.2],
+                                 "bounds": {{"min": [-1, -1, -1], "max": [1, 1, 1]}}}},
+                    "phase": {{"type": "hg", "g": 0.4}}}}}},
+                "shapes": [{{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "interior": "smoke"}}],
+                "lights": [{{"type": "directional", "direction": [-1, -0.6, -0.3], "irradiance": [3, 2.8, 2.5]}},
+                           {{"type": "constant", "radiance": [0.1, 0.12, 0.16]}}]}}"#
+        )
+    };
+    let means = |text: &str, seed: u64| {
+        let desc = parse_scene_str(text, FILE).unwrap_or_else(|e| panic!("{e}"));
+        let built = build_scene(&desc, FILE, Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+        let options = niebla::render::RenderOptions {
+            spp: 64,
+            seed,
+            first_sample: 0,
+            threads: None,
+            sampler: niebla::sampling::SamplerKind::Independent,
+        };
+        let image =
+            niebla::render::render(&built.scene, &built.settings.integrator, &options, &|_, _| {}, None).unwrap();
+        let (w, h) = (built.scene.camera.width, built.scene.camera.height);
+        let mut pixels = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                pixels.push(image.get(x, y).0);
+            }
+        }
+        pixels
+    };
+    // Different seeds: independent estimates.
+    let a = means(
+        &scene(
+            r#""albedo": [1, 0.5, 0.8], "albedo_grid": {"type": "constant", "value": 0.6, "bounds": {"min": [-1, -1, -1], "max": [1, 1, 1]}}"#,
+        ),
+        1,
+    );
+    let b = means(&scene(r#""albedo": [0.6, 0.3, 0.48]"#), 2);
+    for c in 0..3 {
+        let n = a.len() as f64;
+        let d: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p[c] as f64 - q[c] as f64).collect();
+        let mean = d.iter().sum::<f64>() / n;
+        let se = (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let level = b.iter().map(|p| p[c] as f64).sum::<f64>() / n;
+        println!("channel {c}: mean {level:.5}, difference {mean:.6} (se {se:.6})");
+        assert!(level > 0.01, "the medium is lit");
+        assert!(mean.abs() < 4.0 * se, "channel {c}: difference {mean} exceeds 4 standard errors {se}");
+    }
+}

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use glam::{Affine3A, Mat3};
-use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseGrid, SparseVec3Grid};
+use niebla_volume::{DenseGrid, DenseRgbGrid, DensityBoundGrid, MajorantGrid, SparseGrid, SparseVec3Grid};
 
 use crate::color::{BlackbodyTable, Rgb};
 use crate::math::{Ray, Vec3};
@@ -56,6 +56,67 @@ impl GridField {
     #[inline]
     pub fn eval(&self, p: Vec3) -> f32 {
         self.grid.lookup(self.world_to_grid.transform_point3(p))
+    }
+}
+
+/// The voxels of an albedo field: one channel (grey) or three (RGB).
+#[derive(Clone, Debug)]
+pub enum AlbedoGrid {
+    /// One channel, the same albedo in R, G and B.
+    Grey(Arc<DenseGrid>),
+    /// Three channels.
+    Rgb(Arc<DenseRgbGrid>),
+}
+
+/// A spatially varying single-scattering albedo: `albedo(x) = scale *
+/// grid(x)`, looked up trilinearly (values at cell centers) at the world
+/// point placed in the grid's box, which is clamped to the box first: outside
+/// its box the field takes the value of the nearest point of the box
+/// (Mitsuba 3's `gridvolume` with `wrap_mode` `clamp`). It does not change
+/// the extinction, so majorants and trackers are unaffected.
+#[derive(Clone, Debug)]
+pub struct AlbedoField {
+    /// The voxels.
+    pub grid: AlbedoGrid,
+    /// World space to the grid's local box space.
+    pub world_to_grid: Affine3A,
+    /// The grid's local box (lowest corner).
+    pub lo: Vec3,
+    /// The grid's local box (highest corner).
+    pub hi: Vec3,
+    /// Multiplies the grid's values (the medium's `albedo` color).
+    pub scale: Rgb,
+}
+
+impl AlbedoField {
+    /// A field over `grid`'s box placed in the world by the inverse of
+    /// `world_to_grid`, its values times `scale`.
+    pub fn new(grid: AlbedoGrid, world_to_grid: Affine3A, scale: Rgb) -> AlbedoField {
+        let (lo, hi) = match &grid {
+            AlbedoGrid::Grey(g) => g.bounds(),
+            AlbedoGrid::Rgb(g) => g.bounds(),
+        };
+        AlbedoField { grid, world_to_grid, lo: Vec3::from(lo), hi: Vec3::from(hi), scale }
+    }
+
+    /// Albedo at world point `p` (each channel in [0, 1] for valid data).
+    #[inline]
+    pub fn eval(&self, p: Vec3) -> Rgb {
+        let q = self.world_to_grid.transform_point3(p).clamp(self.lo, self.hi).to_array();
+        let v = match &self.grid {
+            AlbedoGrid::Grey(g) => Rgb::splat(g.lookup(q)),
+            AlbedoGrid::Rgb(g) => Rgb(g.lookup(q)),
+        };
+        v * self.scale
+    }
+
+    /// Per-channel largest value the field takes.
+    pub fn max_value(&self) -> Rgb {
+        let v = match &self.grid {
+            AlbedoGrid::Grey(g) => Rgb::splat(g.max_value()),
+            AlbedoGrid::Rgb(g) => Rgb(g.max_value()),
+        };
+        v * self.scale
     }
 }
 
@@ -147,12 +208,16 @@ impl GridMotion {
     }
 }
 
-/// A heterogeneous medium: `sigma_x(p) = density(p) * sigma_x`.
+/// A heterogeneous medium: `sigma_x(p) = density(p) * sigma_x`, or with an
+/// albedo field `sigma_s(p) = density(p) sigma_t albedo(p)` and `sigma_a(p) =
+/// density(p) sigma_t - sigma_s(p)`.
 #[derive(Clone, Debug)]
 pub struct GridMedium {
-    /// Absorption per unit density (1/length).
+    /// Absorption per unit density (1/length); with an albedo field,
+    /// `sigma_t - sigma_s` (the field decides the split at each point).
     pub sigma_a: Rgb,
-    /// Scattering per unit density (1/length).
+    /// Scattering per unit density (1/length); with an albedo field, its
+    /// largest value `sigma_t * albedo.scale` (the field is at most 1).
     pub sigma_s: Rgb,
     /// Density voxels (dimensionless multiplier of the coefficients).
     pub density: DensityGrid,
@@ -172,6 +237,9 @@ pub struct GridMedium {
     pub world_bounds: (Vec3, Vec3),
     /// Eulerian motion blur from a velocity grid, if the medium moves.
     pub motion: Option<GridMotion>,
+    /// Spatially varying single-scattering albedo; `None`: `sigma_s /
+    /// sigma_t` everywhere.
+    pub albedo: Option<AlbedoField>,
 }
 
 impl GridMedium {
@@ -199,6 +267,7 @@ impl GridMedium {
             phase,
             world_bounds,
             motion: None,
+            albedo: None,
         }
     }
 
@@ -283,7 +352,34 @@ impl GridMedium {
     #[inline]
     pub fn point_at_time(&self, p: Vec3, time: f32) -> MediumPoint {
         let d = self.density_at_time(p, time);
-        MediumPoint { sigma_a: self.sigma_a * d, sigma_s: self.sigma_s * d, l_ve: self.l_ve_at_time(p, d, time) }
+        self.point_with_density(p, d, time)
+    }
+
+    /// `(sigma_a, sigma_s)` at world point `p` at `time` (frames) where the
+    /// density (looked up at `time`) is `density`: an albedo field is read at
+    /// the point the motion brings to `p`, like emission fields.
+    #[inline]
+    pub fn absorption_scattering(&self, p: Vec3, density: f32, time: f32) -> (Rgb, Rgb) {
+        match &self.albedo {
+            None => (self.sigma_a * density, self.sigma_s * density),
+            Some(field) => {
+                let source = match &self.motion {
+                    Some(m) if time != 0.0 => m.source_world_point(p, self.world_to_grid.transform_point3(p), time),
+                    _ => p,
+                };
+                let sigma_t = self.sigma_t() * density;
+                let sigma_s = sigma_t * field.eval(source);
+                ((sigma_t - sigma_s).map(|x| x.max(0.0)), sigma_s)
+            }
+        }
+    }
+
+    /// Coefficients at world point `p` at `time` (frames) where the density
+    /// (looked up at `time`) is `density`.
+    #[inline]
+    pub fn point_with_density(&self, p: Vec3, density: f32, time: f32) -> MediumPoint {
+        let (sigma_a, sigma_s) = self.absorption_scattering(p, density, time);
+        MediumPoint { sigma_a, sigma_s, l_ve: self.l_ve_at_time(p, density, time) }
     }
 }
 
@@ -342,7 +438,8 @@ impl GridMedium {
     #[inline]
     pub fn point(&self, p: Vec3) -> MediumPoint {
         let d = self.density_at(p);
-        MediumPoint { sigma_a: self.sigma_a * d, sigma_s: self.sigma_s * d, l_ve: self.l_ve(p, d) }
+        let (sigma_a, sigma_s) = self.absorption_scattering(p, d, 0.0);
+        MediumPoint { sigma_a, sigma_s, l_ve: self.l_ve(p, d) }
     }
 
     /// Largest extinction anywhere (max over channels).

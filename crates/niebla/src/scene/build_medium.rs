@@ -24,7 +24,9 @@ use super::desc::*;
 use super::SceneError;
 use crate::color::{BlackbodyTable, Rgb};
 use crate::limits::{format_bytes, MemoryBudget};
-use crate::medium::{DensityGrid, GridEmission, GridField, GridMedium, GridMotion, HomogeneousMedium, Medium};
+use crate::medium::{
+    AlbedoField, AlbedoGrid, DensityGrid, GridEmission, GridField, GridMedium, GridMotion, HomogeneousMedium, Medium,
+};
 use crate::phase::PhaseFunction;
 
 mod pyro;
@@ -144,8 +146,29 @@ fn build_grid_medium(
         Some(name) => Some(build_motion(desc, path, name, loader, &density, &to_world, &world_to_grid)?),
     };
 
+    // Albedo field, placed by its own transform (default: the density's).
+    let albedo = match &desc.albedo_grid {
+        None => None,
+        Some(source) => {
+            let at = format!("{path}.albedo_grid");
+            let place = match &desc.albedo_to_world {
+                None => to_world,
+                Some(t) => {
+                    build_transform(t)
+                        .ok_or_else(|| {
+                            loader
+                                .error(&format!("{path}.albedo_to_world"), "transform is singular (zero scale?)".into())
+                        })?
+                        .to_world
+                }
+            };
+            Some(loader.albedo_field(&at, source, &place, desc.albedo_grid_scale())?)
+        }
+    };
+
     let (sigma_a, sigma_s) = desc.sigma_a_sigma_s();
     let mut medium = GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, minorant, emission, phase);
+    medium.albedo = albedo;
     // Until the shutter is set, the moving medium is bounded by the static
     // majorant (valid at time 0).
     medium.motion = motion.map(|m| GridMotion { majorant: medium.majorant.clone(), ..m });
@@ -253,6 +276,7 @@ enum FieldKind {
     Density,
     Emission,
     Temperature,
+    Albedo,
 }
 
 impl FieldKind {
@@ -261,6 +285,7 @@ impl FieldKind {
             FieldKind::Density => "density",
             FieldKind::Emission => "emission",
             FieldKind::Temperature => "temperature",
+            FieldKind::Albedo => "albedo",
         }
     }
 }
@@ -329,6 +354,94 @@ impl Loader<'_> {
         let grid = self.load(field, desc, kind)?;
         let world_to_grid = self.world_to_grid(field, &grid, to_world)?;
         Ok(GridField { grid, world_to_grid })
+    }
+
+    /// An albedo field (one channel or RGB) placed in the world by
+    /// `to_world`, its values times `scale`; values outside [0, 1] are errors
+    /// at `{field}.file` (or `field` for sources in the scene file).
+    fn albedo_field(
+        &mut self,
+        field: &str,
+        desc: &DensitySourceDesc,
+        to_world: &Affine3A,
+        scale: Rgb,
+    ) -> Result<AlbedoField, SceneError> {
+        let file_path = format!("{field}.file");
+        let volume = match desc {
+            DensitySourceDesc::Npy { file, bounds } => {
+                let full = self.base_dir.join(file);
+                self.check_file(&file_path, &full, 2)?;
+                Some(
+                    read_npy(&full)
+                        .and_then(|v| v.with_bounds(bounds.min, bounds.max))
+                        .map_err(|e| self.file_error(field, e))?,
+                )
+            }
+            DensitySourceDesc::Vol { file } => {
+                let full = self.base_dir.join(file);
+                self.check_file(&file_path, &full, 2)?;
+                Some(read_vol(&full).map_err(|e| self.file_error(field, e))?)
+            }
+            DensitySourceDesc::Vdb { .. } => {
+                return Err(self.error(
+                    &format!("{field}.type"),
+                    "an albedo grid must be a dense source (constant, grid, npy, vol or procedural), not vdb".into(),
+                ))
+            }
+            _ => None,
+        };
+        let (grid, label, at) = match volume {
+            None => match self.load(field, desc, FieldKind::Albedo)? {
+                DensityGrid::Dense(g) => (AlbedoGrid::Grey(g), "albedo source".to_string(), field.to_string()),
+                DensityGrid::Sparse(_) => unreachable!("sparse sources were refused above"),
+            },
+            Some(volume) => {
+                let [nx, ny, nz] = volume.dims();
+                let label = self.base_dir.join(desc.file().unwrap_or_default()).display().to_string();
+                let grid = match volume {
+                    DenseVolume::Scalar(g) => {
+                        self.charge(
+                            &file_path,
+                            g.storage().len() as u64 * 4,
+                            &format!("the {nx} x {ny} x {nz} albedo grid"),
+                        )?;
+                        AlbedoGrid::Grey(Arc::new(g))
+                    }
+                    DenseVolume::Rgb(g) => {
+                        self.charge(
+                            &file_path,
+                            g.values().len() as u64 * 12,
+                            &format!("the {nx} x {ny} x {nz} RGB albedo grid"),
+                        )?;
+                        AlbedoGrid::Rgb(Arc::new(g))
+                    }
+                };
+                (grid, label, file_path)
+            }
+        };
+        // Finite, in [0, 1] (a grey grid from a source in the scene file was
+        // checked >= 0 by `load`; the upper bound is checked here).
+        let bad = match &grid {
+            AlbedoGrid::Grey(g) => {
+                let s = g.storage();
+                (0..s.len()).find(|&i| !(0.0..=1.0).contains(&s.get(i))).map(|i| (i, format!("{}", s.get(i)), g.dims()))
+            }
+            AlbedoGrid::Rgb(g) => g
+                .values()
+                .iter()
+                .position(|v| !v.iter().all(|c| (0.0..=1.0).contains(c)))
+                .map(|i| (i, format!("{:?}", g.values()[i]), g.dims())),
+        };
+        if let Some((i, value, [nx, ny, _])) = bad {
+            let (x, y, z) = (i % nx, i / nx % ny, i / (nx * ny));
+            return Err(self.error(
+                &at,
+                format!(
+                    "{label}: voxel (x, y, z) = ({x}, {y}, {z}) has value {value}; albedo values must be in [0, 1]"
+                ),
+            ));
+        }
+        Ok(AlbedoField::new(grid, to_world.inverse(), scale))
     }
 
     /// World to the grid's own space (dense: local box; sparse: index).
@@ -425,6 +538,7 @@ impl Loader<'_> {
                          and its `color`"
                     }
                     FieldKind::Temperature => "a temperature must have one channel",
+                    FieldKind::Albedo => "an albedo grid of 3 channels is read by `albedo_grid` only",
                 };
                 Err(self.error(at, format!("{}: has 3 channels (RGB); {hint}", file.display())))
             }

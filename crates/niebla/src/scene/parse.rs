@@ -252,8 +252,16 @@ struct RawGrid {
 
 /// Fields only a grid medium accepts; a homogeneous medium with one of them
 /// gets an error that says so (rather than a bare "unknown field").
-const GRID_ONLY_FIELDS: &[&str] =
-    &["density", "to_world", "majorant_resolution", "storage", "velocity", "velocity_units"];
+const GRID_ONLY_FIELDS: &[&str] = &[
+    "density",
+    "to_world",
+    "majorant_resolution",
+    "storage",
+    "velocity",
+    "velocity_units",
+    "albedo_grid",
+    "albedo_to_world",
+];
 
 fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
     // Without a `type`, a medium with a `density` is a grid medium, any
@@ -283,8 +291,42 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                     ),
                 )
             })?;
+            let albedo_grid = take::<DensitySourceDesc>(&mut object, "albedo_grid")?;
+            let albedo_to_world = take::<TransformDesc>(&mut object, "albedo_to_world")?;
             let raw: RawGrid = rest(object)?;
-            let coefficients = coefficients(raw.sigma_a, raw.sigma_s, raw.sigma_t, raw.albedo)?;
+            let albedo = match &albedo_grid {
+                None => {
+                    if albedo_to_world.is_some() {
+                        return Err(Located::new(
+                            "albedo_to_world",
+                            "`albedo_to_world` places an `albedo_grid`, which this medium does not have",
+                        ));
+                    }
+                    raw.albedo
+                }
+                Some(_) => {
+                    if let Some(key) = [("sigma_a", raw.sigma_a.is_some()), ("sigma_s", raw.sigma_s.is_some())]
+                        .iter()
+                        .find_map(|&(k, given)| given.then_some(k))
+                    {
+                        return Err(Located::new(
+                            key,
+                            format!(
+                                "`{key}` cannot be combined with `albedo_grid`: a medium with an albedo grid \
+                                 gives `sigma_t` (and optionally `albedo`, which multiplies the grid)"
+                            ),
+                        ));
+                    }
+                    if raw.sigma_t.is_none() {
+                        return Err(Located::new(
+                            "sigma_t",
+                            "missing required field `sigma_t`, which goes with `albedo_grid`",
+                        ));
+                    }
+                    Some(raw.albedo.unwrap_or(ColorDesc::Gray(1.0)))
+                }
+            };
+            let coefficients = coefficients(raw.sigma_a, raw.sigma_s, raw.sigma_t, albedo)?;
             Ok(MediumDesc::Grid(GridMediumDesc {
                 coefficients,
                 scale: raw.scale,
@@ -296,6 +338,8 @@ fn parse_medium(mut object: Object) -> Result<MediumDesc, Located> {
                 storage: raw.storage,
                 velocity: raw.velocity,
                 velocity_units: raw.velocity_units,
+                albedo_grid,
+                albedo_to_world,
             }))
         }
         "pyro" => {

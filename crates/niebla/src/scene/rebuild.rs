@@ -204,6 +204,9 @@ fn rebuild(
             (MediumDesc::Grid(g), Medium::Grid(built)) => {
                 let mut grid = built.clone();
                 (grid.sigma_a, grid.sigma_s) = g.sigma_a_sigma_s();
+                if let Some(albedo) = &mut grid.albedo {
+                    albedo.scale = g.albedo_grid_scale();
+                }
                 grid.phase = phase;
                 grid.emission = match (&g.emission, &built.emission) {
                     (None, _) => GridEmission::None,

@@ -315,6 +315,28 @@ fn validate_medium(base: &str, medium: &MediumDesc) -> Check {
             if let Some(r) = &m.majorant_resolution {
                 resolution(&format!("{base}.majorant_resolution"), r, MAX_MAJORANT_RESOLUTION)?;
             }
+            if let Some(source) = &m.albedo_grid {
+                let at = format!("{base}.albedo_grid");
+                if let DensitySourceDesc::Vdb { .. } = source {
+                    return fail(
+                        format!("{at}.type"),
+                        "an albedo grid must be a dense source (constant, grid, npy, vol or procedural), not vdb",
+                    );
+                }
+                validate_source(&at, source)?;
+                // Values above 1 in files are refused when they are read.
+                if let DensitySourceDesc::Constant { value, .. } = source {
+                    in_unit_interval(&format!("{at}.value"), *value)?;
+                }
+                if let DensitySourceDesc::Grid(g) = source {
+                    for (i, v) in g.data.iter().enumerate() {
+                        in_unit_interval(&format!("{at}.data[{i}]"), *v)?;
+                    }
+                }
+            }
+            if let Some(t) = &m.albedo_to_world {
+                validate_transform(&format!("{base}.albedo_to_world"), t)?;
+            }
             Ok(())
         }
         MediumDesc::Pyro(m) => validate_pyro(base, m),

@@ -58,11 +58,7 @@ where
                 return Rgb::ONE;
             };
             let time = sampler.time();
-            let at = move |p: Vec3, density: f32| MediumPoint {
-                sigma_a: g.sigma_a * density,
-                sigma_s: g.sigma_s * density,
-                l_ve: g.l_ve_at_time(p, density, time),
-            };
+            let at = move |p: Vec3, density: f32| g.point_with_density(p, density, time);
             let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
             with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
         }

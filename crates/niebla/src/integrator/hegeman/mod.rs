@@ -443,7 +443,12 @@ impl HegemanIntegrator {
             }
             let st = sigma_t * d;
             let opacity = Rgb::ONE - (st * dt).exp_neg();
-            let mut source = self.in_scattered(model, &g.phase, x, wo) * sigma_s * d;
+            let mut source = match g.albedo {
+                None => self.in_scattered(model, &g.phase, x, wo) * sigma_s * d,
+                // The model's factors use the field's largest albedo; the march
+                // scatters with the albedo at `x`.
+                Some(_) => self.in_scattered(model, &g.phase, x, wo) * g.absorption_scattering(x, d, 0.0).1,
+            };
             source += g.l_ve(x, d);
             l += tr * source.safe_div(st) * opacity;
             tr *= Rgb::ONE - opacity;

@@ -62,7 +62,8 @@ const MAX_SHARED_RATIO: f32 = 3.0;
 pub(super) fn channel_groups(scene: &Scene) -> ([Channels; 3], usize) {
     groups_for(scene.media.iter().map(|m| match m {
         Medium::Homogeneous(h) => (h.sigma_s, h.sigma_t()),
-        Medium::Grid(g) => (g.sigma_s, g.sigma_t()),
+        // With an albedo field, its largest value per channel.
+        Medium::Grid(g) => (g.albedo.as_ref().map_or(g.sigma_s, |a| g.sigma_t() * a.max_value()), g.sigma_t()),
     }))
 }
 

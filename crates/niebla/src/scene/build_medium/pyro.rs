@@ -54,6 +54,8 @@ pub(super) fn build_pyro_medium(
         storage: GridStorageDesc::F32,
         velocity: desc.velocity.clone(),
         velocity_units: desc.velocity_units,
+        albedo_grid: None,
+        albedo_to_world: None,
     };
     // The density is read under `density_attribute`, so errors point there.
     let mut medium = build_grid_medium(&grid_desc, path, loader, phase).map_err(|mut e| {

@@ -148,6 +148,20 @@ pub struct GridMediumDesc {
     /// Units of the velocity grid's values; default
     /// [`VelocityUnitsDesc::WorldPerSecond`].
     pub velocity_units: VelocityUnitsDesc,
+    /// A spatially varying single-scattering albedo (`"albedo_grid"`): a
+    /// dense source (`constant`, `grid`, `npy`, `vol`, `procedural`) of one
+    /// channel (grey) or three (RGB: a 3-channel `.vol` or an `(nz, ny, nx,
+    /// 3)` `.npy`), values in [0, 1], multiplied by the medium's `albedo`
+    /// (then optional, default 1; the file gives `sigma_t`, not `sigma_a` and
+    /// `sigma_s`). It is looked up trilinearly at cell centers in its own box,
+    /// placed by `albedo_to_world`; outside its box the nearest point of the
+    /// box is used (clamped, like Mitsuba's `gridvolume`), so its resolution
+    /// and box need not match the density's (nothing is resampled). `None`:
+    /// the albedo is constant.
+    pub albedo_grid: Option<DensitySourceDesc>,
+    /// Places the albedo grid's box in the world; `None`: the medium's
+    /// `to_world` (as the density).
+    pub albedo_to_world: Option<TransformDesc>,
 }
 
 /// Units of a velocity grid (`"velocity_units"`). "world" is the VDB file's
@@ -199,6 +213,15 @@ impl GridMediumDesc {
     pub fn sigma_a_sigma_s(&self) -> (Rgb, Rgb) {
         let (sigma_a, sigma_s) = self.coefficients.sigma_a_sigma_s();
         (sigma_a * self.scale, sigma_s * self.scale)
+    }
+
+    /// What multiplies the `albedo_grid`'s values: the `albedo` color of the
+    /// `sigma_t` form (1 with the other form, which an albedo grid excludes).
+    pub fn albedo_grid_scale(&self) -> Rgb {
+        match &self.coefficients {
+            CoefficientsDesc::ExtinctionAlbedo { albedo, .. } => albedo.to_rgb(),
+            CoefficientsDesc::AbsorptionScattering { .. } => Rgb::ONE,
+        }
     }
 }
 

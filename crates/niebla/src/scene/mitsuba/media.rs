@@ -54,15 +54,7 @@ pub(super) fn convert_medium<'a>(c: &mut Converter<'a>, node: &'a Node) -> Resul
         return Err(p.error("not supported (expected homogeneous or heterogeneous)"));
     }
     let sigma_t = field(c, &p, "sigma_t", 1.0)?;
-    let albedo = match field(c, &p, "albedo", 0.75)? {
-        Field::Constant(a) => a,
-        Field::Grid(g) => {
-            return Err(g.loc.error(format!(
-                "{}: `albedo` as a gridvolume: niebla's grid media have one albedo per medium (not supported)",
-                p.what()
-            )))
-        }
-    };
+    let albedo = field(c, &p, "albedo", 0.75)?;
     let scale = p.float_or("scale", 1.0)?;
     let phases = p.plugins("phase");
     let mut phase_nodes: Vec<&Node> = phases;
@@ -95,22 +87,45 @@ pub(super) fn convert_medium<'a>(c: &mut Converter<'a>, node: &'a Node) -> Resul
     }
     p.harmless(&["sample_emitters"], "ignored (niebla always samples emitters)", &mut c.notes);
     let mut out = Map::new();
+    let mut density_to_world = None;
     match sigma_t {
         Field::Constant(s) => {
+            if let Field::Grid(g) = albedo {
+                return Err(g.loc.error(format!(
+                    "{}: `albedo` as a gridvolume needs `sigma_t` as a gridvolume too (niebla's albedo grids \
+                     belong to grid media, which the sigma_t grid bounds)",
+                    p.what()
+                )));
+            }
             out.insert("type".into(), json!("homogeneous"));
             out.insert("sigma_t".into(), color_json(s));
         }
         Field::Grid(g) => {
-            let (density, to_world) = grid_density(c, g)?;
+            let (density, to_world) = grid_source(c, g, "sigma_t")?;
             out.insert("type".into(), json!("grid"));
             out.insert("density".into(), density);
             out.insert("sigma_t".into(), json!(1.0));
             if let Some(m) = to_world {
                 out.insert("to_world".into(), to_json(&m));
             }
+            density_to_world = Some(to_world.unwrap_or(IDENTITY));
         }
     }
-    out.insert("albedo".into(), color_json(albedo));
+    match albedo {
+        Field::Constant(a) => {
+            out.insert("albedo".into(), color_json(a));
+        }
+        Field::Grid(g) => {
+            // Mitsuba: albedo(x) = the albedo volume at x, placed by its own
+            // to_world (clamped outside its box, as niebla's albedo grids).
+            let (source, to_world) = grid_source(c, g, "albedo")?;
+            out.insert("albedo_grid".into(), source);
+            let place = to_world.unwrap_or(IDENTITY);
+            if Some(place) != density_to_world {
+                out.insert("albedo_to_world".into(), to_json(&place));
+            }
+        }
+    }
     if scale != 1.0 {
         out.insert("scale".into(), json!(scale));
     }
@@ -135,19 +150,27 @@ fn vol_header(path: &Path) -> Result<([f64; 3], [f64; 3], i32), String> {
     Ok((lo, hi, channels))
 }
 
-/// A `gridvolume` as niebla's density source and the medium's `to_world`
-/// (`None` when the file's box is already where Mitsuba puts the grid).
-fn grid_density(c: &mut Converter, node: &Node) -> Result<(Value, Option<Mat4>), SceneError> {
+/// A `gridvolume` for property `what` (`sigma_t`: one channel; `albedo`: one
+/// or three) as niebla's `vol` source and the transform that places the
+/// file's box where Mitsuba puts the grid (`None` when it is already there).
+fn grid_source(c: &mut Converter, node: &Node, what: &str) -> Result<(Value, Option<Mat4>), SceneError> {
     let p = Props::new(node)?;
     let (file, full) = c.file(&p, "filename")?;
     if !file.ends_with(".vol") {
         return Err(p.error(format!("\"{file}\": only .vol grids are read by the importer")));
     }
     let (lo, hi, channels) = vol_header(&full).map_err(|e| p.error(format!("\"{file}\": {e}")))?;
-    if channels != 1 {
-        return Err(p.error(format!(
-            "\"{file}\" has {channels} channels: niebla's grid media take a one-channel density (not supported)"
-        )));
+    let allowed: &[i32] = if what == "albedo" { &[1, 3] } else { &[1] };
+    if !allowed.contains(&channels) {
+        return Err(p.error(if what == "albedo" {
+            format!("\"{file}\" has {channels} channels: an albedo grid has 1 or 3 (RGB)")
+        } else {
+            format!(
+                "\"{file}\" has {channels} channels: niebla's grid media scale one density channel by a \
+                 constant sigma_t, so a `{what}` grid must have one channel (per-channel extinction grids are \
+                 not supported)"
+            )
+        }));
     }
     if !(0..3).all(|i| hi[i] > lo[i]) {
         return Err(p.error(format!("\"{file}\": its bounding box {lo:?} to {hi:?} is empty")));

@@ -254,3 +254,65 @@ fn tabphase_becomes_an_inline_table_in_mu() {
     );
     assert!(e.contains("p = -2: expected a finite value >= 0"), "{e}");
 }
+
+/// Writes a `.vol` header and zero voxels: `dims`, `channels`, box [0, 1]^3.
+fn write_vol(path: &Path, dims: [i32; 3], channels: i32) {
+    let mut bytes = b"VOL\x03".to_vec();
+    for v in [1, dims[0], dims[1], dims[2], channels] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    for v in [0f32, 0.0, 0.0, 1.0, 1.0, 1.0] {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    bytes.resize(bytes.len() + 4 * (dims.iter().product::<i32>() * channels) as usize, 0);
+    std::fs::write(path, bytes).unwrap();
+}
+
+#[test]
+fn albedo_gridvolumes_become_albedo_grids() {
+    let dir = std::env::temp_dir().join(format!("niebla_mitsuba_albedo_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_vol(&dir.join("d.vol"), [4, 4, 4], 1);
+    write_vol(&dir.join("a1.vol"), [2, 3, 4], 1);
+    write_vol(&dir.join("a3.vol"), [2, 2, 2], 3);
+    write_vol(&dir.join("a2.vol"), [2, 2, 2], 2);
+    let medium = |sigma_t: &str, albedo_file: &str, albedo_to_world: &str| {
+        format!(
+            "<medium type=\"heterogeneous\" id=\"m\">\n{sigma_t}\n\
+             <volume type=\"gridvolume\" name=\"albedo\"><string name=\"filename\" value=\"{albedo_file}\"/>\
+             {albedo_to_world}</volume>\n<float name=\"scale\" value=\"3\"/></medium>"
+        )
+    };
+    let grid_sigma_t = "<volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"d.vol\"/>\
+                        <transform name=\"to_world\"><scale value=\"2\"/></transform></volume>";
+    let run = |body: &str| {
+        let text = format!("<scene version=\"3.0.0\">\n{SENSOR}\n{body}\n</scene>");
+        import_mitsuba_str(&text, "t.xml", &dir, &[])
+    };
+    // Same placement as sigma_t: no albedo_to_world.
+    let same = "<transform name=\"to_world\"><scale value=\"2\"/></transform>";
+    let s = run(&medium(grid_sigma_t, "a1.vol", same)).unwrap_or_else(|e| panic!("{e}")).scene;
+    let m = &s["media"]["m"];
+    assert_eq!(m["type"], json!("grid"));
+    assert_eq!(m["albedo_grid"]["type"], json!("vol"));
+    assert!(m["albedo_grid"]["file"].as_str().unwrap().ends_with("a1.vol"));
+    assert!(m.get("albedo").is_none() && m.get("albedo_to_world").is_none(), "{m}");
+    assert_eq!(m["scale"], json!(3.0));
+    // Its own placement (3 channels): kept, as the matrix mapping the file's box.
+    let own = "<transform name=\"to_world\"><translate x=\"1\"/></transform>";
+    let s = run(&medium(grid_sigma_t, "a3.vol", own)).unwrap_or_else(|e| panic!("{e}")).scene;
+    assert_eq!(
+        s["media"]["m"]["albedo_to_world"],
+        json!({"matrix": [[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]})
+    );
+    // Errors: file:line and what is expected.
+    let e = run(&medium(grid_sigma_t, "a2.vol", "")).unwrap_err().to_string();
+    assert!(e.starts_with("t.xml:10: ") && e.contains("has 2 channels: an albedo grid has 1 or 3"), "{e}");
+    let e = run(&medium("<rgb name=\"sigma_t\" value=\"1\"/>", "a1.vol", "")).unwrap_err().to_string();
+    assert!(e.starts_with("t.xml:10: ") && e.contains("needs `sigma_t` as a gridvolume"), "{e}");
+    let rgb_sigma_t =
+        "<volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"a3.vol\"/></volume>";
+    let e = run(&medium(rgb_sigma_t, "a1.vol", "")).unwrap_err().to_string();
+    assert!(e.starts_with("t.xml:9: ") && e.contains("has 3 channels") && e.contains("one channel"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
