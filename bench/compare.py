@@ -6,6 +6,13 @@ reference, and their ratio. See bench/README.md.
 
     python3 bench/compare.py            # full run: 128x128, ~8-10 min on 2 cores
     python3 bench/compare.py --quick    # ~3 min: 96x96, smaller budgets
+    python3 bench/compare.py --scenes --xml-scenes grid_smoke area_fog
+
+`--xml-scenes` adds Mitsuba 3 XML scenes from scenes/mitsuba/ read directly
+by both renderers (no converter on niebla's side: `niebla render NAME.xml`,
+and `mi.load_file` for Mitsuba), at the resolution the file gives (--scale
+does not apply) and with the sampler it names (niebla follows the XML's
+`independent`); they appear as xml:NAME in the table.
 
 It re-runs itself with bench/.venv/bin/python (creating the venv with
 bench/setup.sh when it is missing).
@@ -52,6 +59,9 @@ import niebla2mitsuba  # noqa: E402
 from volumes import ensure_volumes  # noqa: E402
 
 SCENES = ["fog_spot", "fog_point", "smoke_plume", "dense_cloud", "milk_cube"]
+# Mitsuba 3 XML scenes (scenes/mitsuba/NAME.xml) both renderers read as they are.
+XML_DIR = os.path.join(ROOT, "scenes", "mitsuba")
+XML_SCENES = sorted(f[:-4] for f in os.listdir(XML_DIR) if f.endswith(".xml")) if os.path.isdir(XML_DIR) else []
 # Not in the default set: a homogeneous slab (optical thickness 2, albedo 0.9,
 # HG 0.5) under a sun at normal incidence, seen from 45 degrees above.
 EXTRA_SCENES = ["slab"]
@@ -139,13 +149,15 @@ class Mitsuba:
     name = "mitsuba"
     MAX_LANES = 1 << 22  # larger renders are split into passes of at most this many samples
 
-    def __init__(self, scene_dict: dict):
+    def __init__(self, scene):
+        """`scene`: a scene dict (niebla2mitsuba.convert) or the path of a
+        Mitsuba XML file."""
         import drjit as dr
         import mitsuba as mi
 
         self.dr, self.mi = dr, mi
         t0 = time.perf_counter()
-        self.scene = mi.load_dict(scene_dict)
+        self.scene = mi.load_file(scene) if isinstance(scene, str) else mi.load_dict(scene)
         self.load_s = time.perf_counter() - t0
         film = self.scene.sensors()[0].film().size()
         self.chunk_spp = max(1, self.MAX_LANES // (int(film[0]) * int(film[1])))
@@ -249,6 +261,27 @@ def prepare_scene(name: str, outdir: str, scale: float) -> tuple[str, dict]:
     with open(path, "w") as f:
         json.dump(desc, f, indent=1)
     return path, desc
+
+
+def prepare_xml_scene(binary: str, name: str, outdir: str) -> tuple[str, dict, dict]:
+    """scenes/mitsuba/NAME.xml as it is: its path, the niebla scene niebla
+    reads from it (`niebla convert`, for the resolution and depth in the
+    table) and the XML's integrator (type and max_depth) as Mitsuba reads it."""
+    import xml.etree.ElementTree as ET
+
+    path = os.path.join(XML_DIR, name + ".xml")
+    conv = os.path.join(outdir, name + "_as_niebla.json")
+    p = subprocess.run([binary, "convert", path, "-o", conv], capture_output=True, text=True)
+    if p.returncode:
+        raise RuntimeError(f"niebla convert {path} failed:\n{p.stderr}")
+    with open(conv) as f:
+        desc = json.load(f)
+    integ = ET.parse(path).getroot().find("integrator")
+    info = {"integrator": integ.get("type") if integ is not None else "path", "max_depth": -1}
+    for c in integ if integ is not None else []:
+        if c.get("name") == "max_depth":
+            info["max_depth"] = int(c.get("value"))
+    return path, desc, info
 
 
 def reference(renderer, spp: int, seed0: int, log):
@@ -395,7 +428,9 @@ def main():
     ap.add_argument("--quick", action="store_true", help="96x96 and smaller budgets (~3 min)")
     ap.add_argument("--scale", type=float, default=None,
                     help="resolution relative to the scene files' 256x256 (default 0.5 = 128x128, quick 0.375 = 96x96)")
-    ap.add_argument("--scenes", nargs="+", default=SCENES, choices=SCENES + EXTRA_SCENES)
+    ap.add_argument("--scenes", nargs="*", default=SCENES, choices=SCENES + EXTRA_SCENES)
+    ap.add_argument("--xml-scenes", nargs="*", default=[], choices=XML_SCENES,
+                    help="Mitsuba 3 XML scenes from scenes/mitsuba/, read directly by both renderers")
     ap.add_argument("--peers", nargs="+", default=["mitsuba"], choices=["mitsuba", "cycles"],
                     help="renderers to compare niebla with (cycles: Blender Cycles 5.0 from PyPI bpy, in bench/.venv-cycles)")
     ap.add_argument("--niebla", default=os.path.join(ROOT, "target", "release", "niebla"),
@@ -448,18 +483,32 @@ def main():
 
     results = []
     t_start = time.perf_counter()
-    for name in args.scenes:
-        sdir = os.path.join(args.out, "quick" if args.quick else "full", name)
+    for label in args.scenes + ["xml:" + x for x in args.xml_scenes]:
+        is_xml = label.startswith("xml:")
+        name = label[4:] if is_xml else label
+        sdir = os.path.join(args.out, "quick" if args.quick else "full", label.replace(":", "_"))
         os.makedirs(sdir, exist_ok=True)
-        path, desc = prepare_scene(name, sdir, scale)
+        if is_xml:
+            path, desc, xml_integ = prepare_xml_scene(binary, name, sdir)
+        else:
+            path, desc = prepare_scene(name, sdir, scale)
         w, h = desc["camera"]["width"], desc["camera"]["height"]
         load0 = os.getloadavg()[0]
-        log(f"\n== {name} ({w}x{h}), load average {load0:.2f}")
+        log(f"\n== {label} ({w}x{h}), load average {load0:.2f}")
 
         nb = Niebla(binary, path, sdir)
         peers, peer_info = [], {}
         for peer in args.peers:
-            if peer == "mitsuba":
+            if peer == "mitsuba" and is_xml:
+                ms = Mitsuba(path)
+                peer_info["mitsuba"] = dict(xml_integ, warmup_s=ms.warmup_s)
+                log(f"    mitsuba (from the XML) {xml_integ['integrator']} max_depth {xml_integ['max_depth']}: "
+                    f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
+                peers.append(ms)
+            elif is_xml:
+                log(f"    {peer}: not compared (an XML scene; only Mitsuba reads it)")
+                peer_info[peer] = {"unsupported": "XML scene"}
+            elif peer == "mitsuba":
                 mdict = niebla2mitsuba.convert(desc, os.path.join(HERE, "scenes"), spp=1,
                                                integrator=args.mitsuba_integrator)
                 ms = Mitsuba(mdict)
@@ -479,8 +528,9 @@ def main():
                 peers.append(cy)
 
         # Throughput probes (4 spp) size the references to the time budget.
-        budget = ref_s * REF_WEIGHT[name]
-        _, tn, _ = nb.render(4, 7, "probe")
+        budget = ref_s * REF_WEIGHT.get(name, 1.0)
+        # Twice, the faster counted: a first render may include one-time costs.
+        tn = min(nb.render(4, 7, "probe")[1] for _ in range(2))
         spp_n = int(max(8, min(1 << 16, budget / (tn / 4)))) // 2 * 2
         n_ref, na, nbb, n_ref_t = reference(nb, spp_n, 1001, log)
         n_noise = ref_noise(na, nbb)
@@ -493,8 +543,8 @@ def main():
         tn_, how_n = time_to_reach([(r["seconds"], r["rel_mse"]) for r in n_rows], args.target)
         last_n = n_rows[-1]
         res = {
-            "scene": name, "width": w, "height": h,
-            "max_depth_niebla": desc["render"]["integrator"]["max_depth"],
+            "scene": label, "width": w, "height": h,
+            "max_depth_niebla": desc["render"]["integrator"].get("max_depth"),
             "niebla_time": tn_, "niebla_how": how_n,
             "niebla_msamples_s": w * h * last_n["spp"] / last_n["seconds"] / 1e6,
             "reference": {"niebla_spp": spp_n, "niebla_seconds": n_ref_t, "niebla_noise": n_noise},
@@ -502,7 +552,7 @@ def main():
             "peers": peer_info,
         }
         for pr in peers:
-            _, tp, _ = pr.render(4, 7, "probe")
+            tp = min(pr.render(4, 7, "probe")[1] for _ in range(2))
             spp_p = int(max(8, min(1 << 16, budget / (tp / 4)))) // 2 * 2
             p_ref, pa, pb, p_ref_t = reference(pr, spp_p, 2001, log)
             p_noise = ref_noise(pa, pb)
@@ -550,7 +600,7 @@ def main():
 
     print(f"\nTime to relative MSE {args.target:g} (all against the niebla reference, reference noise "
           f"subtracted); {THREADS} threads each; total {total / 60:.1f} min\n")
-    hdr = f"{'scene':12s} {'res':>7s} {'niebla':>10s} {'niebla Ms/s':>11s}"
+    hdr = f"{'scene':20s} {'res':>7s} {'niebla':>10s} {'niebla Ms/s':>11s}"
     for p in args.peers:
         hdr += f" | {p:>8s} {'ratio':>6s} {p + '*':>9s} {'ratio*':>6s}"
         if p == "cycles":
@@ -559,7 +609,7 @@ def main():
     print(hdr)
     print("-" * len(hdr))
     for r in results:
-        line = f"{r['scene']:12s} {r['width']}x{r['height']:<3d} {fmt_t(r['niebla_time'], r['niebla_how']):>10s} {r['niebla_msamples_s']:11.3f}"
+        line = f"{r['scene']:20s} {r['width']}x{r['height']:<3d} {fmt_t(r['niebla_time'], r['niebla_how']):>10s} {r['niebla_msamples_s']:11.3f}"
         for p in args.peers:
             q = r["peers"].get(p, {})
             if "time" not in q:

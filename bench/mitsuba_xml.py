@@ -4,9 +4,11 @@
 Mitsuba 3.9 has no dict-to-XML writer of its own. This one covers the dicts
 the converter writes: plugin dicts (tag chosen from the plugin type), refs,
 `rgb` values, numbers, booleans, strings, 3-vectors (`<point>` or
-`<vector>`) and `ScalarTransform4f`s (written as a `<matrix>`). Floats are
-written with Python's `repr` (the shortest text that reads back as the same
-double), so no digits are lost on the way.
+`<vector>`) and `ScalarTransform4f`s: written as the operations they were
+made from when they remember them (`niebla2mitsuba.placement`: `<lookat>`,
+`<scale>`, `<rotate>`, `<translate>`, `<matrix>`), else as one `<matrix>`.
+Floats are written with Python's `repr` (the shortest text that reads back as
+the same double), so no digits are lost on the way.
 """
 
 from __future__ import annotations
@@ -48,6 +50,27 @@ def _matrix(t) -> str:
     return " ".join(_num(v) for v in m.flatten())
 
 
+def _ops(ops, indent: str) -> str:
+    import numpy as np
+
+    xyz = lambda v: ", ".join(_num(x) for x in v)
+    out = []
+    for op in ops:
+        kind = op[0]
+        if kind == "lookat":
+            out.append(f'<lookat origin="{xyz(op[1])}" target="{xyz(op[2])}" up="{xyz(op[3])}"/>')
+        elif kind in ("scale", "translate"):
+            out.append(f'<{kind} value="{xyz(op[1])}"/>')
+        elif kind == "rotate":
+            a = op[1]
+            out.append(f'<rotate x="{_num(a[0])}" y="{_num(a[1])}" z="{_num(a[2])}" angle="{_num(op[2])}"/>')
+        elif kind == "matrix":
+            out.append(f'<matrix value="{" ".join(_num(x) for x in np.asarray(op[1], dtype=float).flatten())}"/>')
+        else:
+            raise ValueError(f"unknown transform operation {kind!r}")
+    return "".join(f"{indent}  {o}\n" for o in out)
+
+
 def _value(name: str, v, indent: str) -> str:
     n = quoteattr(name)
     if isinstance(v, bool):
@@ -67,6 +90,8 @@ def _value(name: str, v, indent: str) -> str:
         if v.get("type") == "rgb":
             return f'{indent}<rgb name={n} value="{", ".join(_num(x) for x in v["value"])}"/>\n'
         return _plugin(v, indent, name)
+    if getattr(v, "ops", None) is not None:
+        return f"{indent}<transform name={n}>\n{_ops(v.ops, indent)}{indent}</transform>\n"
     if hasattr(v, "matrix"):
         return f'{indent}<transform name={n}>\n{indent}  <matrix value="{_matrix(v)}"/>\n{indent}</transform>\n'
     raise ValueError(f"{name}: cannot write {type(v).__name__} {v!r}")

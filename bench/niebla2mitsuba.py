@@ -90,6 +90,69 @@ def niebla_transform(t) -> np.ndarray:
     return tr @ m
 
 
+def placement(mi, ops):
+    """A `mi.ScalarTransform4f` (a subclass of it) that also remembers the
+    operations it was made from, so that bench/mitsuba_xml.py writes them as
+    `<lookat>`, `<scale>`, `<rotate>`, `<translate>` and `<matrix>` elements
+    with the numbers of the niebla scene as written: niebla's importer hands
+    those numbers to niebla unchanged, which composes them in float32 exactly
+    as from the JSON file. `ops`: ("lookat", origin, target, up), ("scale",
+    [x, y, z]), ("rotate", axis, degrees), ("translate", [x, y, z]) or
+    ("matrix", 4x4), applied first to last."""
+    t = mi.ScalarTransform4f()
+    for op in ops:
+        kind, args = op[0], op[1:]
+        if kind == "lookat":
+            step = mi.ScalarTransform4f().look_at(origin=args[0], target=args[1], up=args[2])
+        elif kind == "scale":
+            step = mi.ScalarTransform4f().scale(args[0])
+        elif kind == "rotate":
+            step = mi.ScalarTransform4f().rotate(args[0], args[1])
+        elif kind == "translate":
+            step = mi.ScalarTransform4f().translate(args[0])
+        elif kind == "matrix":
+            step = mi.ScalarTransform4f(np.asarray(args[0], dtype=float).tolist())
+        else:
+            raise ValueError(kind)
+        t = step @ t
+    cls = _placement_class(mi)
+    out = cls(t)
+    out.ops = [tuple(op) for op in ops]
+    return out
+
+
+_PLACEMENT = {}
+
+
+def _placement_class(mi):
+    if "cls" not in _PLACEMENT:
+
+        class Placement(mi.ScalarTransform4f):
+            ops = None
+
+        _PLACEMENT["cls"] = Placement
+    return _PLACEMENT["cls"]
+
+
+def niebla_transform_ops(t):
+    """niebla's `to_world` object as placement operations (see `placement`)."""
+    if t is None:
+        return []
+    if "matrix" in t:
+        return [("matrix", np.array(t["matrix"], dtype=float))]
+    ops = []
+    if "scale" in t:
+        s = t["scale"]
+        ops.append(("scale", [float(s)] * 3 if isinstance(s, (int, float)) else [float(x) for x in s]))
+    for axis, v in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0]), ("z", [0.0, 0.0, 1.0])):
+        deg = t.get("rotate_" + axis, 0.0)
+        if deg:
+            ops.append(("rotate", v, float(deg)))
+    if "translate" in t:
+        ops.append(("translate", [float(x) for x in t["translate"]]))
+    return ops
+
+
 def _box_matrix(bmin, bmax):
     bmin, bmax = np.array(bmin, float), np.array(bmax, float)
     m = np.diag([*((bmax - bmin) / 2), 1.0])
@@ -120,23 +183,41 @@ def _phase(p):
     raise Unsupported(f"phase function {p['type']!r}")
 
 
-def _coefficients(m):
-    """(sigma_t, albedo) as RGB lists, with `scale` applied to sigma_t."""
-    scale = float(m.get("scale", 1.0))
+def niebla_coefficients(m):
+    """(sigma_a, sigma_s) as niebla computes them from the medium's JSON, in
+    float32 and in its order of operations (sigma_s = sigma_t * albedo,
+    sigma_a = sigma_t - sigma_s, then each times `scale`), as float32 arrays."""
+    f = lambda v: np.array(_color(v), dtype=np.float32)
+    scale = np.float32(m.get("scale", 1.0))
     if "sigma_t" in m:
-        st, al = _color(m["sigma_t"]), _color(m.get("albedo", 1.0))
+        st, al = f(m["sigma_t"]), f(m.get("albedo", 1.0))
+        ss = st * al
+        sa = st - ss
     else:
-        sa, ss = _color(m["sigma_a"]), _color(m["sigma_s"])
-        st = [a + s for a, s in zip(sa, ss)]
-        al = [s / t if t > 0 else 0.0 for s, t in zip(ss, st)]
-    return [x * scale for x in st], al
+        sa, ss = f(m["sigma_a"]), f(m["sigma_s"])
+    return sa * scale, ss * scale
+
+
+def _coefficients(m):
+    """(sigma_t, albedo) as RGB lists of floats, `scale` applied: sigma_t =
+    sigma_a + sigma_s and albedo = sigma_s / sigma_t of niebla's own float32
+    coefficients, in float64. niebla's importer computes sigma_s = sigma_t *
+    albedo and sigma_a = sigma_t - sigma_s in float64 and rounds them to
+    float32, which gives back exactly these float32 values (the float64
+    errors are ~1e-16 relative, far below a float32 step)."""
+    sa, ss = niebla_coefficients(m)
+    st = [float(a) + float(s) for a, s in zip(sa, ss)]
+    al = [float(s) / t if t > 0 else 0.0 for s, t in zip(ss, st)]
+    return st, al
 
 
 def _medium(mi, name, m, scene_dir):
     kind = m.get("type", "grid" if "density" in m else "homogeneous")
-    st, al = _coefficients(m)
+    if kind not in ("homogeneous", "grid"):
+        raise Unsupported(f"media.{name}: type {kind!r}")
     if m.get("emission"):
         raise Unsupported(f"media.{name}: emission")
+    st, al = _coefficients(m)
     out = {
         "phase": _phase(m.get("phase")),
         "albedo": _spectrum(al),
@@ -146,8 +227,12 @@ def _medium(mi, name, m, scene_dir):
         # Mitsuba reads an `rgb` value as a reflectance in [0, 1]: pass the
         # extinction's color normalized to a maximum of 1 and its maximum as
         # `scale` (which multiplies sigma_t only).
+        # A gray extinction is a plain float (no normalization, no scale).
+        if _is_gray(st):
+            out.update(type="homogeneous", sigma_t=st[0])
+            return out
         top = max(st)
-        out.update(type="homogeneous", sigma_t=_spectrum([x / top for x in st]) if top > 0 else 0.0, scale=top)
+        out.update(type="homogeneous", sigma_t=_spectrum([x / top for x in st]), scale=top)
         return out
     if kind != "grid":
         raise Unsupported(f"media.{name}: type {kind!r}")
@@ -182,7 +267,7 @@ def _medium(mi, name, m, scene_dir):
             "type": "gridvolume",
             "filename": vol,
             "filter_type": "trilinear",
-            "to_world": mi.ScalarTransform4f(_unit_box_matrix(bmin, bmax).tolist()),
+            "to_world": placement(mi, [("matrix", _unit_box_matrix(bmin, bmax))]),
         }
         out.update(type="heterogeneous", sigma_t=sigma_t, scale=st[0])
         return out
@@ -257,9 +342,7 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
         "type": "perspective",
         "fov": float(cam.get("fov_y", 40.0)),
         "fov_axis": "y",
-        "to_world": mi.ScalarTransform4f().look_at(
-            origin=cam["position"], target=cam["target"], up=cam.get("up", [0, 1, 0])
-        ),
+        "to_world": placement(mi, [("lookat", cam["position"], cam["target"], cam.get("up", [0, 1, 0]))]),
         "film": {
             "type": "hdrfilm",
             "width": int(cam["width"]),
@@ -277,11 +360,11 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
     for i, s in enumerate(desc.get("shapes", [])):
         t = s["type"]
         if t == "box":
-            d = {"type": "cube", "to_world": mi.ScalarTransform4f(_box_matrix(s["min"], s["max"]).tolist())}
+            d = {"type": "cube", "to_world": placement(mi, [("matrix", _box_matrix(s["min"], s["max"]))])}
         elif t == "sphere":
             d = {"type": "sphere", "center": s["center"], "radius": float(s["radius"])}
         elif t in ("rectangle", "disk"):
-            d = {"type": t, "to_world": mi.ScalarTransform4f(niebla_transform(s.get("to_world")).tolist())}
+            d = {"type": t, "to_world": placement(mi, niebla_transform_ops(s.get("to_world")))}
         else:
             raise Unsupported(f"shapes[{i}]: type {t!r}")
         b = s.get("bsdf", {"type": "null"})
@@ -304,12 +387,14 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
         elif t == "spot":
             pos = np.array(l["position"], float)
             target = np.array(l["target"], float) if "target" in l else pos + np.array(l["direction"], float)
+            # niebla's numbers as written when it names a target.
+            lookat_target = l["target"] if "target" in l else target.tolist()
             axis = target - pos
             up = np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.9 * np.linalg.norm(axis) else np.array([1.0, 0.0, 0.0])
             cutoff = float(l.get("cutoff_angle", 20.0))
             d = {
                 "type": "spot",
-                "to_world": mi.ScalarTransform4f().look_at(origin=pos.tolist(), target=target.tolist(), up=up.tolist()),
+                "to_world": placement(mi, [("lookat", l["position"], lookat_target, up.tolist())]),
                 "intensity": {"type": "rgb", "value": _color(l["intensity"])},
                 "cutoff_angle": cutoff,
                 "beam_width": float(l.get("beam_width", 0.75 * cutoff)),

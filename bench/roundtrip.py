@@ -2,27 +2,28 @@
 bench/mitsuba_xml.py) -> niebla's XML importer, rendered against the
 original.
 
-    /work/main/bench/.venv/bin/python bench/roundtrip.py [--niebla PATH] [--spp 64] [--size 48]
+    /work/main/bench/.venv/bin/python bench/roundtrip.py [--niebla PATH] [--spp 16] [--size 32]
 
 For every scene in bench/scenes/ and scenes/ the converter accepts, writes
 the XML to bench/out/roundtrip/, renders the JSON and the XML with the same
-niebla binary, seed and sample count (the camera resized to --size pixels
-wide in both), and prints how many pixels are bit-identical, the largest
-per-pixel difference and the difference of the image means; it also
-converts the XML back to niebla JSON (`niebla convert`) and checks camera,
-depth, media coefficients, phase functions, shapes and lights against the
-original within f32 rounding (relative 1e-6, 1e-5 for coefficients). Scenes
+niebla binary, seed, sample count and sampler (the camera resized to --size
+pixels wide in both; each sampler in --samplers, passed as `--sampler` to
+both renders because the XML names Mitsuba's `independent` sampler), and
+requires the two images to be bit-identical. It also converts the XML back
+to niebla JSON (`niebla convert`) and requires the camera, depth, media
+coefficients (niebla's float32 sigma_a and sigma_s), phase functions,
+shapes and lights to be the same float32 values as the original's. Scenes
 the converter refuses are listed with its reason. Exit status 1 when a
-converted scene fails to load, differs structurally, or the image means
-differ by more than --mean-tolerance (relative, default 1%).
+converted scene fails to load, differs structurally, or renders a different
+image.
 
-Bit-identical images are not possible: the converter writes transforms as
-float32 matrices computed in float64 (niebla composes `rotate_x: -90` in
-float32, where cos 90 deg is -4.4e-8, not 6e-17), the camera's look-at
-matrix holds the normalized view direction in float32, and media are
-rewritten from sigma_a/sigma_s to sigma_t/albedo/scale. Each changes some
-values in their last bit, and one flipped random decision (a null collision,
-Russian roulette) decorrelates the rest of that path.
+Why it is exact: the converter writes the numbers of the niebla scene as
+written (camera and spot `<lookat>`, a rectangle's `<scale>`, `<rotate>`,
+`<translate>`), and niebla's importer hands a lone `<lookat>` and a
+transform in niebla's own order back to niebla unchanged; media go out as
+sigma_t = sigma_a + sigma_s and albedo = sigma_s / sigma_t of niebla's own
+float32 coefficients (in float64), which the importer turns back into
+sigma_a and sigma_s in float64 and rounds to those float32 values.
 """
 
 from __future__ import annotations
@@ -47,31 +48,22 @@ def read_exr(path):
     return np.array(mi.Bitmap(path), dtype=np.float64)[:, :, :3]
 
 
-def _coeffs(m):
-    """(sigma_a, sigma_s) per unit length (per unit density for grids), scale applied."""
-    scale = float(m.get("scale", 1.0))
-    c = lambda v: np.array([v] * 3 if isinstance(v, (int, float)) else v, dtype=float)
-    if "sigma_t" in m:
-        st, al = c(m["sigma_t"]), c(m.get("albedo", 1.0))
-        return st * (1 - al) * scale, st * al * scale
-    return c(m["sigma_a"]) * scale, c(m["sigma_s"]) * scale
-
-
 def structural_differences(orig: dict, conv: dict) -> list:
     """What differs between the original niebla scene and the one read back
-    from XML by more than f32 rounding (relative 1e-6)."""
-    out = []
+    from XML as the float32 values niebla keeps."""
+    import niebla2mitsuba as n2m
 
-    def close(a, b, what, tol=1e-6):
-        a, b = np.array(a, dtype=float), np.array(b, dtype=float)
-        if a.shape != b.shape or not np.allclose(a, b, rtol=tol, atol=tol):
+    out = []
+    f32 = lambda v: np.array(v, dtype=np.float32)
+
+    def same(a, b, what):
+        a, b = f32(a), f32(b)
+        if a.shape != b.shape or not np.array_equal(a, b):
             out.append(f"{what}: {a.tolist()} vs {b.tolist()}")
 
     oc, cc = orig["camera"], conv["camera"]
-    close(oc["position"], cc["position"], "camera.position")
-    d = lambda c: (np.array(c["target"], float) - c["position"]) / np.linalg.norm(np.array(c["target"], float) - c["position"])
-    close(d(oc), d(cc), "camera direction")
-    close(oc.get("fov_y", 40), cc["fov_y"], "camera.fov_y")
+    for k, default in (("position", None), ("target", None), ("up", [0, 1, 0]), ("fov_y", 40)):
+        same(oc.get(k, default), cc.get(k, default), f"camera.{k}")
     oi, ci = orig["render"]["integrator"], conv["render"]["integrator"]
     if oi.get("max_depth", 1024) != ci.get("max_depth", 1024):
         out.append(f"max_depth {oi.get('max_depth')} vs {ci.get('max_depth')}")
@@ -79,34 +71,44 @@ def structural_differences(orig: dict, conv: dict) -> list:
         out.append("number of media")
     for name, m in orig.get("media", {}).items():
         cm = conv["media"]["medium_" + name]
-        for a, b, what in zip(_coeffs(m), _coeffs(cm), ("sigma_a", "sigma_s")):
-            close(a, b, f"media.{name}.{what}", tol=1e-5)
-        if m.get("phase", {"type": "isotropic"}) != cm["phase"]:
-            out.append(f"media.{name}.phase: {m.get('phase')} vs {cm['phase']}")
+        for a, b, what in zip(n2m.niebla_coefficients(m), n2m.niebla_coefficients(cm), ("sigma_a", "sigma_s")):
+            same(a, b, f"media.{name}.{what}")
+        op, cp = m.get("phase", {"type": "isotropic"}), cm["phase"]
+        if op["type"] != cp["type"] or any(not np.array_equal(f32(op[k]), f32(cp.get(k))) for k in op if k != "type"):
+            out.append(f"media.{name}.phase: {op} vs {cp}")
     os_, cs = orig.get("shapes", []), conv["shapes"]
     if [s["type"] for s in os_] != [s["type"] for s in cs]:
         out.append(f"shape types {[s['type'] for s in os_]} vs {[s['type'] for s in cs]}")
     else:
-        import niebla2mitsuba as n2m
-
         for i, (a, b) in enumerate(zip(os_, cs)):
             for k in ("min", "max", "center", "radius"):
                 if k in a:
-                    close(a[k], b[k], f"shapes[{i}].{k}")
-            if a["type"] == "rectangle":
-                close(n2m.niebla_transform(a.get("to_world")), b["to_world"]["matrix"], f"shapes[{i}].to_world")
+                    same(a[k], b[k], f"shapes[{i}].{k}")
+            if "to_world" in a:
+                ta, tb = a["to_world"], b.get("to_world", {})
+                for k in set(ta) | set(tb):
+                    same(ta.get(k, 0.0), tb.get(k, 0.0), f"shapes[{i}].to_world.{k}")
     ol, cl = orig.get("lights", []), conv["lights"]
     if [l["type"] for l in ol] != [l["type"] for l in cl]:
         out.append("light types")
+    else:
+        for i, (a, b) in enumerate(zip(ol, cl)):
+            for k in set(a) - {"type"}:
+                va, vb = a[k], b.get(k)
+                if isinstance(va, (int, float)) and isinstance(vb, list):
+                    va = [va] * 3
+                if isinstance(vb, (int, float)) and isinstance(va, list):
+                    vb = [vb] * 3
+                same(va, vb, f"lights[{i}].{k}")
     return out
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--niebla", default=os.path.join(ROOT, "target", "debug", "niebla"))
-    ap.add_argument("--spp", type=int, default=64)
-    ap.add_argument("--size", type=int, default=48)
-    ap.add_argument("--mean-tolerance", type=float, default=0.01)
+    ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--size", type=int, default=32)
+    ap.add_argument("--samplers", nargs="+", default=["independent", "sobol"], choices=["independent", "sobol"])
     a = ap.parse_args()
     import llvm
 
@@ -151,31 +153,35 @@ def main():
             continue
         with open(conv) as f:
             diffs = structural_differences(desc, json.load(f))
-        print(f"{name}: read back: " + ("the same scene within f32 rounding" if not diffs else "; ".join(diffs)))
+        print(f"{name}: read back: " + ("the same float32 values" if not diffs else "; ".join(diffs)))
         failed |= bool(diffs)
-        imgs = []
         try:
-            for src, tag in ((js, "json"), (xml, "xml")):
-                exr = os.path.join(out, f"{name}_{tag}.exr")
-                r = subprocess.run([a.niebla, "render", src, "--spp", str(a.spp), "--seed", "0", "--quiet", "-o", exr],
-                                   capture_output=True, text=True)
-                if r.returncode != 0:
-                    print(f"{name}: {tag}: niebla failed: {r.stderr.strip()}")
+            for sampler in a.samplers:
+                imgs = []
+                for src, tag in ((js, "json"), (xml, "xml")):
+                    exr = os.path.join(out, f"{name}_{sampler}_{tag}.exr")
+                    r = subprocess.run([a.niebla, "render", src, "--spp", str(a.spp), "--seed", "0", "--sampler", sampler,
+                                        "--quiet", "-o", exr], capture_output=True, text=True)
+                    if r.returncode != 0:
+                        print(f"{name}: {tag}: niebla failed: {r.stderr.strip()}")
+                        failed = True
+                        break
+                    imgs.append(read_exr(exr))
+                if len(imgs) != 2:
+                    continue
+                x, y = imgs
+                same = np.all(x == y, axis=2).mean()
+                mean_rel = abs(x.mean() - y.mean()) / y.mean()
+                if same == 1.0:
+                    print(f"{name}: {sampler}: {x.shape[1]}x{x.shape[0]} at {a.spp} spp: bit-identical "
+                          f"(image mean {y.mean():.6g})")
+                else:
+                    rel = np.abs(x - y) / np.maximum(np.abs(y), 1e-6)
+                    print(f"{name}: {sampler}: NOT bit-identical: {100 * same:.1f}% of pixels equal, largest per-pixel "
+                          f"relative difference {rel.max():.2e}; image means differ by {100 * mean_rel:.4f}%")
                     failed = True
-                    break
-                imgs.append(read_exr(exr))
         finally:
             os.remove(js)
-        if len(imgs) != 2:
-            continue
-        x, y = imgs
-        same = np.all(x == y, axis=2).mean()
-        rel = np.abs(x - y) / np.maximum(np.abs(y), 1e-6)
-        mean_rel = abs(x.mean() - y.mean()) / y.mean()
-        print(f"{name}: {100 * same:.1f}% of pixels bit-identical, median per-pixel relative difference "
-              f"{np.median(rel):.2e}, largest {rel.max():.2e}; image means differ by {100 * mean_rel:.4f}%")
-        if mean_rel > a.mean_tolerance:
-            failed = True
     sys.exit(1 if failed else 0)
 
 

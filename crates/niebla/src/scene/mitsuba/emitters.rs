@@ -5,7 +5,7 @@ use serde_json::{json, Value};
 
 use super::convert::{color_json, Converter};
 use super::props::Props;
-use super::transform::{is_identity, norm, point, to_json, vector, IDENTITY};
+use super::transform::{is_identity, norm, point, to_json, vector, Form, IDENTITY};
 use super::xml::Node;
 use crate::scene::SceneError;
 
@@ -13,7 +13,8 @@ use crate::scene::SceneError;
 pub(super) fn convert_emitter<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<Value, SceneError> {
     let p = Props::new(node)?;
     let t = p.plugin_type()?;
-    let m = p.transform("to_world")?;
+    let placed = p.transform_form("to_world")?;
+    let m = placed.as_ref().map(|(m, _)| *m);
     let out = match t {
         "point" => {
             let position = match (p.vec3("position")?, m) {
@@ -37,8 +38,16 @@ pub(super) fn convert_emitter<'a>(c: &mut Converter<'a>, node: &'a Node) -> Resu
             if p.plugin_named("texture").is_some() {
                 return Err(p.error("a projected `texture` is not supported"));
             }
-            json!({"type": "spot", "position": position, "direction": axis, "intensity": color_json(intensity),
-                   "cutoff_angle": cutoff, "beam_width": beam})
+            let mut out = json!({"type": "spot", "position": position, "direction": axis,
+                   "intensity": color_json(intensity), "cutoff_angle": cutoff, "beam_width": beam});
+            // A lone <lookat>: its origin and target as written (the same
+            // axis; niebla normalizes it in f32 as from a JSON scene).
+            if let Some((_, Form::LookAt { origin, target, .. })) = &placed {
+                out["position"] = json!(origin);
+                out.as_object_mut().unwrap().remove("direction");
+                out["target"] = json!(target);
+            }
+            out
         }
         "directional" => {
             let direction = match (p.vec3("direction")?, m) {

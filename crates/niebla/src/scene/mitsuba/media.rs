@@ -88,7 +88,7 @@ pub(super) fn convert_medium<'a>(c: &mut Converter<'a>, node: &'a Node) -> Resul
     p.harmless(&["sample_emitters"], "ignored (niebla always samples emitters)", &mut c.notes);
     let mut out = Map::new();
     let mut density_to_world = None;
-    match sigma_t {
+    let per_unit = match sigma_t {
         Field::Constant(s) => {
             if let Field::Grid(g) = albedo {
                 return Err(g.loc.error(format!(
@@ -98,40 +98,79 @@ pub(super) fn convert_medium<'a>(c: &mut Converter<'a>, node: &'a Node) -> Resul
                 )));
             }
             out.insert("type".into(), json!("homogeneous"));
-            out.insert("sigma_t".into(), color_json(s));
+            s
         }
         Field::Grid(g) => {
             let (density, to_world) = grid_source(c, g, "sigma_t")?;
             out.insert("type".into(), json!("grid"));
             out.insert("density".into(), density);
-            out.insert("sigma_t".into(), json!(1.0));
             if let Some(m) = to_world {
                 out.insert("to_world".into(), to_json(&m));
             }
             density_to_world = Some(to_world.unwrap_or(IDENTITY));
+            [1.0; 3]
         }
-    }
+    };
     match albedo {
-        Field::Constant(a) => {
-            out.insert("albedo".into(), color_json(a));
+        Field::Constant(albedo) => {
+            if albedo.iter().all(|a| (0.0..=1.0).contains(a)) && per_unit.iter().all(|s| *s >= 0.0) && scale >= 0.0 {
+                // sigma_s = sigma_t scale albedo and sigma_a = sigma_t scale -
+                // sigma_s, in f64, written as the f32 values niebla keeps. A scene
+                // that niebla's bench converter wrote (sigma_t = sigma_a + sigma_s,
+                // albedo = sigma_s / sigma_t of niebla's own f32 coefficients) reads
+                // back to those coefficients bit for bit.
+                let st = per_unit.map(|s| s * scale);
+                let ss: Rgb3 = std::array::from_fn(|i| st[i] * albedo[i]);
+                let sa: Rgb3 = std::array::from_fn(|i| st[i] - ss[i]);
+                out.insert("sigma_a".into(), color_f32_json(sa));
+                out.insert("sigma_s".into(), color_f32_json(ss));
+            } else {
+                // Out of range: niebla's own checks name the field.
+                out.insert("sigma_t".into(), color_json(per_unit));
+                out.insert("albedo".into(), color_json(albedo));
+                if scale != 1.0 {
+                    out.insert("scale".into(), json!(scale));
+                }
+            }
         }
         Field::Grid(g) => {
             // Mitsuba: albedo(x) = the albedo volume at x, placed by its own
             // to_world (clamped outside its box, as niebla's albedo grids).
             let (source, to_world) = grid_source(c, g, "albedo")?;
+            out.insert("sigma_t".into(), color_json(per_unit));
             out.insert("albedo_grid".into(), source);
             let place = to_world.unwrap_or(IDENTITY);
             if Some(place) != density_to_world {
                 out.insert("albedo_to_world".into(), to_json(&place));
             }
+            if scale != 1.0 {
+                out.insert("scale".into(), json!(scale));
+            }
         }
-    }
-    if scale != 1.0 {
-        out.insert("scale".into(), json!(scale));
     }
     out.insert("phase".into(), phase);
     p.finish()?;
     Ok(Value::Object(out))
+}
+
+/// `x` rounded to f32, as the shortest decimal that reads back (through
+/// f64, as niebla's JSON reader does) to that f32.
+fn f32_json(x: f64) -> Value {
+    let f = x as f32;
+    match format!("{f}").parse::<f64>() {
+        Ok(d) if d as f32 == f => json!(d),
+        _ => json!(f as f64),
+    }
+}
+
+/// A color of f32 values (see [`f32_json`]): one number when gray.
+fn color_f32_json(c: Rgb3) -> Value {
+    let c = c.map(|x| x as f32 as f64);
+    if c[0] == c[1] && c[1] == c[2] {
+        f32_json(c[0])
+    } else {
+        json!(c.map(f32_json))
+    }
 }
 
 /// The bounding box and channel count in a `.vol` header (48 bytes).

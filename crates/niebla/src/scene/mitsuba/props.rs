@@ -6,7 +6,7 @@
 
 use std::cell::Cell;
 
-use super::transform::{read_transform, Mat4};
+use super::transform::{read_transform_form, Form, Mat4};
 use super::xml::Node;
 use crate::scene::SceneError;
 
@@ -202,11 +202,17 @@ impl<'a> Props<'a> {
 
     /// A `<transform>` named `name`.
     pub fn transform(&self, name: &str) -> Result<Option<Mat4>, SceneError> {
+        Ok(self.transform_form(name)?.map(|(m, _)| m))
+    }
+
+    /// Like [`Props::transform`], with the transform's [`Form`] (the numbers
+    /// as written, where niebla has a description of its own for them).
+    pub fn transform_form(&self, name: &str) -> Result<Option<(Mat4, Form)>, SceneError> {
         let Some(n) = self.named(name) else { return Ok(None) };
         if n.tag != "transform" {
             return Err(self.bad(n, &format!("<transform name=\"{name}\">, found <{}>", n.tag)));
         }
-        read_transform(n).map(Some)
+        read_transform_form(n).map(Some)
     }
 
     /// The nested plugin element or `<ref>` with attribute `name="name"`, marked as read.

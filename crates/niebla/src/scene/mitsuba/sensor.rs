@@ -5,7 +5,7 @@ use serde_json::{json, Map, Value};
 
 use super::convert::Converter;
 use super::props::Props;
-use super::transform::{det3, dot, norm, point, vector, IDENTITY};
+use super::transform::{det3, dot, norm, point, vector, Form, IDENTITY};
 use super::xml::Node;
 use crate::scene::SceneError;
 
@@ -20,7 +20,7 @@ pub(super) fn convert_sensor<'a>(
     if p.plugin_type()? != "perspective" {
         return Err(p.error("not supported (niebla's camera is Mitsuba's `perspective`)"));
     }
-    let m = p.transform("to_world")?.unwrap_or(IDENTITY);
+    let (m, form) = p.transform_form("to_world")?.unwrap_or((IDENTITY, Form::Matrix));
     let (left, up, dir) = (vector(&m, [1.0, 0.0, 0.0]), vector(&m, [0.0, 1.0, 0.0]), vector(&m, [0.0, 0.0, 1.0]));
     let (nl, nu, nd) = (norm(left), norm(up), norm(dir));
     let orthogonal = [dot(left, up) / (nl * nu), dot(left, dir) / (nl * nd), dot(up, dir) / (nu * nd)]
@@ -109,6 +109,13 @@ pub(super) fn convert_sensor<'a>(
     p.harmless(&["srf"], "ignored", &mut c.notes);
     p.finish()?;
     let up = up.map(|x| x / nu);
+    // A lone <lookat> is niebla's own camera description: its numbers as
+    // written (the same camera; niebla then builds the frame in f32 exactly
+    // as from a JSON scene).
+    let (position, target, up) = match form {
+        Form::LookAt { origin, target, up } => (origin, target, up),
+        _ => (position, target, up),
+    };
     let camera = json!({
         "type": "perspective", "position": position, "target": target, "up": up,
         "fov_y": fov_y, "width": width, "height": height,

@@ -8,7 +8,7 @@ use serde_json::{json, Map, Value};
 use super::convert::{color_json, Converter};
 use super::props::Props;
 use super::transform::{
-    dot, is_axis_aligned, is_identity, mul, norm, point, rotation, to_json, vector, Mat4, IDENTITY,
+    dot, is_axis_aligned, is_identity, mul, norm, point, rotation, to_json, vector, Form, Mat4, IDENTITY,
 };
 use super::xml::Node;
 use crate::scene::SceneError;
@@ -46,7 +46,13 @@ const CUBE_TRIANGLES: [[u32; 3]; 12] = [
 pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<(), SceneError> {
     let p = Props::new(node)?;
     let t = p.plugin_type()?;
-    let m = p.transform("to_world")?.unwrap_or(IDENTITY);
+    let (m, form) = p.transform_form("to_world")?.unwrap_or((IDENTITY, Form::Matrix));
+    // niebla's own transform object where the XML spells one (the numbers as
+    // written, composed by niebla in f32 as from a JSON scene), else the matrix.
+    let to_world = |m: &Mat4| match &form {
+        Form::Components(c) => c.clone(),
+        _ => to_json(m),
+    };
     let flip = p.boolean("flip_normals")?.unwrap_or(false);
     let mut shape = Map::new();
     match t {
@@ -91,7 +97,7 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             let m = if flip { mul(&m, &rotation([1.0, 0.0, 0.0], 180.0)) } else { m };
             shape.insert("type".into(), json!(t));
             if !is_identity(&m) {
-                shape.insert("to_world".into(), to_json(&m));
+                shape.insert("to_world".into(), if flip { to_json(&m) } else { to_world(&m) });
             }
         }
         "obj" | "ply" => {
@@ -99,7 +105,7 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             shape.insert("type".into(), json!("mesh"));
             shape.insert("file".into(), json!(file));
             if !is_identity(&m) {
-                shape.insert("to_world".into(), to_json(&m));
+                shape.insert("to_world".into(), to_world(&m));
             }
             if flip {
                 shape.insert("flip_normals".into(), json!(true));

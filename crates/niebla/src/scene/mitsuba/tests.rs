@@ -27,7 +27,8 @@ fn err(body: &str) -> String {
 fn camera_from_look_at() {
     let s = import("").unwrap().scene;
     assert_eq!(s["camera"]["position"], json!([0.0, 1.0, 5.0]));
-    assert_eq!(s["camera"]["target"], json!([0.0, 1.0, 4.0]));
+    // A lone <lookat> keeps its numbers as written.
+    assert_eq!(s["camera"]["target"], json!([0.0, 1.0, 0.0]));
     assert_eq!(s["camera"]["up"], json!([0.0, 1.0, 0.0]));
     assert_eq!(s["camera"]["fov_y"], json!(40.0));
     assert_eq!(s["render"], json!({"spp": 8, "seed": 0, "sampler": "independent", "integrator": {"type": "volpath"}}));
@@ -75,7 +76,8 @@ fn media_shapes_and_refs() {
     let sc = &s.scene;
     assert_eq!(
         sc["media"]["fog"],
-        json!({"type": "homogeneous", "sigma_t": [1.0, 2.0, 3.0], "albedo": 0.5, "scale": 2.0,
+        // sigma_s = sigma_t scale albedo, sigma_a = sigma_t scale - sigma_s.
+        json!({"type": "homogeneous", "sigma_a": [1.0, 2.0, 3.0], "sigma_s": [1.0, 2.0, 3.0],
                "phase": {"type": "double_hg", "w": 0.75, "g1": 0.7, "g2": 0.0}})
     );
     assert_eq!(
@@ -104,8 +106,9 @@ fn disks_keep_their_placement_and_emit() {
     let sc = &s.scene;
     assert_eq!(
         sc["shapes"][0],
-        json!({"type": "disk", "to_world": {"matrix": [[2.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0],
-               [0.0, 0.0, 2.0, 1.0], [0.0, 0.0, 0.0, 1.0]]}, "bsdf": {"type": "diffuse", "reflectance": 0.5}})
+        // Scale then translate is niebla's own transform object.
+        json!({"type": "disk", "to_world": {"scale": 2.0, "translate": [0.0, 0.0, 1.0]},
+               "bsdf": {"type": "diffuse", "reflectance": 0.5}})
     );
     // flip_normals: a half turn about x (y and z negated).
     assert_eq!(sc["lights"][0]["shape"]["type"], json!("disk"));
@@ -155,11 +158,73 @@ fn lights_keep_their_numbers() {
     let l = &s.scene["lights"];
     assert_eq!(
         l[0],
-        json!({"type": "spot", "position": [0.0, 4.0, 0.0], "direction": [0.0, -1.0, 0.0],
+        json!({"type": "spot", "position": [0.0, 4.0, 0.0], "target": [0.0, 0.0, 0.0],
                "intensity": [10.0, 20.0, 30.0], "cutoff_angle": 30.0, "beam_width": 22.5})
     );
     assert_eq!(l[1], json!({"type": "directional", "direction": [0.0, -1.0, 0.0], "irradiance": 3.0}));
     assert_eq!(l[2], json!({"type": "point", "position": [1.0, 2.0, 3.0], "intensity": 1.0}));
+}
+
+/// Transforms in niebla's order (scale, rotate about +x, +y, +z, translate)
+/// become niebla's transform object; anything else stays a matrix.
+#[test]
+fn transforms_in_niebla_order_keep_their_numbers() {
+    let placed = |ops: &str| {
+        let s = import(&format!(r#"<shape type="rectangle"><transform name="to_world">{ops}</transform></shape>"#))
+            .unwrap()
+            .scene;
+        s["shapes"][0]["to_world"].clone()
+    };
+    assert_eq!(
+        placed(r#"<scale value="3"/><rotate x="1" angle="-90"/><rotate z="1" angle="10"/><translate y="0.5"/>"#),
+        json!({"scale": 3.0, "rotate_x": -90.0, "rotate_z": 10.0, "translate": [0.0, 0.5, 0.0]})
+    );
+    assert_eq!(placed(r#"<scale x="2" y="1" z="4"/>"#), json!({"scale": [2.0, 1.0, 4.0]}));
+    // Out of niebla's order, a tilted or negative axis, a repeated step: the matrix.
+    for ops in [
+        r#"<rotate x="1" angle="-90"/><scale value="3"/>"#,
+        r#"<rotate x="1" y="1" angle="30"/>"#,
+        r#"<rotate x="-1" angle="30"/>"#,
+        r#"<translate x="1"/><translate x="1"/>"#,
+    ] {
+        assert!(placed(ops).get("matrix").is_some(), "{ops}: {}", placed(ops));
+    }
+}
+
+/// The bench converter writes a medium as sigma_t = sigma_a + sigma_s and
+/// albedo = sigma_s / sigma_t (in f64, as shortest decimal text) of niebla's
+/// f32 coefficients; the importer gives back exactly those f32 values, over
+/// coefficients from 1e-4 to 1e3 and ratios sigma_a / sigma_s up to 1e7.
+#[test]
+fn media_coefficients_read_back_to_the_same_f32() {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for i in 0..2000 {
+        let draw = |u: f64| 10f64.powf(-4.0 + 7.0 * u) as f32;
+        let (sa, ss) = (draw(uniform()), draw(uniform()));
+        let (sa, ss) = if i % 7 == 0 {
+            (0.0, ss)
+        } else if i % 11 == 0 {
+            (sa, 0.0)
+        } else {
+            (sa, ss)
+        };
+        let st = sa as f64 + ss as f64;
+        let albedo = ss as f64 / st;
+        let text = format!(
+            r#"<medium type="homogeneous" id="m"><float name="sigma_t" value="{st:?}"/><float name="albedo" value="{albedo:?}"/></medium>
+               <shape type="sphere"><ref name="interior" id="m"/></shape>"#
+        );
+        let s = import(&text).unwrap().scene;
+        let m = &s["media"]["m"];
+        let read = |k: &str| m[k].as_f64().unwrap() as f32;
+        assert_eq!((read("sigma_a"), read("sigma_s")), (sa, ss), "{m}");
+    }
 }
 
 #[test]

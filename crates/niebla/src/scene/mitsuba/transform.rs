@@ -75,8 +75,31 @@ pub(super) fn to_json(m: &Mat4) -> serde_json::Value {
     serde_json::json!({ "matrix": m.iter().map(|r| r.to_vec()).collect::<Vec<_>>() })
 }
 
-/// Reads a `<transform>` element.
-pub(super) fn read_transform(node: &Node) -> Result<Mat4, SceneError> {
+/// What a `<transform>` also says beyond its matrix, so that the importer can
+/// hand niebla the numbers as written (niebla composes its own transforms in
+/// f32; a matrix composed here in f64 and rounded would differ in the last
+/// bit, which decorrelates random decisions in a render).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) enum Form {
+    /// A single `<lookat>`: origin, target and up as written.
+    LookAt {
+        /// The eye position.
+        origin: [f64; 3],
+        /// The point looked at.
+        target: [f64; 3],
+        /// The up vector (not normalized).
+        up: [f64; 3],
+    },
+    /// At most one each of `<scale>`, `<rotate>` about +x, +y, +z and
+    /// `<translate>`, in that order: niebla's own transform object
+    /// (`scale`, `rotate_x`, `rotate_y`, `rotate_z`, `translate`).
+    Components(serde_json::Value),
+    /// Anything else: only the matrix describes it.
+    Matrix,
+}
+
+/// Reads a `<transform>` element: its matrix and its [`Form`].
+pub(super) fn read_transform_form(node: &Node) -> Result<(Mat4, Form), SceneError> {
     node.check_attrs(&["name"])?;
     let mut m = IDENTITY;
     for op in &node.children {
@@ -86,7 +109,50 @@ pub(super) fn read_transform(node: &Node) -> Result<Mat4, SceneError> {
     if m.iter().flatten().any(|x| !x.is_finite()) {
         return Err(node.loc.error("<transform>: the matrix is not finite"));
     }
-    Ok(m)
+    Ok((m, form(node)?))
+}
+
+/// The [`Form`] of a `<transform>` whose operations all read (see `read_op`).
+fn form(node: &Node) -> Result<Form, SceneError> {
+    if let [op] = node.children.as_slice() {
+        if op.tag == "lookat" {
+            return Ok(Form::LookAt {
+                origin: three(op, "origin")?,
+                target: three(op, "target")?,
+                up: three(op, "up")?,
+            });
+        }
+    }
+    // Stages in niebla's order: scale 0, rotate x 1, y 2, z 3, translate 4.
+    let mut out = serde_json::Map::new();
+    let mut last = None;
+    for op in &node.children {
+        let (stage, key, value) = match op.tag.as_str() {
+            "scale" => {
+                let s = xyz(op, 1.0, true)?;
+                let v = if s[0] == s[1] && s[1] == s[2] { serde_json::json!(s[0]) } else { serde_json::json!(s) };
+                (0, "scale", v)
+            }
+            "rotate" => {
+                let a = xyz(op, 0.0, false)?;
+                let angle = one_number(op, "angle", op.required("angle")?)?;
+                match a {
+                    [x, 0.0, 0.0] if x > 0.0 => (1, "rotate_x", serde_json::json!(angle)),
+                    [0.0, y, 0.0] if y > 0.0 => (2, "rotate_y", serde_json::json!(angle)),
+                    [0.0, 0.0, z] if z > 0.0 => (3, "rotate_z", serde_json::json!(angle)),
+                    _ => return Ok(Form::Matrix),
+                }
+            }
+            "translate" => (4, "translate", serde_json::json!(xyz(op, 0.0, false)?)),
+            _ => return Ok(Form::Matrix),
+        };
+        if last.is_some_and(|l| stage <= l) {
+            return Ok(Form::Matrix);
+        }
+        last = Some(stage);
+        out.insert(key.into(), value);
+    }
+    Ok(Form::Components(serde_json::Value::Object(out)))
 }
 
 /// `x`, `y`, `z` attributes (each defaulting to `default`) or `value="x, y, z"`.
