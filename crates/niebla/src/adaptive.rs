@@ -315,8 +315,8 @@ pub fn render_adaptive(
                         let mut standin_layers = vec![0i128; k];
                         for segment in &pending {
                             standin.add(&segment.moments[i]);
-                            for j in 0..k {
-                                standin_layers[j] += segment.layers[i * k + j];
+                            for (sum, v) in standin_layers.iter_mut().zip(&segment.layers[i * k..(i + 1) * k]) {
+                                *sum += v;
                             }
                         }
                         (value[i], variance[i]) = pixel_value(&decided[i], &standin, total);
@@ -371,8 +371,8 @@ pub fn render_adaptive(
         let mut all_layers = decided_layers[i * k..(i + 1) * k].to_vec();
         for segment in &pending {
             all.add(&segment.moments[i]);
-            for j in 0..k {
-                all_layers[j] += segment.layers[i * k + j];
+            for (sum, v) in all_layers.iter_mut().zip(&segment.layers[i * k..(i + 1) * k]) {
+                *sum += v;
             }
         }
         (value[i], variance[i]) = pixel_value(&all, &Moments::default(), total);
@@ -425,7 +425,7 @@ fn layer_image(set: AovSet, channels: &[AovChannel], w: usize, h: usize, means: 
             _ => 3,
         };
         let mut data = Vec::with_capacity(pixels * components);
-        for i in 0..pixels {
+        for (i, pixel_variance) in variance.iter().enumerate().take(pixels) {
             match aov {
                 Aov::Alpha => data.push(get(i, AovChannel::Alpha) as f32),
                 Aov::Direct | Aov::Indirect | Aov::Emission | Aov::Surface => {
@@ -438,7 +438,7 @@ fn layer_image(set: AovSet, channels: &[AovChannel], w: usize, h: usize, means: 
                     let hits = get(i, AovChannel::Coverage);
                     data.push(if hits > 0.0 { (get(i, AovChannel::DepthSum) / hits) as f32 } else { 0.0 });
                 }
-                Aov::Variance => data.extend(variance[i].0),
+                Aov::Variance => data.extend(pixel_variance.0),
             }
         }
         layers.push(AovLayer { aov, components, data });
