@@ -1,12 +1,13 @@
 //! `niebla render --adaptive THRESHOLD`: an unbiased adaptive render
 //! (`niebla::adaptive`), written as an EXR with the samples-per-pixel map
-//! and the variance, or a PNG of the image. Adaptive renders use the
+//! and the variance and any layers, or a PNG of the image (RGBA with alpha). Adaptive renders use the
 //! independent sampler whatever the scene says (see `niebla::adaptive`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use niebla::adaptive::{render_adaptive, write_adaptive_exr, AdaptiveOptions};
+use niebla::aov::{Aov, AovSet};
 use niebla::integrator::IntegratorSettings;
 use niebla::scene::Scene;
 
@@ -26,6 +27,8 @@ pub struct AdaptiveRun {
     pub exposure: f32,
     /// No progress output.
     pub quiet: bool,
+    /// Layers to render (`--aovs`, the scene's `film.aovs`, alpha when transparent).
+    pub layers: AovSet,
 }
 
 /// Checks the request, renders and writes the outputs.
@@ -48,13 +51,21 @@ pub fn run(
             format!("the {} integrator has no per-pixel sample sums", integrator.name()),
         ));
     }
-    let options = AdaptiveOptions { spp: run.spp, threshold: run.threshold, seed: run.seed, threads: run.threads };
+    let options = AdaptiveOptions {
+        spp: run.spp,
+        threshold: run.threshold,
+        seed: run.seed,
+        threads: run.threads,
+        layers: run.layers,
+    };
     let start = Instant::now();
     let result = render_adaptive(scene, integrator, &options, &|_, _| {}, None)?;
     let seconds = start.elapsed().as_secs_f64();
     for out in outputs {
         if out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
             write_adaptive_exr(&result, run.threshold, out)?;
+        } else if let Some(alpha) = result.layers.as_ref().and_then(|l| l.get(Aov::Alpha)) {
+            niebla::aov::write_rgba_png(&result.image, &alpha.data, out, run.exposure)?;
         } else {
             niebla::film::write_image(&result.image, out, run.exposure)?;
         }

@@ -54,9 +54,60 @@ pub struct AdaptiveBenchArgs {
     /// Renders (seeds) averaged per point.
     #[arg(long, default_value_t = 1)]
     pub seeds: u32,
+    /// Seconds measured: `wall` (elapsed) or `cpu` (the process's CPU time,
+    /// user + system, all threads, from /proc/self/stat in 10 ms ticks;
+    /// Linux only): on a machine shared with other work, CPU time is what
+    /// the render itself spent.
+    #[arg(long, value_enum, default_value_t = Clock::Wall)]
+    pub clock: Clock,
     /// `--threads`: worker threads.
     #[command(flatten)]
     pub threads: ThreadsFlag,
+}
+
+/// What `niebla bench adaptive` measures seconds with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Clock {
+    /// Elapsed time.
+    Wall,
+    /// CPU time of the process (all threads, user + system).
+    Cpu,
+}
+
+/// CPU seconds (user + system, all threads, exited ones included) the
+/// process has spent: fields 14 and 15 of /proc/self/stat, in ticks of
+/// 1/100 s (Linux's USER_HZ).
+fn process_cpu_seconds() -> Result<f64, CliError> {
+    let fail = |why: &str| CliError::invalid_option("--clock", format!("cpu: cannot read /proc/self/stat ({why})"));
+    let stat = std::fs::read_to_string("/proc/self/stat").map_err(|e| fail(&e.to_string()))?;
+    // The command name (field 2) is in parentheses and may hold spaces.
+    let rest = stat.rsplit_once(')').ok_or_else(|| fail("no command name"))?.1;
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let tick = |i: usize| fields.get(i).and_then(|f| f.parse::<u64>().ok()).ok_or_else(|| fail("short line"));
+    // `rest` starts at field 3, so fields 14 and 15 are at 11 and 12.
+    Ok((tick(11)? + tick(12)?) as f64 / 100.0)
+}
+
+/// A stopwatch on `clock`.
+struct Stopwatch {
+    clock: Clock,
+    wall: Instant,
+    cpu: f64,
+}
+
+impl Stopwatch {
+    fn start(clock: Clock) -> Result<Stopwatch, CliError> {
+        let cpu = if clock == Clock::Cpu { process_cpu_seconds()? } else { 0.0 };
+        Ok(Stopwatch { clock, wall: Instant::now(), cpu })
+    }
+
+    /// Seconds since [`Stopwatch::start`].
+    fn seconds(&self) -> Result<f64, CliError> {
+        Ok(match self.clock {
+            Clock::Wall => self.wall.elapsed().as_secs_f64(),
+            Clock::Cpu => process_cpu_seconds()? - self.cpu,
+        })
+    }
 }
 
 /// Samples (or seconds) at which a sweep of `(x, rel MSE)` points crosses
@@ -111,12 +162,13 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
     spp_list.sort_unstable();
     spp_list.dedup();
     println!(
-        "bench adaptive: width {}, threads {}, reference {} spp, target relative MSE {:.1e}, {} seed(s) per point",
+        "bench adaptive: width {}, threads {}, reference {} spp, target relative MSE {:.1e}, {} seed(s) per point, {} seconds",
         args.width,
         threads.map_or("all".to_string(), |t| t.to_string()),
         args.reference_spp,
         args.target,
-        args.seeds
+        args.seeds,
+        if args.clock == Clock::Cpu { "CPU" } else { "wall" }
     );
     let mut rows = Vec::new();
     for path in &scenes {
@@ -167,9 +219,9 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
         for &spp in &spp_list {
             let (mut error, mut time) = (0.0, 0.0);
             for seed in 0..seeds {
-                let start = Instant::now();
+                let watch = Stopwatch::start(args.clock)?;
                 let image = prepared.render(&scene, &plain_options(spp, 11 + seed), &|_, _| {}, None)?;
-                time += start.elapsed().as_secs_f64();
+                time += watch.seconds()?;
                 error += image.relative_mse(&reference);
             }
             let (error, time) = (error / seeds as f64, time / seeds as f64);
@@ -183,10 +235,10 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             for &spp in &spp_list {
                 let (mut error, mut time, mut taken) = (0.0, 0.0, 0.0);
                 for seed in 0..seeds {
-                    let options = AdaptiveOptions { spp, threshold, seed: 11 + seed, threads };
-                    let start = Instant::now();
+                    let options = AdaptiveOptions { spp, threshold, seed: 11 + seed, threads, layers: AovSet::EMPTY };
+                    let watch = Stopwatch::start(args.clock)?;
                     let result = render_adaptive(&scene, &settings, &options, &|_, _| {}, None)?;
-                    time += start.elapsed().as_secs_f64();
+                    time += watch.seconds()?;
                     error += result.image.relative_mse(&reference);
                     taken += result.spp.iter().sum::<u64>() as f64 / result.spp.len() as f64;
                 }

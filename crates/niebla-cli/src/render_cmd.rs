@@ -105,10 +105,11 @@ pub struct RenderArgs {
     /// relative standard error of its value (from the first half of its
     /// samples) is below THRESHOLD, in (0, 1), and so is its neighbours';
     /// the image stays unbiased. --spp is the most a pixel takes. The EXR
-    /// also holds `spp.Z` (samples per pixel) and `variance.RGB`; it is not
+    /// also holds `spp.Z` (samples per pixel), `variance.RGB` and the
+    /// --aovs layers (each pixel's by the same rule as its beauty); it is not
     /// a checkpoint (no --resume). Uses the independent sampler (the
     /// argument needs independent passes; `--sampler sobol` is refused).
-    #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "aovs", "denoise", "transparent"])]
+    #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "denoise"])]
     pub adaptive: Option<f32>,
     /// Render frames of a sequence: `N`, `FIRST-LAST` or `FIRST-LAST:STEP`
     /// (frame numbers >= 0). Frame patterns in the scene's file names
@@ -297,7 +298,8 @@ pub fn render_loaded(
             ));
         }
         let seed = args.seed.or(built.settings.seed);
-        let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet: args.quiet.quiet };
+        let quiet = args.quiet.quiet;
+        let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet, layers: aovs };
         return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, outputs).map(|()| None);
     }
     let (start_acc, seed) = match &args.resume {

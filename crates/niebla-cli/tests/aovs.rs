@@ -198,4 +198,24 @@ fn adaptive_writes_the_spp_map_and_refuses_bad_thresholds() {
     assert!(spp.iter().all(|&s| [16.0, 24.0, 32.0, 48.0, 64.0].contains(&s)), "{spp:?}");
     assert!(spp.iter().any(|&s| s < 64.0), "some pixels stop early");
     assert!(exr.contains_key("variance.G") && exr.contains_key("R"));
+    // With layers: the split layers add up to the beauty; the spp map is
+    // that of the render without layers (same samples, same decisions).
+    let list = "direct,indirect,emission,surface,albedo,depth";
+    run_ok(&dir, &["render", "fog.json", "-o", "b.exr", "--adaptive", "0.2", "--spp", "64", "--aovs", list, "--quiet"]);
+    let layered = channels(&dir.join("b.exr"));
+    let f = |name: &str| -> Vec<f32> { layered[name].iter().map(|&b| f32::from_bits(b)).collect() };
+    assert_eq!(f("spp.Z"), spp);
+    assert_eq!(f("R"), exr["R"].iter().map(|&b| f32::from_bits(b)).collect::<Vec<_>>());
+    for c in ["R", "G", "B"] {
+        let beauty = f(c);
+        let parts: Vec<Vec<f32>> =
+            ["direct", "indirect", "emission", "surface"].iter().map(|l| f(&format!("{l}.{c}"))).collect();
+        for (i, b) in beauty.iter().enumerate() {
+            let sum: f32 = parts.iter().map(|p| p[i]).sum();
+            assert!((sum - b).abs() <= 1e-5 * b.abs() + 1e-7, "pixel {i} {c}: layers {sum}, beauty {b}");
+        }
+    }
+    assert!(layered.contains_key("albedo.G") && layered.contains_key("depth.Z"));
+    let err = run_err(&dir, &["render", "fog.json", "-o", "c.exr", "--adaptive", "0.2", "--denoise"]);
+    assert!(err.contains("--denoise") || err.contains("cannot be used"), "{err}");
 }

@@ -5,7 +5,16 @@
 //! **Schedule.** Passes end at the sample counts 1, 2, 3, 4, 6, 8, 12, 16,
 //! 24, ... (powers of two and 1.5 times powers of two, [`schedule`]), then
 //! at `spp`; sample indices continue across passes. A pixel takes a pass
-//! only while it is active, and once stopped it stays so.
+//! only while it is active, and once stopped it stays so. (The render
+//! loop joins the passes between two decisions into one, keeping the sums
+//! of each pass a later decision separates apart: the sums, hence the
+//! image, are those of the pass-by-pass loop, bit for bit.)
+//!
+//! **Layers.** With `AdaptiveOptions::layers`, every layer channel of a
+//! pixel (split radiance, alpha, albedo, normal, depth and coverage sums)
+//! takes the value rule of the beauty below, with the same decisions: it
+//! is linear in the samples, so the argument holds channel by channel and
+//! the split layers still add up to the beauty.
 //!
 //! **Decisions see the first half.** Before the pass that starts after
 //! `t` samples, the decisions use the samples `< d` of every pixel, with
@@ -54,12 +63,11 @@
 use std::collections::VecDeque;
 use std::sync::atomic::AtomicBool;
 
-use crate::aov::{Aov, AovSet};
+use crate::aov::{segment_channels, Aov, AovChannel, AovImage, AovLayer, AovSet};
 use crate::color::Rgb;
 use crate::film::{Image, FRACTION_BITS};
 use crate::integrator::{IntegratorSettings, PreparedIntegrator};
-use crate::render::{RenderError, RenderOptions};
-use crate::sampling::SamplerKind;
+use crate::render::RenderError;
 use crate::world::Scene;
 
 /// Decided samples a pixel needs before it may stop (so the earliest stop
@@ -82,6 +90,10 @@ pub struct AdaptiveImage {
     pub variance: Vec<Rgb>,
     /// Samples of the schedule (what every pixel of a plain render takes).
     pub total_spp: u64,
+    /// The layers asked for (`AdaptiveOptions::layers`; `None` if none):
+    /// each channel a pixel's value by the rule of the image, the variance
+    /// layer [`AdaptiveImage::variance`].
+    pub layers: Option<AovImage>,
 }
 
 /// How an adaptive render runs.
@@ -95,6 +107,8 @@ pub struct AdaptiveOptions {
     pub seed: u64,
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
+    /// Layers (`crate::aov`) to render with the image ([`AovSet::EMPTY`]: none).
+    pub layers: AovSet,
 }
 
 /// The sample counts at which the passes of an adaptive render of `spp`
@@ -203,7 +217,13 @@ fn pixel_value(decided: &Moments, standin: &Moments, n: u64) -> (Rgb, Rgb) {
 
 /// Render `scene` adaptively (see the module documentation). `threshold`
 /// must lie in (0, 1); `photon`, `ppm` and `ppb` are not supported (no per-pixel
-/// sample sums of their own).
+/// sample sums of their own). `progress` is told the samples taken after
+/// each pass, out of `spp` per pixel.
+///
+/// Passes run only between decisions (the first one covers samples
+/// `0 .. 16`, before which no pixel can stop); each pass renders only the
+/// pixels still active, in chunks of pixels on one thread pool, and keeps
+/// the sums of every sample range a later decision needs apart.
 pub fn render_adaptive(
     scene: &Scene,
     settings: &IntegratorSettings,
@@ -217,113 +237,220 @@ pub fn render_adaptive(
     let total = u64::from(options.spp);
     let ends = schedule(total);
     let threshold2 = (options.threshold as f64).powi(2);
-    let set = AovSet::EMPTY.with(Aov::Variance);
+    let channels = segment_channels(options.layers);
+    let k = channels.len();
+    let stride = 6 + k;
+    // Sample counts at which pixels may stop, and the boundaries of the
+    // sample ranges whose sums stay apart (every cutoff of a decision is
+    // one of them).
+    let decisions: Vec<u64> = ends.iter().copied().filter(|&t| t < total && cutoff(&ends, t) >= MIN_DECIDED).collect();
+    let bounds: Vec<u64> = ends.iter().copied().filter(|&b| b >= MIN_DECIDED || b == total).collect();
+    let pool = match options.threads {
+        Some(threads) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| RenderError::ThreadPool { threads, message: e.to_string() })?,
+        ),
+        None => None,
+    };
     let mut active = vec![true; pixels];
     let mut decided = vec![Moments::default(); pixels];
+    let mut decided_layers = vec![0i128; pixels * k];
     let mut taken = vec![0u64; pixels];
     let mut value = vec![Rgb::ZERO; pixels];
     let mut variance = vec![Rgb::ZERO; pixels];
-    // Passes after the cutoff: (start, per-pixel moments of the pass).
-    let mut pending: VecDeque<(u64, Vec<Moments>)> = VecDeque::new();
+    let mut layer_means = vec![0f64; pixels * k];
+    // Sample ranges after the cutoff, per pixel (zero where inactive).
+    let mut pending: VecDeque<Segment> = VecDeque::new();
     let mut converged = vec![false; pixels];
     let mut t = 0u64;
-    for &end in &ends {
+    for &end in decisions.iter().chain(std::iter::once(&total)) {
         if t > 0 {
             let d = cutoff(&ends, t);
-            while pending.front().is_some_and(|(start, _)| *start < d) {
-                let (_, pass) = pending.pop_front().expect("checked");
+            while pending.front().is_some_and(|s| s.start < d) {
+                let segment = pending.pop_front().expect("checked");
                 for i in (0..pixels).filter(|&i| active[i]) {
-                    decided[i].add(&pass[i]);
+                    decided[i].add(&segment.moments[i]);
+                    for j in 0..k {
+                        decided_layers[i * k + j] += segment.layers[i * k + j];
+                    }
                 }
             }
-            if d >= MIN_DECIDED {
-                let image_mean = (0..pixels)
-                    .map(|i| {
-                        if active[i] {
-                            (0..3).map(|c| decided[i].mean(c)).sum::<f64>() / 3.0
-                        } else {
-                            value[i].average() as f64
+            let image_mean = (0..pixels)
+                .map(|i| {
+                    if active[i] {
+                        (0..3).map(|c| decided[i].mean(c)).sum::<f64>() / 3.0
+                    } else {
+                        value[i].average() as f64
+                    }
+                })
+                .sum::<f64>()
+                / pixels.max(1) as f64;
+            let eps = (0.01 * image_mean).powi(2).max(f64::MIN_POSITIVE);
+            let factor = stop_variance_factor(d, t, total);
+            for i in 0..pixels {
+                converged[i] = !active[i] || {
+                    let m = &decided[i];
+                    let relative: f64 =
+                        (0..3).map(|c| m.sample_variance(c) / (m.mean(c).powi(2) + eps)).sum::<f64>() / 3.0;
+                    let trusted = (0..3).all(|c| m.effective_samples(c).is_none_or(|e| e >= MIN_EFFECTIVE));
+                    trusted && relative * factor < threshold2
+                };
+            }
+            for y in 0..h {
+                for x in 0..w {
+                    let i = y * w + x;
+                    if !active[i] {
+                        continue;
+                    }
+                    let mut all = true;
+                    for yy in y.saturating_sub(1)..(y + 2).min(h) {
+                        for xx in x.saturating_sub(1)..(x + 2).min(w) {
+                            all &= converged[yy * w + xx];
                         }
-                    })
-                    .sum::<f64>()
-                    / pixels.max(1) as f64;
-                let eps = (0.01 * image_mean).powi(2).max(f64::MIN_POSITIVE);
-                let factor = stop_variance_factor(d, t, total);
-                for i in 0..pixels {
-                    converged[i] = !active[i] || {
-                        let m = &decided[i];
-                        let relative: f64 =
-                            (0..3).map(|c| m.sample_variance(c) / (m.mean(c).powi(2) + eps)).sum::<f64>() / 3.0;
-                        let trusted = (0..3).all(|c| m.effective_samples(c).is_none_or(|e| e >= MIN_EFFECTIVE));
-                        trusted && relative * factor < threshold2
-                    };
-                }
-                for y in 0..h {
-                    for x in 0..w {
-                        let i = y * w + x;
-                        if !active[i] {
-                            continue;
-                        }
-                        let mut all = true;
-                        for yy in y.saturating_sub(1)..(y + 2).min(h) {
-                            for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                                all &= converged[yy * w + xx];
+                    }
+                    if all {
+                        let mut standin = Moments::default();
+                        let mut standin_layers = vec![0i128; k];
+                        for segment in &pending {
+                            standin.add(&segment.moments[i]);
+                            for (sum, v) in standin_layers.iter_mut().zip(&segment.layers[i * k..(i + 1) * k]) {
+                                *sum += v;
                             }
                         }
-                        if all {
-                            let mut standin = Moments::default();
-                            for (_, pass) in &pending {
-                                standin.add(&pass[i]);
-                            }
-                            (value[i], variance[i]) = pixel_value(&decided[i], &standin, total);
-                            active[i] = false;
+                        (value[i], variance[i]) = pixel_value(&decided[i], &standin, total);
+                        for j in 0..k {
+                            layer_means[i * k + j] = stopped_mean(
+                                decided_layers[i * k + j],
+                                decided[i].n,
+                                standin_layers[j],
+                                standin.n,
+                                total,
+                            );
                         }
+                        active[i] = false;
                     }
                 }
             }
         }
-        if !active.iter().any(|&a| a) {
+        let list: Vec<u32> = (0..pixels).filter(|&i| active[i]).map(|i| i as u32).collect();
+        if list.is_empty() {
             break;
         }
-        let size = end - t;
-        let pass = RenderOptions {
-            spp: size as u32,
-            seed: options.seed,
-            first_sample: t,
-            threads: options.threads,
-            sampler: SamplerKind::Independent,
-        };
-        let (sums, squares) = prepared.render_aov_sums_masked(scene, &pass, set, Some(&active), progress, cancel)?;
-        let moments = (0..pixels)
-            .map(|i| {
-                if active[i] {
-                    taken[i] += size;
-                    let square = [0, 1, 2].map(|c| squares.values[i * 3 + c]);
-                    Moments { sum: sums.sums[i], square, n: size }
-                } else {
-                    Moments::default()
-                }
-            })
-            .collect();
-        pending.push_back((t, moments));
+        let mut segments = Vec::new();
+        let mut start = t;
+        for &b in bounds.iter().filter(|&&b| b > t && b <= end) {
+            segments.push((start, b));
+            start = b;
+        }
+        let render = || prepared.render_segment_sums(scene, options.seed, options.layers, &list, &segments, cancel);
+        let sums = match &pool {
+            Some(pool) => pool.install(render),
+            None => render(),
+        }?;
+        for (g, &(start, b)) in segments.iter().enumerate() {
+            let size = b - start;
+            let mut segment = Segment { start, moments: vec![Moments::default(); pixels], layers: vec![0; pixels * k] };
+            for (j, &i) in list.iter().enumerate() {
+                let i = i as usize;
+                let cell = &sums[(j * segments.len() + g) * stride..][..stride];
+                segment.moments[i] =
+                    Moments { sum: [cell[0], cell[1], cell[2]], square: [cell[3], cell[4], cell[5]], n: size };
+                segment.layers[i * k..(i + 1) * k].copy_from_slice(&cell[6..]);
+                taken[i] += size;
+            }
+            pending.push_back(segment);
+        }
+        progress(taken.iter().sum(), pixels as u64 * total);
         t = end;
     }
     // Pixels that took every sample: the mean of all of them.
     for i in (0..pixels).filter(|&i| active[i]) {
         let mut all = decided[i];
-        for (_, pass) in &pending {
-            all.add(&pass[i]);
+        let mut all_layers = decided_layers[i * k..(i + 1) * k].to_vec();
+        for segment in &pending {
+            all.add(&segment.moments[i]);
+            for (sum, v) in all_layers.iter_mut().zip(&segment.layers[i * k..(i + 1) * k]) {
+                *sum += v;
+            }
         }
         (value[i], variance[i]) = pixel_value(&all, &Moments::default(), total);
+        for j in 0..k {
+            layer_means[i * k + j] = stopped_mean(all_layers[j], all.n, 0, 0, total);
+        }
     }
+    let layers =
+        (!options.layers.is_empty()).then(|| layer_image(options.layers, &channels, w, h, &layer_means, &variance));
     let mut image = Image::new(w as u32, h as u32);
     image.pixels = value;
-    Ok(AdaptiveImage { image, spp: taken, variance, total_spp: total })
+    Ok(AdaptiveImage { image, spp: taken, variance, total_spp: total, layers })
+}
+
+/// The per-pixel sums of one range of sample indices.
+struct Segment {
+    /// First sample index of the range.
+    start: u64,
+    /// Beauty sums per pixel.
+    moments: Vec<Moments>,
+    /// Layer channel sums, `layers[pixel * k + j]`.
+    layers: Vec<i128>,
+}
+
+/// The value of one channel of a pixel, from the fixed-point sum `decided`
+/// of its `d` decided samples and `standin` of `m` samples standing in for
+/// the samples `d .. n` (`m` = 0: `decided` holds all `n` samples):
+/// `(S_decided + S_standin (n - d) / m) / n`, the rule of the image.
+fn stopped_mean(decided: i128, d: u64, standin: i128, m: u64, n: u64) -> f64 {
+    let n_f = n.max(1) as f64;
+    if m == 0 {
+        to_f64(decided) / n_f
+    } else {
+        (to_f64(decided) + to_f64(standin) / m as f64 * (n - d) as f64) / n_f
+    }
+}
+
+/// The layer images of an adaptive render from each pixel's channel values
+/// `means[pixel * k + j]` (channel `channels[j]`) and the variance of its
+/// value (the variance layer): as `AovSums::layers` makes them from sums,
+/// with depth the ratio of the depth and coverage values.
+fn layer_image(set: AovSet, channels: &[AovChannel], w: usize, h: usize, means: &[f64], variance: &[Rgb]) -> AovImage {
+    let k = channels.len();
+    let pixels = w * h;
+    let get = |i: usize, ch: AovChannel| channels.iter().position(|&c| c == ch).map_or(0.0, |j| means[i * k + j]);
+    let mut layers = Vec::new();
+    for aov in set.iter() {
+        let components = match aov {
+            Aov::Alpha | Aov::Depth => 1,
+            _ => 3,
+        };
+        let mut data = Vec::with_capacity(pixels * components);
+        for (i, pixel_variance) in variance.iter().enumerate().take(pixels) {
+            match aov {
+                Aov::Alpha => data.push(get(i, AovChannel::Alpha) as f32),
+                Aov::Direct | Aov::Indirect | Aov::Emission | Aov::Surface => {
+                    let l = aov as usize - Aov::Direct as usize;
+                    data.extend((0..3).map(|c| get(i, AovChannel::Split(l, c)) as f32));
+                }
+                Aov::Albedo => data.extend((0..3).map(|c| get(i, AovChannel::Albedo(c)) as f32)),
+                Aov::Normal => data.extend((0..3).map(|c| get(i, AovChannel::Normal(c)) as f32)),
+                Aov::Depth => {
+                    let hits = get(i, AovChannel::Coverage);
+                    data.push(if hits > 0.0 { (get(i, AovChannel::DepthSum) / hits) as f32 } else { 0.0 });
+                }
+                Aov::Variance => data.extend(pixel_variance.0),
+            }
+        }
+        layers.push(AovLayer { aov, components, data });
+    }
+    AovImage { width: w as u32, height: h as u32, layers }
 }
 
 /// Writes an adaptive render as an EXR: the image (`R`, `G`, `B`), the
-/// samples each pixel took (`spp.Z`) and the variance of each pixel's value
-/// (`variance.R/G/B`), with the threshold and the schedule's spp as header
+/// samples each pixel took (`spp.Z`), the variance of each pixel's value
+/// (`variance.R/G/B`) and the layers rendered (channels named as those of
+/// `niebla render --aovs`), with the threshold, the schedule's spp and the
+/// layers (`nieblaAovs`, so `aov::read_aov_exr` reads them) as header
 /// attributes. Not a checkpoint: an adaptive render cannot be resumed.
 pub fn write_adaptive_exr(
     result: &AdaptiveImage,
@@ -340,10 +467,21 @@ pub fn write_adaptive_exr(
         list.push(AnyChannel::new(format!("variance.{name}").as_str(), FlatSamples::F32(variance)));
     }
     list.push(AnyChannel::new("spp.Z", FlatSamples::F32(result.spp.iter().map(|&n| n as f32).collect())));
+    let mut recorded = AovSet::EMPTY.with(Aov::Variance);
+    for layer in result.layers.iter().flat_map(|l| &l.layers).filter(|l| l.aov != Aov::Variance) {
+        recorded = recorded.with(layer.aov);
+        for (c, name) in layer.channel_names().iter().enumerate() {
+            let values = layer.data.iter().skip(c).step_by(layer.components).copied().collect();
+            list.push(AnyChannel::new(name.as_str(), FlatSamples::F32(values)));
+        }
+    }
+    let recorded = recorded.iter().map(|a| a.name()).collect::<Vec<_>>().join(",");
     let mut attributes = LayerAttributes::default();
-    for (name, value) in
-        [("nieblaAdaptiveThreshold", threshold.to_string()), ("nieblaSpp", result.total_spp.to_string())]
-    {
+    for (name, value) in [
+        ("nieblaAdaptiveThreshold", threshold.to_string()),
+        ("nieblaSpp", result.total_spp.to_string()),
+        ("nieblaAovs", recorded),
+    ] {
         attributes.other.insert(Text::from(name), AttributeValue::Text(Text::from(value.as_str())));
     }
     let size = (image.width as usize, image.height as usize);

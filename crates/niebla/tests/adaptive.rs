@@ -29,7 +29,7 @@ fn adaptive_image_has_the_plain_mean() {
     let scene = &built.scene;
     let volpath = registry::defaults("volpath").unwrap();
     let spp = 64;
-    let options = AdaptiveOptions { spp, threshold: 0.3, seed: 7, threads: None };
+    let options = AdaptiveOptions { spp, threshold: 0.3, seed: 7, threads: None, layers: AovSet::EMPTY };
     let adaptive = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
     let plain_options =
         RenderOptions { spp, seed: 8, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
@@ -83,7 +83,7 @@ fn adaptive_mean_over_seeds_matches_the_plain_mean() {
     let mut taken = 0u64;
     let adaptive: Vec<f64> = (0..runs)
         .map(|seed| {
-            let options = AdaptiveOptions { spp: 256, threshold: 0.4, seed, threads: None };
+            let options = AdaptiveOptions { spp: 256, threshold: 0.4, seed, threads: None, layers: AovSet::EMPTY };
             let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
             taken += result.spp.iter().sum::<u64>();
             result.image.mean().average() as f64
@@ -127,7 +127,7 @@ fn flat_pixels_stop_early_and_noisy_ones_take_every_sample() {
     let built = build_scene(&desc, "flat_noisy.json", std::path::Path::new(".")).unwrap();
     let scene = &built.scene;
     let volpath = registry::defaults("volpath").unwrap();
-    let options = AdaptiveOptions { spp: 64, threshold: 0.01, seed: 3, threads: Some(2) };
+    let options = AdaptiveOptions { spp: 64, threshold: 0.01, seed: 3, threads: Some(2), layers: AovSet::EMPTY };
     let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
     let (w, h) = (24usize, 12usize);
     for y in 0..h {
@@ -174,7 +174,7 @@ fn adaptive_mean_matches_the_plain_mean_on_fog_point() {
     };
     let (mut adaptive, mut plain, mut taken) = (Vec::new(), Vec::new(), 0u64);
     for seed in 0..runs {
-        let options = AdaptiveOptions { spp: 64, threshold: 0.3, seed, threads: None };
+        let options = AdaptiveOptions { spp: 64, threshold: 0.3, seed, threads: None, layers: AovSet::EMPTY };
         let result = render_adaptive(scene, &settings, &options, &|_, _| {}, None).unwrap();
         taken += result.spp.iter().sum::<u64>();
         adaptive.push(result.image.mean().average() as f64);
@@ -194,5 +194,73 @@ fn adaptive_mean_matches_the_plain_mean_on_fog_point() {
         "fog_point image mean over {runs} seeds: adaptive {a:.5}, plain {p:.5}, SE {se:.1e}; {share:.2} of the samples"
     );
     assert!((a - p).abs() <= 4.0 * se, "adaptive {a}, plain {p}, SE {se}");
+    assert!(share < 0.9, "some pixels must stop early: took {share:.2} of the samples");
+}
+
+/// Adaptive renders with layers: the beauty and the spp map are those of
+/// the render without layers (bit for bit), the split layers add up to the
+/// beauty in every pixel (float rounding), the variance layer is the
+/// variance of the pixels' values, and each layer's image mean over 32
+/// seeds equals that of plain renders with layers within 4 SE (8x6 pixels,
+/// at most 256 spp, threshold 0.4, so that many pixels stop).
+#[test]
+fn adaptive_layers_split_the_beauty_and_keep_the_plain_mean() {
+    let built = fog_spot(8, 6);
+    let scene = &built.scene;
+    let volpath = registry::defaults("volpath").unwrap();
+    let split = [Aov::Direct, Aov::Indirect, Aov::Emission, Aov::Surface];
+    let set = split.into_iter().fold(AovSet::EMPTY, AovSet::with).with(Aov::Variance).with(Aov::Alpha);
+    let runs = 32u64;
+    let spp = 256u32;
+    let prepared = PreparedIntegrator::new(scene, &volpath);
+    let mean_and_se = |values: &[f64]| {
+        let m = values.iter().sum::<f64>() / values.len() as f64;
+        let v = values.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (values.len() - 1) as f64;
+        (m, (v / values.len() as f64).sqrt())
+    };
+    let layer_means = |layers: &niebla::aov::AovImage| -> Vec<f64> {
+        split.iter().map(|&a| layers.get(a).unwrap().data.iter().map(|&v| v as f64).sum::<f64>() / 144.0).collect()
+    };
+    let (mut adaptive, mut plain) = (vec![Vec::new(); 4], vec![Vec::new(); 4]);
+    let mut taken = 0u64;
+    for seed in 0..runs {
+        let options = AdaptiveOptions { spp, threshold: 0.4, seed, threads: None, layers: set };
+        let result = render_adaptive(scene, &volpath, &options, &|_, _| {}, None).unwrap();
+        taken += result.spp.iter().sum::<u64>();
+        let layers = result.layers.as_ref().expect("layers asked for");
+        if seed < 2 {
+            let bare = AdaptiveOptions { layers: AovSet::EMPTY, ..options };
+            let bare = render_adaptive(scene, &volpath, &bare, &|_, _| {}, None).unwrap();
+            assert_eq!(bare.image.pixels, result.image.pixels, "layers changed the beauty");
+            assert_eq!(bare.spp, result.spp, "layers changed the spp map");
+            assert!(bare.layers.is_none());
+        }
+        for (i, p) in result.image.pixels.iter().enumerate() {
+            let sum = split.iter().fold(niebla::color::Rgb::ZERO, |s, &a| s + layers.get(a).unwrap().rgb(i));
+            for c in 0..3 {
+                assert!((sum[c] - p[c]).abs() <= 1e-5 * p[c].abs() + 1e-7, "pixel {i}: layers {sum:?}, beauty {p:?}");
+            }
+            assert_eq!(layers.get(Aov::Variance).unwrap().rgb(i), result.variance[i]);
+            let alpha = layers.get(Aov::Alpha).unwrap().data[i];
+            assert!((0.0..=1.0).contains(&alpha), "alpha {alpha}");
+        }
+        for (l, m) in layer_means(layers).into_iter().enumerate() {
+            adaptive[l].push(m);
+        }
+        let plain_options =
+            RenderOptions { spp, seed: 1000 + seed, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
+        let (sums, aov) = prepared.render_aov_sums(scene, &plain_options, set, &|_, _| {}, None).unwrap();
+        for (l, m) in layer_means(&aov.layers(&sums, spp as u64)).into_iter().enumerate() {
+            plain[l].push(m);
+        }
+    }
+    let share = taken as f64 / (runs as f64 * 48.0 * spp as f64);
+    for (l, aov) in split.iter().enumerate() {
+        let ((a, sa), (p, sp)) = (mean_and_se(&adaptive[l]), mean_and_se(&plain[l]));
+        let se = (sa * sa + sp * sp).sqrt();
+        eprintln!("{}: adaptive {a:.5} (SE {sa:.1e}), plain {p:.5} (SE {sp:.1e})", aov.name());
+        assert!((a - p).abs() <= 4.0 * se + 1e-9, "{}: adaptive {a}, plain {p}, SE {se}", aov.name());
+    }
+    eprintln!("{share:.2} of the samples taken");
     assert!(share < 0.9, "some pixels must stop early: took {share:.2} of the samples");
 }

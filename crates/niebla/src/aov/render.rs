@@ -10,7 +10,7 @@ use crate::sampling::{PixelSampler, SamplerKind};
 use crate::world::Scene;
 
 use super::features::camera_features;
-use super::{AovSample, AovSet, AovSums};
+use super::{AovChannel, AovSample, AovSet, AovSums, LayerSplit};
 
 /// Added to the seed of the features' random stream, so that it is
 /// independent of the integrator's numbers (which it never changes).
@@ -95,4 +95,100 @@ pub fn render_aov_sums_masked_with<I: Integrator>(
         aov.values[i * k..(i + 1) * k].copy_from_slice(&layers);
     }
     Ok((sums, aov))
+}
+
+/// The layer channels [`render_segment_sums_with`] sums for `set`: those of
+/// [`AovSums::channels_for`] without the beauty's squares (always summed).
+pub fn segment_channels(set: AovSet) -> Vec<AovChannel> {
+    AovSums::channels_for(set).into_iter().filter(|c| !matches!(c, AovChannel::Square(_))).collect()
+}
+
+/// Fixed-point sums of sample ranges of some pixels, the render loop of
+/// adaptive sampling (`crate::adaptive`). For each pixel `pixels[j]`
+/// (index `y * width + x`) and each range `segments[g] = (start, end)` of
+/// sample indices, `6 + k` sums at `out[(j * segments.len() + g) * (6 + k)..]`:
+/// the beauty's R, G, B, their squares, and the `k` channels of
+/// [`segment_channels`]`(set)`. Independent sampler; every sample is that of
+/// [`render_aov_sums_with`] with the same seed and index (the beauty's bit
+/// for bit: without split layers it calls `radiance`, whose value
+/// `radiance_split` reproduces). Runs on the current rayon pool in chunks
+/// of pixels; the sums do not depend on the chunking or the thread count.
+pub fn render_segment_sums_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    seed: u64,
+    set: AovSet,
+    pixels: &[u32],
+    segments: &[(u64, u64)],
+    cancel: Option<&AtomicBool>,
+) -> Result<Vec<i128>, RenderError> {
+    use rayon::prelude::*;
+    use std::sync::atomic::Ordering;
+    let channels = segment_channels(set);
+    let stride = 6 + channels.len();
+    let per_pixel = stride * segments.len();
+    let needs_split = channels.iter().any(|c| matches!(c, AovChannel::Split(..)));
+    let needs_features = channels.iter().any(|c| !matches!(c, AovChannel::Split(..)));
+    let width = scene.camera.width;
+    // Small chunks balance uneven pixels (stopped neighbours leave few
+    // active pixels per tile); large enough to keep rayon's cost negligible.
+    let chunk = (pixels.len() / (rayon::current_num_threads() * 16)).clamp(1, 256);
+    let chunks: Vec<Option<Vec<i128>>> = pixels
+        .par_chunks(chunk)
+        .map(|list| {
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return None;
+            }
+            let mut out = vec![0i128; list.len() * per_pixel];
+            for (j, &i) in list.iter().enumerate() {
+                let (x, y) = (i % width, i / width);
+                for (g, &(start, end)) in segments.iter().enumerate() {
+                    let cell = &mut out[j * per_pixel + g * stride..][..stride];
+                    for s in start..end {
+                        let mut sampler = PixelSampler::for_pixel(SamplerKind::Independent, seed, x, y, s);
+                        let ray = scene.camera.sample_ray(x, y, &mut sampler);
+                        let mut split = if needs_split {
+                            integrator.radiance_split(scene, ray, scene.camera_medium, &mut sampler)
+                        } else {
+                            LayerSplit::unsplit(integrator.radiance(scene, ray, scene.camera_medium, &mut sampler))
+                        };
+                        debug_assert!(
+                            split.total.is_finite(),
+                            "non-finite radiance {:?} at pixel ({x}, {y}) sample {s}",
+                            split.total
+                        );
+                        if !split.total.is_finite() {
+                            // Dropped like the beauty sample of a plain render.
+                            split = Default::default();
+                        }
+                        for (c, v) in split.total.0.into_iter().enumerate() {
+                            cell[c] += quantize_sample(v);
+                            cell[3 + c] += quantize_sample(v * v);
+                        }
+                        if channels.is_empty() {
+                            continue;
+                        }
+                        let features = if needs_features {
+                            let mut own = PixelSampler::for_pixel(
+                                SamplerKind::Independent,
+                                seed.wrapping_add(FEATURE_STREAM),
+                                x,
+                                y,
+                                s,
+                            );
+                            camera_features(scene, ray, scene.camera_medium, &mut own)
+                        } else {
+                            Default::default()
+                        };
+                        AovSums::accumulate(&channels, &AovSample { split, features }, &mut cell[6..]);
+                    }
+                }
+            }
+            Some(out)
+        })
+        .collect();
+    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || chunks.iter().any(Option::is_none) {
+        return Err(RenderError::Cancelled);
+    }
+    Ok(chunks.into_iter().flatten().flatten().collect())
 }

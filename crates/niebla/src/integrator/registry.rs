@@ -563,6 +563,33 @@ impl PreparedIntegrator {
             }
         }
     }
+
+    /// The sums of sample ranges of some pixels for adaptive rendering
+    /// ([`crate::aov::render_segment_sums_with`]); on the current rayon pool.
+    /// `photon`, `ppm` and `ppb` have no per-pixel samples (they panic here).
+    pub fn render_segment_sums(
+        &self,
+        scene: &Scene,
+        seed: u64,
+        set: crate::aov::AovSet,
+        pixels: &[u32],
+        segments: &[(u64, u64)],
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Vec<i128>, RenderError> {
+        use crate::aov::render_segment_sums_with as with;
+        self.check_motion(scene)?;
+        match self {
+            PreparedIntegrator::Emission(i) => with(scene, i, seed, set, pixels, segments, cancel),
+            PreparedIntegrator::Single(i) => with(scene, i, seed, set, pixels, segments, cancel),
+            PreparedIntegrator::VolPath(i) => with(scene, i.as_ref(), seed, set, pixels, segments, cancel),
+            PreparedIntegrator::Analytic(i) => with(scene, i, seed, set, pixels, segments, cancel),
+            PreparedIntegrator::Hegeman(i) => with(scene, i.as_ref(), seed, set, pixels, segments, cancel),
+            PreparedIntegrator::Zhou(i) => with(scene, i.as_ref(), seed, set, pixels, segments, cancel),
+            PreparedIntegrator::Photon(_) | PreparedIntegrator::Ppm(_) | PreparedIntegrator::Ppb(_) => {
+                panic!("photon, ppm and ppb have no per-pixel samples (the adaptive command refuses them)")
+            }
+        }
+    }
 }
 
 #[cfg(test)]
