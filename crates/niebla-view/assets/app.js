@@ -150,8 +150,9 @@ function wireMouse(canvas) {
   canvas.addEventListener('contextmenu', (e) => e.preventDefault());
   canvas.addEventListener('pointerdown', (e) => { drag = { x: e.clientX, y: e.clientY, pan: e.button !== 0 || e.shiftKey }; canvas.setPointerCapture(e.pointerId); });
   canvas.addEventListener('pointermove', (e) => {
-    inspect(e);
-    if (!drag) return;
+    // The inspector follows the cursor when not dragging (its text change
+    // repaints the page: during a drag that is browser time taken from frames).
+    if (!drag) { inspect(e); return; }
     const scaleToImage = canvas.height / canvas.getBoundingClientRect().height;
     const dx = (e.clientX - drag.x) * scaleToImage, dy = (e.clientY - drag.y) * scaleToImage;
     drag.x = e.clientX;

@@ -257,6 +257,7 @@ fn a_zhou_preview_update_follows_the_edit_and_a_full_update_restores_the_exact_i
     // its distance to the exact edited image is a small part of the edit's
     // own change of the image (same samples, so no noise enters the ratio).
     let (off, edit) = (relative_difference(&preview, &exact), relative_difference(&before, &exact));
+    eprintln!("preview: relative difference to the exact image {off:.4}; the edit's own change {edit:.4}");
     assert!(preview != exact, "the preview lattice is coarser");
     assert!(off < 0.2 * edit, "preview off by {off}, the edit changed the image by {edit}");
     // Any later full update, here a camera move alone, lights on the full
