@@ -259,7 +259,8 @@ fn a_zhou_preview_update_follows_the_edit_and_a_full_update_restores_the_exact_i
     let (off, edit) = (relative_difference(&preview, &exact), relative_difference(&before, &exact));
     eprintln!("preview: relative difference to the exact image {off:.4}; the edit's own change {edit:.4}");
     assert!(preview != exact, "the preview lattice is coarser");
-    assert!(off < 0.2 * edit, "preview off by {off}, the edit changed the image by {edit}");
+    // Measured: 0.0052 against 0.31 (a ratio of 0.017); the bound leaves 3x.
+    assert!(off < 0.05 * edit, "preview off by {off}, the edit changed the image by {edit}");
     // Any later full update, here a camera move alone, lights on the full
     // lattice again: bit-equal to a fresh precomputation.
     let mut moved = edited.clone();
