@@ -13,7 +13,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const state = {
   label: '', scene: null, compare: null, integrators: [], reloads: 0,
   frames: [null, null], lastId: [0, 0], frameCount: [0, 0],
-  sentAt: {}, latencies: [], relativeMse: null, error: null, saved: null, lastVersion: 1, busy: false,
+  sentAt: {}, postAt: {}, latencies: [], relativeMse: null, error: null, saved: null, lastVersion: 1, busy: false,
 };
 window.nieblaView = state;
 // The benchmark edits through the same path as the controls: nieblaView.edit(interactive).
@@ -53,6 +53,7 @@ async function flush() {
       const reply = await response.json();
       if (response.ok) {
         state.sentAt[reply.version] = sent;
+        state.postAt[reply.version] = performance.now();
         state.lastVersion = reply.version;
         showError(null);
       } else {
@@ -149,8 +150,9 @@ function wireMouse(canvas) {
   canvas.addEventListener('contextmenu', (e) => e.preventDefault());
   canvas.addEventListener('pointerdown', (e) => { drag = { x: e.clientX, y: e.clientY, pan: e.button !== 0 || e.shiftKey }; canvas.setPointerCapture(e.pointerId); });
   canvas.addEventListener('pointermove', (e) => {
-    inspect(e);
-    if (!drag) return;
+    // The inspector follows the cursor when not dragging (its text change
+    // repaints the page: during a drag that is browser time taken from frames).
+    if (!drag) { inspect(e); return; }
     const scaleToImage = canvas.height / canvas.getBoundingClientRect().height;
     const dx = (e.clientX - drag.x) * scaleToImage, dy = (e.clientY - drag.y) * scaleToImage;
     drag.x = e.clientX;
@@ -219,17 +221,40 @@ function updateCompare() {
   $('bias-note').textContent = `A = ${a.integrator}: ${kind(a.integrator)}. B = ${b.integrator}: ${kind(b.integrator)}.`;
 }
 
+// One frame request of `slot` (long poll), started as soon as the previous
+// answer's headers name its id, so the next frame's request travels while
+// this one is decoded and drawn.
+function requestFrame(slot) {
+  const requested = performance.now();
+  return fetch(`api/frame?slot=${slot}&after=${state.lastId[slot]}`)
+    .then((response) => ({ response, requested, headersAt: performance.now() }));
+}
+
+// Milliseconds per stage from the server's X-Niebla-Timing header.
+function serverTiming(value) {
+  const stages = {};
+  for (const pair of (value ?? '').split(';')) {
+    const [name, ms] = pair.split('=');
+    if (name) stages[name] = Number(ms);
+  }
+  return stages;
+}
+
 async function pollSlot(slot) {
+  let next = null;
   for (;;) {
-    if (slot === 1 && !state.compare) { await sleep(150); continue; }
-    let response;
+    if (slot === 1 && !state.compare) { next = null; await sleep(150); continue; }
+    let reply;
     try {
-      response = await fetch(`api/frame?slot=${slot}&after=${state.lastId[slot]}`);
+      reply = await (next ?? requestFrame(slot));
     } catch (e) {
+      next = null;
       $('status').textContent = 'disconnected; retrying';
       await sleep(1000);
       continue;
     }
+    next = null;
+    const { response, headersAt } = reply;
     const reloads = Number(response.headers.get('X-Niebla-Reloads') ?? 0);
     if (reloads !== state.reloads) {
       state.reloads = reloads;
@@ -244,24 +269,38 @@ async function pollSlot(slot) {
     }
     if (!response.ok) { await sleep(1000); continue; }
     const h = (name) => response.headers.get(`X-Niebla-${name}`);
+    state.lastId[slot] = Number(h('Id'));
+    next = requestFrame(slot);
     const halves = new Uint16Array(await response.arrayBuffer());
+    const bodyAt = performance.now();
     const frame = {
       width: Number(h('Width')), height: Number(h('Height')), halves, spp: Number(h('Spp')),
       elapsed: Number(h('Elapsed')), sps: Number(h('Samples-Per-Second')), relErr: h('Relative-Error'),
       interactive: h('Interactive') === 'true', integrator: h('Integrator'), version: Number(h('Version')),
-      receivedAt: performance.now(),
+      receivedAt: bodyAt,
     };
-    state.lastId[slot] = Number(h('Id'));
     if (slot === 1 && !state.compare) continue;
-    if (slot === 0 && state.sentAt[frame.version] !== undefined) {
-      state.latencies.push({ version: frame.version, ms: frame.receivedAt - state.sentAt[frame.version], interactive: frame.interactive });
-      // Edits superseded before their first frame never get one.
-      for (const v of Object.keys(state.sentAt)) if (Number(v) <= frame.version) delete state.sentAt[v];
-    }
     state.frames[slot] = frame;
     state.frameCount[slot] += 1;
     display.upload(slot, frame.width, frame.height, halves);
+    const uploadedAt = performance.now();
     display.draw();
+    const drawnAt = performance.now();
+    if (slot === 0 && state.sentAt[frame.version] !== undefined) {
+      const sent = state.sentAt[frame.version];
+      const server = serverTiming(h('Timing'));
+      // Edit to drawn frame, and where it went: the POST until the server had
+      // it (network up), the server's stages, the way back until the page had
+      // the headers (network down), the body, the texture upload and the draw.
+      const timing = {
+        post: state.postAt[frame.version] - sent, server, headers: headersAt - sent,
+        body: bodyAt - headersAt, upload: uploadedAt - bodyAt, draw: drawnAt - uploadedAt,
+      };
+      timing.up = server.server !== undefined ? headersAt - sent - server.server : null;
+      state.latencies.push({ version: frame.version, ms: drawnAt - sent, interactive: frame.interactive, timing });
+      // Edits superseded before their first frame never get one.
+      for (const v of Object.keys(state.sentAt)) if (Number(v) <= frame.version) { delete state.sentAt[v]; delete state.postAt[v]; }
+    }
     if (slot === 0) $('status').textContent = status(frame);
     updateCompare();
   }

@@ -29,6 +29,54 @@ pub struct Frame {
     pub integrator: String,
     /// The image (linear RGB radiance), kept at full precision for saving.
     pub image: std::sync::Arc<Image>,
+    /// Where the time between the edit and this frame went on the server.
+    pub timing: FrameTiming,
+}
+
+/// The server's share of a frame's latency, in seconds per stage, for the
+/// `X-Niebla-Timing` header (the page adds its own stages; the benchmark
+/// prints both). The stages before `pass` are those of the job's first
+/// pass; later passes of the same job report only their own pass.
+#[derive(Clone, Debug)]
+pub struct FrameTiming {
+    /// When the edit reached the server (`None`: no edit, e.g. the initial scene).
+    pub edited_at: Option<std::time::Instant>,
+    /// Validating the edit (the scene parser) before it became the job.
+    pub validate: f64,
+    /// From the new job to the render slot taking it up (the slot was busy or asleep).
+    pub queue: f64,
+    /// Reading the scene JSON into a description (and the preview size).
+    pub parse: f64,
+    /// Scene rebuild and integrator update or precomputation.
+    pub prepare: f64,
+    /// Rendering the pass.
+    pub pass: f64,
+    /// Taking the mean image and the error estimate.
+    pub image: f64,
+    /// When the frame was published (the wait for the page's request starts).
+    pub published: std::time::Instant,
+}
+
+impl FrameTiming {
+    /// The header value: `stage=milliseconds` pairs separated by `;`, with
+    /// `wait` (published to taken by a request), `encode` (the half floats)
+    /// and `server` (edit arrival to the encoded reply, when known) added.
+    pub fn header(&self, wait: f64, encode: f64, server: Option<f64>) -> String {
+        let mut stages = vec![
+            ("validate", self.validate),
+            ("queue", self.queue),
+            ("parse", self.parse),
+            ("prepare", self.prepare),
+            ("pass", self.pass),
+            ("image", self.image),
+            ("wait", wait),
+            ("encode", encode),
+        ];
+        if let Some(server) = server {
+            stages.push(("server", server));
+        }
+        stages.iter().map(|(name, s)| format!("{name}={:.3}", s * 1e3)).collect::<Vec<_>>().join(";")
+    }
 }
 
 /// `image` as half floats: 6 bytes per pixel (R, G, B as binary16, little

@@ -141,14 +141,19 @@ async fn route(context: &Arc<Context>, request: Request) -> Reply {
             .unwrap_or_else(|e| error_reply(500, e.to_string()))
         }
         (&Method::POST, "api/scene" | "api/save") => {
+            let arrived = std::time::Instant::now();
             let body = match body_json(&parts.headers, body).await {
                 Ok(body) => body,
                 Err(reply) => return reply,
             };
             let save_request = route == "api/save";
-            tokio::task::spawn_blocking(
-                move || if save_request { save(&session, &body) } else { edit(&session, &body) },
-            )
+            tokio::task::spawn_blocking(move || {
+                if save_request {
+                    save(&session, &body)
+                } else {
+                    edit(&session, &body, arrived)
+                }
+            })
             .await
             .unwrap_or_else(|e| error_reply(500, e.to_string()))
         }
@@ -216,7 +221,12 @@ fn frame(session: &Session, query: &str) -> Reply {
             .with_header("X-Niebla-Event", "error")
             .with_header("X-Niebla-Reloads", &reloads),
         Event::Frame(f) => {
-            let mut reply = Reply::new(200, encode_half(&f.image))
+            let taken = std::time::Instant::now();
+            let wait = taken.duration_since(f.timing.published).as_secs_f64();
+            let bytes = encode_half(&f.image);
+            let encode = taken.elapsed().as_secs_f64();
+            let server = f.timing.edited_at.map(|t| t.elapsed().as_secs_f64());
+            let mut reply = Reply::new(200, bytes)
                 .with_header("Content-Type", "application/octet-stream")
                 .with_header("X-Niebla-Event", "frame")
                 .with_header("X-Niebla-Reloads", &reloads);
@@ -231,6 +241,7 @@ fn frame(session: &Session, query: &str) -> Reply {
                 ("Relative-Error", f.relative_error.map_or("".into(), |e| format!("{e:.6e}"))),
                 ("Interactive", f.interactive.to_string()),
                 ("Integrator", f.integrator.clone()),
+                ("Timing", f.timing.header(wait, encode, server)),
             ];
             for (name, value) in figures {
                 reply = reply.with_header(&format!("X-Niebla-{name}"), &value);
@@ -257,7 +268,7 @@ pub fn validate_scene(session: &Session, scene: &Value) -> Result<(), String> {
 /// bool, "preview_scale": n, "max_spp": n}`; absent fields keep their value.
 /// 422 with the parser's message when the scene (or the scene with the
 /// comparison integrator) does not validate.
-fn edit(session: &Session, body: &Value) -> Reply {
+fn edit(session: &Session, body: &Value, arrived: std::time::Instant) -> Reply {
     let Some(body) = body.as_object() else { return error_reply(400, "malformed message: expected a JSON object") };
     let current = session.job();
     let scene = body.get("scene").cloned().unwrap_or_else(|| (*current.scene).clone());
@@ -293,6 +304,8 @@ fn edit(session: &Session, body: &Value) -> Reply {
         job.interactive = interactive;
         job.preview_scale = preview_scale.map_or(job.preview_scale, |p| p as u32);
         job.max_spp = max_spp.map_or(job.max_spp, |m| m as u32);
+        job.edited_at = Some(arrived);
+        job.validate_seconds = arrived.elapsed().as_secs_f64();
     });
     json_reply(200, &json!({ "version": version }))
 }

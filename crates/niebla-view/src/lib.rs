@@ -258,7 +258,11 @@ fn watch(session: Arc<Session>, path: PathBuf) {
         stamp = now;
         match read_scene(Some(&path)) {
             Ok((_, scene)) => {
-                session.update_job(|job| job.scene = Arc::new(scene));
+                session.update_job(|job| {
+                    job.scene = Arc::new(scene);
+                    job.edited_at = None;
+                    job.validate_seconds = 0.0;
+                });
                 session.note_reload();
             }
             Err(e) => {

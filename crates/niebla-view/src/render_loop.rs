@@ -23,7 +23,7 @@ use niebla::render::{PreparedIntegrator, RenderError};
 use niebla::scene::{build_scene, parse_scene_str, rebuild_scene, BuiltScene, CameraDesc, SceneDesc};
 use serde_json::Value;
 
-use crate::frame::{relative_error_estimate, Frame};
+use crate::frame::{relative_error_estimate, Frame, FrameTiming};
 use crate::session::{Job, Session, SlotInput};
 
 /// What a slot keeps between jobs: the description it built last (camera
@@ -65,6 +65,18 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
     let mut done: Option<SlotInput> = None;
     let mut cache: Option<SlotCache> = None;
     let timing = std::env::var_os("NIEBLA_VIEW_TIMING").is_some();
+    // With `--threads`, one pool for the slot's whole life: building one per
+    // pass (as `RenderOptions::threads` does) costs a thread start-up per frame.
+    let pool = match session.threads {
+        Some(threads) => match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+            Ok(pool) => Some(pool),
+            Err(e) => {
+                slot_error(&session, index, format!("cannot start {threads} render threads: {e}"));
+                return;
+            }
+        },
+        None => None,
+    };
     while let Some(job) = session.wait_job(seen) {
         seen = job.version;
         let slot = &session.slots[index];
@@ -79,7 +91,11 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
         done = None;
         let Some(scene) = &input.scene else { continue };
         slot.rendering_interactive.store(job.interactive, Ordering::SeqCst);
-        let result = render_job(&session, index, &job, scene, &mut cache, timing);
+        let mut run = || render_job(&session, index, &job, scene, &mut cache, timing);
+        let result = match &pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        };
         slot.rendering_interactive.store(false, Ordering::SeqCst);
         match result {
             Ok(()) if !slot.cancel.load(Ordering::SeqCst) => done = Some(input),
@@ -87,6 +103,11 @@ pub fn run_slot(session: Arc<Session>, index: usize) {
             Err(message) => slot.publish_error(job.version, message),
         }
     }
+}
+
+/// Report `message` as slot `index`'s error for the current job.
+fn slot_error(session: &Session, index: usize, message: String) {
+    session.slots[index].publish_error(session.job().version, message);
 }
 
 /// The scene of `desc` ready to render: `cache`'s scene brought up to
@@ -98,6 +119,7 @@ fn prepare(
     desc: SceneDesc,
     cache: &mut Option<SlotCache>,
     cancel: &std::sync::atomic::AtomicBool,
+    interactive: bool,
 ) -> Result<(&'static str, &'static str), String> {
     let rebuilt = cache
         .as_ref()
@@ -121,12 +143,19 @@ fn prepare(
     let old = cache.take().and_then(|c| c.prepared);
     let (prepared, kept) = match (old, edit) {
         (Some((old_settings, mut prepared)), Some(edit)) if old_settings == settings => {
-            if !prepared.update_cancellable(&built.scene, &settings, &edit, Some(cancel)) {
+            // A drag frame may take `zhou`'s coarser preview lighting; the
+            // next non-interactive job lights on the full lattice again.
+            let done = match interactive {
+                true => prepared.update_preview_cancellable(&built.scene, &settings, &edit, Some(cancel)),
+                false => prepared.update_cancellable(&built.scene, &settings, &edit, Some(cancel)),
+            };
+            if !done {
                 // A newer edit stopped it: drop the half-updated integrator.
                 *cache = Some(SlotCache { desc, built, prepared: None });
                 return Ok((how, "cancelled"));
             }
-            (prepared, "updated")
+            let kept = if prepared.is_preview() { "updated (preview)" } else { "updated" };
+            (prepared, kept)
         }
         _ => {
             if cancel.load(Ordering::SeqCst) {
@@ -159,6 +188,7 @@ fn render_job(
     timing: bool,
 ) -> Result<(), String> {
     let start = Instant::now();
+    let queue = job.edited_at.map_or(0.0, |t| start.duration_since(t).as_secs_f64() - job.validate_seconds);
     let text = serde_json::to_string(scene).map_err(|e| e.to_string())?;
     let mut desc = parse_scene_str(&text, &session.label).map_err(|e| e.to_string())?;
     if job.interactive {
@@ -169,7 +199,7 @@ fn render_job(
     }
     let parsed = start.elapsed();
     let slot = &session.slots[index];
-    let (how, kept) = prepare(session, desc, cache, &slot.cancel)?;
+    let (how, kept) = prepare(session, desc, cache, &slot.cancel, job.interactive)?;
     let prepared_at = start.elapsed();
     let Some(SlotCache { built, prepared: Some((_, prepared)), .. }) = cache.as_ref() else {
         return Ok(()); // cancelled before the precomputation
@@ -178,7 +208,7 @@ fn render_job(
     let world = &built.scene;
     let budget = Budget::Samples(if job.interactive { 1 } else { job.max_spp.max(1) });
     let options = ProgressiveOptions {
-        threads: session.threads,
+        threads: None, // the slot's pool (`run_slot`) or the global one
         sampler: settings.sampler,
         cancel: Some(&slot.cancel),
         ..ProgressiveOptions::new(&settings.integrator, settings.seed, budget)
@@ -187,9 +217,11 @@ fn render_job(
     let mut previous: Option<Image> = None;
     let mut first = true;
     let accumulator = Accumulator::new(width, height);
+    let mut pass_start = Instant::now();
     let result = resume_progressive_sums_prepared(world, prepared, &options, accumulator, |acc, info| {
+        let pass = pass_start.elapsed().as_secs_f64();
+        let image_start = Instant::now();
         if timing && first {
-            first = false;
             eprintln!(
                 "niebla view: slot {index} version {} ({}x{}{}): parse {:.1} ms, scene {how} + integrator {kept} \
                  {:.1} ms, first pass {:.1} ms",
@@ -206,6 +238,18 @@ fn render_job(
         let relative_error = previous.as_ref().and_then(|p| relative_error_estimate(p, &image));
         let elapsed = start.elapsed().as_secs_f64();
         let samples = acc.spp as f64 * width as f64 * height as f64;
+        let stage = |s: f64| if first { s } else { 0.0 };
+        let timing = FrameTiming {
+            edited_at: job.edited_at.filter(|_| first),
+            validate: stage(job.validate_seconds),
+            queue: stage(queue),
+            parse: stage(parsed.as_secs_f64()),
+            prepare: stage((prepared_at - parsed).as_secs_f64()),
+            pass,
+            image: image_start.elapsed().as_secs_f64(),
+            published: Instant::now(),
+        };
+        first = false;
         slot.publish_frame(Frame {
             id: 0,
             version: job.version,
@@ -218,8 +262,10 @@ fn render_job(
             interactive: job.interactive,
             integrator: settings.integrator.name().to_string(),
             image: Arc::new(image.clone()),
+            timing,
         });
         previous = Some(image);
+        pass_start = Instant::now();
         !slot.cancel.load(Ordering::SeqCst)
     });
     match result {

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
@@ -28,6 +28,11 @@ pub struct Job {
     pub preview_scale: u32,
     /// Stop refining after this many samples per pixel.
     pub max_spp: u32,
+    /// When the edit that made this job arrived at the server (`None`: the
+    /// initial scene or a reload from disk): where a frame's latency starts.
+    pub edited_at: Option<Instant>,
+    /// Seconds the server spent validating that edit.
+    pub validate_seconds: f64,
 }
 
 /// Everything that decides what one slot renders (two jobs with equal
@@ -178,6 +183,8 @@ impl Session {
             interactive: false,
             preview_scale: 2,
             max_spp: 1 << 16,
+            edited_at: None,
+            validate_seconds: 0.0,
         };
         Session {
             scene_path,

@@ -367,7 +367,8 @@ const CLOUD: &str = r#"{
 fn frames_after_camera_and_medium_edits_equal_a_render_of_the_edited_scene() {
     for integrator in [
         json!({"type": "hegeman", "resolution": 8}),
-        json!({"type": "zhou", "resolution": 8, "rbf_count": 12, "fit_iterations": 4, "cache": false}),
+        // Resolution 16: interactive medium edits light a preview lattice of 8.
+        json!({"type": "zhou", "resolution": 16, "rbf_count": 12, "fit_iterations": 4, "cache": false}),
         json!({"type": "volpath", "max_depth": 16}),
     ] {
         let mut scene: Value = serde_json::from_str(CLOUD).unwrap();
@@ -383,9 +384,17 @@ fn frames_after_camera_and_medium_edits_equal_a_render_of_the_edited_scene() {
                 viewer.frame_with_spp(1, reply["version"].as_u64().unwrap());
             }
         }
+        // A slider drag of the medium (interactive frames: zhou's preview
+        // lighting), then the same scene as a finished edit: the frame must
+        // be the full precomputation's.
         scene["media"]["cloud"]["scale"] = json!(1.6);
         scene["media"]["cloud"]["albedo"] = json!([0.8, 0.85, 0.95]);
         scene["media"]["cloud"]["phase"]["g"] = json!(-0.2);
+        let (status, reply) = viewer.post("api/scene", &json!({ "scene": scene, "interactive": true }));
+        assert_eq!(status, 200, "{reply}");
+        let (headers, _) = viewer.frame_with_spp(1, reply["version"].as_u64().unwrap());
+        let timing = header(&headers, "x-niebla-timing");
+        assert!(timing.contains("pass=") && timing.contains("server="), "{timing}");
         let (status, reply) = viewer.post("api/scene", &json!({ "scene": scene, "interactive": false, "max_spp": 4 }));
         assert_eq!(status, 200, "{reply}");
         let (headers, body) = viewer.frame_with_spp(4, reply["version"].as_u64().unwrap());

@@ -433,12 +433,52 @@ impl PreparedIntegrator {
         edit: &crate::scene::SceneEdit,
         cancel: Option<&AtomicBool>,
     ) -> bool {
+        self.update_with(scene, settings, edit, false, cancel)
+    }
+
+    /// [`Self::update_cancellable`] for an interactive (drag) frame: `zhou`
+    /// lights the edited media on its coarser preview lattice
+    /// ([`ZhouIntegrator::update_media_preview`]), so the image approximates
+    /// that of a new precomputation; the next [`Self::update_cancellable`]
+    /// (any edit, a camera move included) lights them on the full lattice
+    /// again. The other integrators update as in [`Self::update`].
+    pub fn update_preview_cancellable(
+        &mut self,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        edit: &crate::scene::SceneEdit,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
+        self.update_with(scene, settings, edit, true, cancel)
+    }
+
+    /// True when a preview update ([`Self::update_preview_cancellable`])
+    /// left an approximate precomputation (renders then differ from those of
+    /// `PreparedIntegrator::new`).
+    pub fn is_preview(&self) -> bool {
+        matches!(self, PreparedIntegrator::Zhou(z) if z.is_preview())
+    }
+
+    fn update_with(
+        &mut self,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+        edit: &crate::scene::SceneEdit,
+        preview: bool,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         match self {
             PreparedIntegrator::Zhou(z) => {
                 if edit.any_light() {
-                    return z.update_lights(scene, &edit.media, cancel);
-                } else if edit.any_medium() {
-                    return z.update_media(scene, &edit.media, cancel);
+                    return match preview {
+                        true => z.update_lights_preview(scene, &edit.media, cancel),
+                        false => z.update_lights(scene, &edit.media, cancel),
+                    };
+                } else if edit.any_medium() || (!preview && z.is_preview()) {
+                    return match preview {
+                        true => z.update_media_preview(scene, &edit.media, cancel),
+                        false => z.update_media(scene, &edit.media, cancel),
+                    };
                 } else if edit.camera {
                     z.set_view(scene.camera.position);
                 }

@@ -192,7 +192,15 @@ struct GridModel {
     /// RBFs in world units.
     rbfs: Vec<Rbf>,
     fit: FitReport,
+    /// Lit on the coarser preview lattice ([`ZhouIntegrator::update_media_preview`]).
+    preview: bool,
 }
+
+/// A preview relight ([`ZhouIntegrator::update_media_preview`]) lights a
+/// lattice with `resolution / PREVIEW_DIVISOR` cells along the longest
+/// side (at least 8): about `PREVIEW_DIVISOR^3` times fewer nodes to
+/// interpolate the source to and to solve the diffusion on.
+pub const PREVIEW_DIVISOR: usize = 2;
 
 /// The integrator with its precomputation.
 #[derive(Clone, Debug)]
@@ -288,12 +296,42 @@ impl ZhouIntegrator {
     /// [`ZhouIntegrator::new`], so the result renders identically to a new
     /// precomputation. `false` when `cancel` stopped it: the integrator is
     /// then half updated and must be dropped.
+    /// A medium lit on the preview lattice ([`Self::update_media_preview`])
+    /// is lit again on the full one here even when not flagged in `changed`.
     pub fn update_media(&mut self, scene: &Scene, changed: &[bool], cancel: Option<&AtomicBool>) -> bool {
+        self.update_media_with(scene, changed, false, cancel)
+    }
+
+    /// [`Self::update_media`] for an interactive frame: the lighting and
+    /// diffusion of the flagged media run on a lattice `PREVIEW_DIVISOR`
+    /// times coarser along each axis, built over the same box from the
+    /// same RBFs (world units, so no new fit), and the view pass on it. The
+    /// image approximates the full precomputation's (the view rays still
+    /// march the real density); [`Self::is_preview`] is then true until a
+    /// full update ([`Self::update_media`] or [`Self::update_lights`])
+    /// lights those media on the full lattice again, which renders
+    /// identically to a new precomputation.
+    pub fn update_media_preview(&mut self, scene: &Scene, changed: &[bool], cancel: Option<&AtomicBool>) -> bool {
+        self.update_media_with(scene, changed, true, cancel)
+    }
+
+    /// True when some medium is lit on the preview lattice.
+    pub fn is_preview(&self) -> bool {
+        self.models.iter().flatten().any(|m| m.preview)
+    }
+
+    fn update_media_with(
+        &mut self,
+        scene: &Scene,
+        changed: &[bool],
+        preview: bool,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         let start = Instant::now();
         if let Some(local) = &mut self.local {
             local.update_media(scene, changed);
         }
-        let done = self.relight(scene, |index| changed.get(index) == Some(&true), cancel);
+        let done = self.relight(scene, |index| changed.get(index) == Some(&true), preview, cancel);
         self.lighting_seconds = start.elapsed().as_secs_f64();
         done
     }
@@ -309,6 +347,27 @@ impl ZhouIntegrator {
     /// `cancel` stopped it: the integrator is then half updated and must be
     /// dropped.
     pub fn update_lights(&mut self, scene: &Scene, changed_media: &[bool], cancel: Option<&AtomicBool>) -> bool {
+        self.update_lights_with(scene, changed_media, false, cancel)
+    }
+
+    /// [`Self::update_lights`] for an interactive frame: every grid medium
+    /// is lit on the preview lattice, as in [`Self::update_media_preview`].
+    pub fn update_lights_preview(
+        &mut self,
+        scene: &Scene,
+        changed_media: &[bool],
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
+        self.update_lights_with(scene, changed_media, true, cancel)
+    }
+
+    fn update_lights_with(
+        &mut self,
+        scene: &Scene,
+        changed_media: &[bool],
+        preview: bool,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         let start = Instant::now();
         self.lights = ModelLight::from_scene(&scene.lights);
         if self.settings.local_lights == LocalLights::Hegeman {
@@ -318,23 +377,45 @@ impl ZhouIntegrator {
             local.update_media(scene, changed_media);
             local.update_lights(scene);
         }
-        let done = self.relight(scene, |_| true, cancel);
+        let done = self.relight(scene, |_| true, preview, cancel);
         self.lighting_seconds = start.elapsed().as_secs_f64();
         done
     }
 
     /// Run the lighting, diffusion and view pass again for the grid media
-    /// whose index `redo` accepts, keeping their lattices and fits; `false`
-    /// when `cancel` stopped it (some models are then left empty).
-    fn relight(&mut self, scene: &Scene, redo: impl Fn(usize) -> bool, cancel: Option<&AtomicBool>) -> bool {
+    /// whose index `redo` accepts (and, unless `preview`, for those lit on
+    /// the preview lattice), keeping their fits: on the full lattice, or on
+    /// the preview lattice when `preview` (`D~` evaluated on it from the
+    /// same RBFs); `false` when `cancel` stopped it (some models are then
+    /// left empty).
+    fn relight(
+        &mut self,
+        scene: &Scene,
+        redo: impl Fn(usize) -> bool,
+        preview: bool,
+        cancel: Option<&AtomicBool>,
+    ) -> bool {
         let order = self.settings.sh_order as usize;
+        let full = self.settings.resolution.max(4) as usize;
+        let resolution = if preview { (full / PREVIEW_DIVISOR).max(8).min(full) } else { full };
         for (index, (model, medium)) in self.models.iter_mut().zip(&scene.media).enumerate() {
-            let (Some(model), Medium::Grid(g), true) = (model.as_mut(), medium, redo(index)) else {
+            let (Some(model), Medium::Grid(g)) = (model.as_mut(), medium) else {
                 continue;
             };
-            let lattice = model.lattice;
+            if !(redo(index) || (model.preview && !preview)) {
+                // Kept lighting; the camera may have moved.
+                model.set_view(scene.camera.position, order);
+                continue;
+            }
+            let (lo, hi) = g.world_bounds;
+            // The lattice `decompose` makes (full), or the coarser preview one.
+            let lattice = Lattice::over_box(lo, hi, resolution);
             let rbfs = std::mem::take(&mut model.rbfs);
-            let smooth = std::mem::take(&mut model.smooth);
+            let smooth = if lattice == model.lattice {
+                std::mem::take(&mut model.smooth)
+            } else {
+                rbf::evaluate_at_nodes(&lattice, &rbfs)
+            };
             let fit = std::mem::replace(
                 &mut model.fit,
                 FitReport { relative_error: 0.0, history: Vec::new(), teleports_kept: 0 },
@@ -344,6 +425,7 @@ impl ZhouIntegrator {
                 return false;
             };
             *model = relit;
+            model.preview = resolution != full;
             model.set_view(scene.camera.position, order);
         }
         self.fit_seconds = 0.0;
@@ -657,6 +739,7 @@ fn light_model(
         step,
         rbfs,
         fit,
+        preview: false,
     })
 }
 
