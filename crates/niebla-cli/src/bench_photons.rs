@@ -59,6 +59,15 @@ pub struct PhotonBenchArgs {
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
+    /// Seed of the sweep renders (the `volpath` reference keeps its own).
+    #[arg(long, default_value_t = 7)]
+    pub seed: u64,
+    /// Instead of the sweep: this many independent renders of `--max-spp`
+    /// samples (passes) per integrator, seeds `--seed`, `--seed + 1`, ...;
+    /// prints the mean over the renders of the image mean / reference mean
+    /// with its standard error (from the spread of the renders).
+    #[arg(long, default_value_t = 0)]
+    pub repeats: u32,
     /// Worker threads of the renders (the tracing figure always uses all cores).
     #[command(flatten)]
     pub threads: ThreadsFlag,
@@ -183,6 +192,43 @@ fn ppb_settings(scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -
     }
 }
 
+/// `--repeats`: independent renders of `--max-spp` samples with seeds
+/// `--seed + k`; the mean of their image-mean / reference-mean ratios with
+/// its standard error, the median, the smallest and largest ratio and the
+/// mean relative MSE, as a summary line.
+fn repeated_means(
+    scene: &Scene,
+    name: &str,
+    settings: &IntegratorSettings,
+    reference_mean: f64,
+    args: &PhotonBenchArgs,
+) -> Result<String, CliError> {
+    let n = args.repeats as usize;
+    let mut ratios = Vec::with_capacity(n);
+    let start = Instant::now();
+    for k in 0..args.repeats as u64 {
+        let (image, _) = timed(scene, settings, args.max_spp, args.seed.wrapping_add(k), args.threads.threads)?;
+        ratios.push(image.mean().average() as f64 / reference_mean);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let mean = ratios.iter().sum::<f64>() / n as f64;
+    let var = if n > 1 { ratios.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64 } else { 0.0 };
+    let se = (var / n as f64).sqrt();
+    let mut sorted = ratios.clone();
+    sorted.sort_by(f64::total_cmp);
+    let line = format!(
+        "{name:<12} {n} renders x {} spp ({seconds:.1} s): mean/ref {mean:.4} +- {se:.4} (SE), median {:.4}, \
+         min {:.4}, max {:.4}, std {:.4}",
+        args.max_spp,
+        sorted[n / 2],
+        sorted[0],
+        sorted[n - 1],
+        var.sqrt()
+    );
+    println!("{line}");
+    Ok(line)
+}
+
 /// Time of `photon`, `ppm` (point and beam queries), `ppb` and `volpath` to the
 /// target error. Each sweep renders at 1, 2, 4, ... spp (passes), each a
 /// separate timed render with seed 7, until the error is below the target or
@@ -210,10 +256,14 @@ fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &Phot
         if !args.only.is_empty() && !args.only.iter().any(|o| o == name) {
             continue;
         }
+        if args.repeats > 0 {
+            summary.push(repeated_means(scene, name, &settings, reference_mean, args)?);
+            continue;
+        }
         let mut points: Vec<(f64, f64)> = Vec::new();
         let mut spp = 1u32;
         loop {
-            let (image, seconds) = timed(scene, &settings, spp, 7, args.threads.threads)?;
+            let (image, seconds) = timed(scene, &settings, spp, args.seed, args.threads.threads)?;
             let measured = image.relative_mse(&reference);
             let error = (measured - noise).max(measured * 1e-3);
             let mean_ratio = image.mean().average() as f64 / reference_mean;

@@ -560,6 +560,14 @@ const RENDER_AND_INTEGRATOR: &[ErrorCase] = &[
         message: "unknown field",
         also: &[],
     },
+    ErrorCase {
+        name: "ppb tube_sin out of range",
+        from: SINGLE,
+        to: r#"{"type": "ppb", "tube_sin": 1.5}"#,
+        path: "render.integrator.tube_sin",
+        message: "must be in [0, 1], got 1.5",
+        also: &[],
+    },
 ];
 
 #[test]
@@ -574,6 +582,18 @@ fn unknown_integrator_type_lists_every_integrator() {
     for name in niebla::integrator::registry::NAMES {
         assert!(err.message.contains(name), "{err} does not list {name}");
     }
+}
+
+#[test]
+fn ppb_tube_sin_parses() {
+    let text = edit(SINGLE, r#"{"type": "ppb", "tube_sin": 0.1}"#);
+    let desc = parse_scene_str(&text, FILE).unwrap();
+    let IntegratorSettings::Ppb(ppb) = desc.render.integrator.settings else { panic!("not ppb") };
+    assert_eq!(ppb.tube_sin, 0.1);
+    let text = edit(SINGLE, r#"{"type": "ppb"}"#);
+    let desc = parse_scene_str(&text, FILE).unwrap();
+    let IntegratorSettings::Ppb(ppb) = desc.render.integrator.settings else { panic!("not ppb") };
+    assert_eq!(ppb.tube_sin, niebla::integrator::photon::PpbSettings::DEFAULT_TUBE_SIN);
 }
 
 #[test]

@@ -95,20 +95,94 @@ struct Node {
 /// Most pieces in a leaf.
 const LEAF: usize = 4;
 
-/// One crossing of a camera ray with a beam, handed to
+/// One crossing of a camera ray with a beam piece, handed to
 /// [`BeamMap::for_each_crossing`].
 #[derive(Clone, Copy, Debug)]
-pub struct Crossing<'a> {
-    /// The beam.
-    pub beam: &'a Beam,
-    /// Ray parameter of the point of the camera ray closest to the beam's line.
-    pub t: f32,
-    /// Distance along the beam of its point closest to the camera ray's line.
-    pub s: f32,
-    /// Distance between the two points (`< radius`).
-    pub u: f32,
-    /// `sin` of the angle between the ray and the beam.
-    pub sin_theta: f32,
+pub enum Crossing<'a> {
+    /// The lines meet at an angle with `sin theta >= min_sin`: the points
+    /// of closest approach (the beam x beam 1D estimate's query).
+    Line {
+        /// The beam.
+        beam: &'a Beam,
+        /// Ray parameter of the point of the camera ray closest to the beam's line.
+        t: f32,
+        /// Distance along the beam of its point closest to the camera ray's line.
+        s: f32,
+        /// Distance between the two points (`< radius`).
+        u: f32,
+        /// `sin` of the angle between the ray and the beam.
+        sin_theta: f32,
+    },
+    /// The lines are nearly parallel (`sin theta < min_sin`): the interval
+    /// `[s_a, s_b)` of the piece whose points lie within the radius of the
+    /// camera ray's line (distance measured perpendicular to the ray) and
+    /// project onto the ray inside `[0, t_end)` (the beam x beam 2D
+    /// estimate's query, a tube of the radius around the camera ray).
+    Tube {
+        /// The beam.
+        beam: &'a Beam,
+        /// Start of the interval, distance along the beam.
+        s_a: f32,
+        /// End of the interval (`> s_a`), distance along the beam.
+        s_b: f32,
+    },
+}
+
+impl Crossing<'_> {
+    /// The beam crossed.
+    pub fn beam(&self) -> &Beam {
+        match self {
+            Crossing::Line { beam, .. } | Crossing::Tube { beam, .. } => beam,
+        }
+    }
+}
+
+/// The interval of beam parameters `s` in `[s0, s1)` whose points
+/// `o_b + s d_b` lie within `r` of the line `o + t d` (unit `d`; the
+/// distance measured perpendicular to that line) and project onto it at
+/// `t` in `[0, t_end)`; `None` when it is empty. Solved in `f64` from
+/// cross products (`|p + s q|^2 < r^2` with `p = (o_b - o) x d`,
+/// `q = d_b x d`), stable for parallel lines.
+pub fn tube_interval(o: Vec3, d: Vec3, beam: &Beam, s0: f32, s1: f32, t_end: f32, r: f32) -> Option<(f32, f32)> {
+    let w = beam.o - o;
+    let p = w.cross(d);
+    let q = beam.d.cross(d);
+    let (px, py, pz) = (p.x as f64, p.y as f64, p.z as f64);
+    let (qx, qy, qz) = (q.x as f64, q.y as f64, q.z as f64);
+    let a = qx * qx + qy * qy + qz * qz;
+    let b = px * qx + py * qy + pz * qz;
+    let c = px * px + py * py + pz * pz - (r as f64) * (r as f64);
+    let (mut lo, mut hi) = (s0 as f64, s1 as f64);
+    // Distance: a s^2 + 2 b s + c < 0.
+    if a > 0.0 {
+        let disc = b * b - a * c;
+        if disc <= 0.0 {
+            return None;
+        }
+        let root = disc.sqrt();
+        lo = lo.max((-b - root) / a);
+        hi = hi.min((-b + root) / a);
+    } else if c >= 0.0 {
+        return None;
+    }
+    // Projection: t(s) = w.d + s (d_b.d) in [0, t_end).
+    let e0 = w.dot(d) as f64;
+    let k = beam.d.dot(d) as f64;
+    let t_end = t_end as f64;
+    if k > 0.0 {
+        lo = lo.max(-e0 / k);
+        hi = hi.min((t_end - e0) / k);
+    } else if k < 0.0 {
+        lo = lo.max((t_end - e0) / k);
+        hi = hi.min(-e0 / k);
+    } else if !(e0 >= 0.0 && e0 < t_end) {
+        return None;
+    }
+    if hi > lo {
+        Some((lo as f32, (hi as f32).max(lo as f32)))
+    } else {
+        None
+    }
 }
 
 /// The beams of one pass with a BVH over their pieces, for one query radius.
@@ -176,17 +250,22 @@ impl BeamMap {
         self.radius
     }
 
-    /// Call `f` for every beam piece whose line passes within the radius of
-    /// the segment `[0, t_end)` of `ray` (unit direction), at the points of
-    /// closest approach of the two lines: `0 <= t < t_end`, the beam
-    /// parameter inside the piece, distance `< radius`. Parallel pairs
-    /// (`sin < 1e-4`) are skipped. Each beam's crossing is reported once.
-    pub fn for_each_crossing(&self, ray: &Ray, t_end: f32, mut f: impl FnMut(Crossing)) {
+    /// Call `f` for every beam piece near the segment `[0, t_end)` of
+    /// `ray` (unit direction). Where `sin theta >= min_sin` (the angle
+    /// between ray and beam) a [`Crossing::Line`]: the lines pass within
+    /// the radius at their points of closest approach, `0 <= t < t_end`,
+    /// the beam parameter inside the piece (each beam reported at most
+    /// once). Where `sin theta < min_sin` a [`Crossing::Tube`]: the
+    /// non-empty interval of the piece inside the tube of the radius
+    /// around the ray (see [`tube_interval`]; a long beam may report one
+    /// interval per piece, they do not overlap).
+    pub fn for_each_crossing(&self, ray: &Ray, t_end: f32, min_sin: f32, mut f: impl FnMut(Crossing)) {
         if self.nodes.is_empty() {
             return;
         }
         let inv = Vec3::ONE / ray.d;
         let r = self.radius;
+        let min_sin2 = min_sin * min_sin;
         let mut stack = [0u32; 64];
         let mut top = 1usize;
         while top > 0 {
@@ -198,12 +277,15 @@ impl BeamMap {
             if node.count > 0 {
                 for piece in &self.pieces[node.first as usize..(node.first + node.count) as usize] {
                     let beam = &self.beams[piece.beam as usize];
-                    let w0 = ray.o - beam.o;
-                    let b = ray.d.dot(beam.d);
-                    let sin2 = 1.0 - b * b;
-                    if !(sin2 > 1e-8) {
+                    let sin2 = ray.d.cross(beam.d).length_squared();
+                    if !(sin2 >= min_sin2 && sin2 > 0.0) {
+                        if let Some((s_a, s_b)) = tube_interval(ray.o, ray.d, beam, piece.s0, piece.s1, t_end, r) {
+                            f(Crossing::Tube { beam, s_a, s_b });
+                        }
                         continue;
                     }
+                    let w0 = ray.o - beam.o;
+                    let b = ray.d.dot(beam.d);
                     let d = ray.d.dot(w0);
                     let e = beam.d.dot(w0);
                     let t = (b * e - d) / sin2;
@@ -213,7 +295,7 @@ impl BeamMap {
                     }
                     let u = (w0 + ray.d * t - beam.d * s).length();
                     if u < r {
-                        f(Crossing { beam, t, s, u, sin_theta: sin2.sqrt() });
+                        f(Crossing::Line { beam, t, s, u, sin_theta: sin2.sqrt() });
                     }
                 }
             } else {
@@ -345,10 +427,11 @@ mod tests {
             let t_end = rng.next_1d() * 6.0;
             let expected = brute(&beams, &ray, t_end, r);
             let mut found = Vec::new();
-            map.for_each_crossing(&ray, t_end, |c| {
-                let index = (c.beam as *const Beam as usize - map.beams().as_ptr() as usize) / size_of::<Beam>();
-                assert!(c.u < r && c.sin_theta > 0.0);
-                found.push((index as u32, c.t));
+            map.for_each_crossing(&ray, t_end, 0.0, |c| {
+                let Crossing::Line { beam, t, u, sin_theta, .. } = c else { panic!("no tube crossings at min_sin 0") };
+                let index = (beam as *const Beam as usize - map.beams().as_ptr() as usize) / size_of::<Beam>();
+                assert!(u < r && sin_theta > 0.0);
+                found.push((index as u32, t));
             });
             found.sort_by_key(|a| a.0);
             assert_eq!(found.len(), expected.len());
@@ -365,6 +448,76 @@ mod tests {
     fn empty_map_reports_nothing() {
         let map = BeamMap::build(Vec::new(), 0.1, 1.0);
         assert!(map.is_empty());
-        map.for_each_crossing(&Ray::new(Vec3::ZERO, Vec3::X), 10.0, |_| panic!("no beams"));
+        map.for_each_crossing(&Ray::new(Vec3::ZERO, Vec3::X), 10.0, 1.0, |_| panic!("no beams"));
+    }
+
+    /// The length of the set of beam points inside the tube, by brute force
+    /// (midpoint rule on a fine grid of the piece).
+    fn brute_tube(ray: &Ray, beam: &Beam, s0: f32, s1: f32, t_end: f32, r: f32) -> f64 {
+        let n = 200_000;
+        let h = (s1 - s0) as f64 / n as f64;
+        let mut inside = 0usize;
+        for i in 0..n {
+            let s = s0 as f64 + (i as f64 + 0.5) * h;
+            let y = beam.o + beam.d * s as f32 - ray.o;
+            let t = y.dot(ray.d);
+            let dist2 = (y - ray.d * t).length_squared();
+            if t >= 0.0 && t < t_end && dist2 < r * r {
+                inside += 1;
+            }
+        }
+        inside as f64 * h
+    }
+
+    #[test]
+    fn tube_intervals_match_brute_force_lengths() {
+        let mut rng = PixelSampler::from_key(17);
+        let r = 0.1;
+        let mut nonempty = 0;
+        for k in 0..300 {
+            let o = Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d()) * 0.4 - 0.2;
+            let d = sample_uniform_sphere(rng.next_2d());
+            let ray = Ray::new(o, d);
+            // Beams near the ray: parallel, antiparallel, slightly tilted, exactly parallel.
+            let tilt = [0.0, 0.01, 0.1, 0.5][k % 4];
+            let sign = if k % 8 < 4 { 1.0 } else { -1.0 };
+            let bd = (d * sign + sample_uniform_sphere(rng.next_2d()) * tilt).normalize();
+            let offset = Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d()) * 0.2 - 0.1;
+            let beam = Beam {
+                o: o + d * (rng.next_1d() * 2.0 - 0.5) + offset,
+                d: bd,
+                length: rng.next_1d() * 2.0,
+                power: Rgb::ONE,
+                medium: 0,
+                hero: 0,
+            };
+            let t_end = rng.next_1d() * 2.0;
+            let expected = brute_tube(&ray, &beam, 0.0, beam.length, t_end, r);
+            let got =
+                tube_interval(ray.o, ray.d, &beam, 0.0, beam.length, t_end, r).map_or(0.0, |(a, b)| (b - a) as f64);
+            assert!((got - expected).abs() < 1e-4 + 1e-4 * expected, "case {k}: {got} vs {expected}");
+            if got > 0.0 {
+                nonempty += 1;
+            }
+        }
+        assert!(nonempty > 50, "too few non-empty intervals: {nonempty}");
+    }
+
+    #[test]
+    fn near_parallel_beams_are_reported_as_tubes_once_per_piece() {
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        // A beam along the ray at distance 0.05, from x = 1 to 3, cut into pieces of 0.5.
+        let beam = Beam { o: Vec3::new(1.0, 0.05, 0.0), d: Vec3::X, length: 2.0, power: Rgb::ONE, medium: 0, hero: 0 };
+        let map = BeamMap::build(vec![beam], 0.1, 0.5);
+        let mut total = 0.0;
+        let mut count = 0;
+        map.for_each_crossing(&ray, 2.5, 0.1, |c| {
+            let Crossing::Tube { s_a, s_b, .. } = c else { panic!("parallel beams are tubes") };
+            total += s_b - s_a;
+            count += 1;
+        });
+        // Inside the tube from x = 1 to the ray's end at 2.5.
+        assert_eq!(count, 3);
+        assert!((total - 1.5).abs() < 1e-5, "{total}");
     }
 }

@@ -21,6 +21,31 @@
 //! first diffuse surface: direct light by shadow rays plus the surface
 //! photon map, as `ppm` does.
 //!
+//! **Near-parallel crossings: the tube estimate.** The weight
+//! `1 / (2 r sin theta)` is unbounded where a beam runs nearly parallel to
+//! the camera ray: such crossings are rare but large, so the per-pass image
+//! is heavy tailed (a few passes average low, rare ones far high). For
+//! crossings with `sin theta < tube_sin` ([`PpbSettings::tube_sin`]) the
+//! beam x beam 2D estimate of the same paper is used instead, with the 2D
+//! kernel `1 / (pi r^2)` across the camera ray: the beam's points within
+//! `r` of the camera ray's line (distance perpendicular to the ray) that
+//! project onto `[0, t_end)` form an interval `[s_a, s_b)` of the beam
+//! ([`super::beams::tube_interval`]); with one point `s` uniform in it and
+//! `t` its projection on the ray,
+//!
+//! `L_b = sigma_s(x_t) Phi_b w_b(s) T_c(t) f(wo, -d_b) (s_b - s_a) / (pi r^2)`,
+//!
+//! an unbiased estimate of `int_{s_a}^{s_b} sigma_s Phi w T_c f / (pi r^2) ds`.
+//! Both estimates blur the same radiance and converge to it as `r -> 0`;
+//! averaged over the offset `u` between the lines (uniform in `(-r, r)`),
+//! the tube's chord `2 sqrt(r^2 - u^2) / sin theta` over `pi r^2` has the
+//! mean `1 / (2 r sin theta)` of the 1D weight. But the tube's weight is
+//! bounded by the length of beam inside the tube (at most the beam's or
+//! the ray's length), where the 1D weight grows without bound. The split by
+//! `sin theta` is a partition of the beam-ray pairs (weights 1 and 0 that
+//! sum to one, independent of the radius), so the sum stays consistent;
+//! exactly parallel pairs, which the 1D estimate cannot handle, are tubes.
+//!
 //! The radius shrinks per pass as in progressive photon beams (Jarosz,
 //! Nowrouzezahrai, Thomas, Sloan and Zwicker 2011) for a 1D kernel:
 //! `r_{i+1} = r_i (i + alpha) / (i + 1)`, so `r_i ~ r_1 i^(alpha - 1) /
@@ -31,7 +56,7 @@
 use std::collections::BinaryHeap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
-use super::beams::{beams_supported, Beam, BeamMap};
+use super::beams::{beams_supported, BeamMap, Crossing};
 use super::emitters::Emitters;
 use super::estimate::{Kernel, PhotonIntegrator};
 use super::kdtree::{Neighbor, PhotonTree};
@@ -71,6 +96,10 @@ pub struct PpbSettings {
     pub sampling: SingleSampling,
     /// Store direct beams and photons too (double counts direct light; for tests).
     pub store_direct: bool,
+    /// Crossings with `sin theta` below this (angle between camera ray and
+    /// beam) use the beam x beam 2D (tube) estimate instead of the 1D one,
+    /// in [0, 1]: 0 is the 1D estimate everywhere (see the module docs).
+    pub tube_sin: f32,
 }
 
 impl PpbSettings {
@@ -80,6 +109,8 @@ impl PpbSettings {
     pub const DEFAULT_ALPHA: f32 = 2.0 / 3.0;
     /// The automatic initial beam radius as a fraction of the scene's diagonal.
     pub const AUTO_RADIUS_FRACTION: f32 = 1.0 / 256.0;
+    /// Default [`PpbSettings::tube_sin`].
+    pub const DEFAULT_TUBE_SIN: f32 = 0.25;
 }
 
 impl Default for PpbSettings {
@@ -92,6 +123,7 @@ impl Default for PpbSettings {
             max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
             sampling: SingleSampling::Mis,
             store_direct: false,
+            tube_sin: Self::DEFAULT_TUBE_SIN,
         }
     }
 }
@@ -103,6 +135,8 @@ impl Default for PpbSettings {
 pub struct BeamIntegrator<'a> {
     /// The beams of the pass (the BVH holds the radius).
     pub beams: &'a BeamMap,
+    /// [`PpbSettings::tube_sin`].
+    pub tube_sin: f32,
     /// Single scattering and the surface map (its volume map is empty).
     pub photon: PhotonIntegrator<'a>,
 }
@@ -133,7 +167,8 @@ impl CameraRayVisitor for BeamVisitor<'_, '_> {
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
         let s = self.integrator.photon.single.segment(scene, id, ray, t_end, sampler);
-        let multiple = beam_estimate(self.integrator.beams, m, id, ray, t_end, &mut self.found, sampler);
+        let multiple =
+            beam_estimate(self.integrator.beams, self.integrator.tube_sin, m, id, ray, t_end, &mut self.found, sampler);
         SegmentRadiance { radiance: s.radiance + multiple, transmittance: s.transmittance }
     }
 
@@ -149,11 +184,15 @@ impl CameraRayVisitor for BeamVisitor<'_, '_> {
     }
 }
 
-/// The beam x beam 1D estimate over `[0, t_end)` of `ray` in medium `m`
-/// (index `id`), attenuated to the ray's origin (see the module docs).
-/// `found` is scratch space.
+/// The beam estimate over `[0, t_end)` of `ray` in medium `m` (index
+/// `id`), attenuated to the ray's origin: the 1D estimate for crossings
+/// with `sin theta >= tube_sin`, the 2D tube estimate for the others (see
+/// the module docs). `found` is scratch space; `sampler` draws the point
+/// of each tube interval and the ratio-tracking steps in grids.
+#[allow(clippy::too_many_arguments)]
 pub fn beam_estimate(
     beams: &BeamMap,
+    tube_sin: f32,
     m: &Medium,
     id: MediumId,
     ray: &Ray,
@@ -166,26 +205,42 @@ pub fn beam_estimate(
     }
     let wo = -ray.d;
     let phase = m.phase();
-    let norm = 0.5 / beams.radius();
-    let beam_term = |beam: &Beam, s: f32, sin_theta: f32| {
-        beam.power * beam.weight(m, s) * (phase.eval(wo, -beam.d) * norm / sin_theta)
+    let r = beams.radius();
+    let line_norm = 0.5 / r;
+    let tube_norm = 1.0 / (std::f32::consts::PI * r * r);
+    // The crossing as (t, Phi w f K): 1D kernel `1 / (2 r sin theta)`, or a
+    // uniform point of the tube interval with weight `length / (pi r^2)`.
+    let term = |c: Crossing, sampler: &mut PixelSampler| -> Option<(f32, Rgb)> {
+        let beam = c.beam();
+        if beam.medium != id.0 {
+            return None;
+        }
+        let (t, s, k) = match c {
+            Crossing::Line { t, s, sin_theta, .. } => (t, s, line_norm / sin_theta),
+            Crossing::Tube { s_a, s_b, .. } => {
+                let s = (s_a + (s_b - s_a) * sampler.next_1d()).min(s_b);
+                let t = (beam.o + beam.d * s - ray.o).dot(ray.d).clamp(0.0, t_end);
+                (t, s, (s_b - s_a) * tube_norm)
+            }
+        };
+        Some((t, beam.power * beam.weight(m, s) * (phase.eval(wo, -beam.d) * k)))
     };
     if let Some(h) = m.as_homogeneous() {
         let point = h.point();
         let mut sum = Rgb::ZERO;
-        beams.for_each_crossing(ray, t_end, |c| {
-            if c.beam.medium == id.0 {
-                sum += (point.sigma_t() * c.t).exp_neg() * point.sigma_s * beam_term(c.beam, c.s, c.sin_theta);
+        beams.for_each_crossing(ray, t_end, tube_sin, |c| {
+            if let Some((t, contribution)) = term(c, sampler) {
+                sum += (point.sigma_t() * t).exp_neg() * point.sigma_s * contribution;
             }
         });
         return sum;
     }
     found.clear();
-    beams.for_each_crossing(ray, t_end, |c| {
-        if c.beam.medium == id.0 {
-            let sigma_s = m.at(ray.at(c.t)).sigma_s;
+    beams.for_each_crossing(ray, t_end, tube_sin, |c| {
+        if let Some((t, contribution)) = term(c, sampler) {
+            let sigma_s = m.at(ray.at(t)).sigma_s;
             if !sigma_s.is_black() {
-                found.push((c.t, sigma_s * beam_term(c.beam, c.s, c.sin_theta)));
+                found.push((t, sigma_s * contribution));
             }
         }
     });
@@ -281,6 +336,7 @@ pub fn render_ppb(
             let beams = BeamMap::build(traced.beams, r_beam, (8.0 * r_beam).max(scene.diagonal() / 64.0));
             let integrator = BeamIntegrator {
                 beams: &beams,
+                tube_sin: settings.tube_sin.clamp(0.0, 1.0),
                 photon: PhotonIntegrator {
                     maps: &maps,
                     volume_kernel: Kernel::Radius(r_beam),

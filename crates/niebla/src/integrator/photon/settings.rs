@@ -168,6 +168,9 @@ struct PpbFields {
     /// Single-scattering sampling along camera rays (default `mis`).
     #[serde(default)]
     sampling: Option<SamplingField>,
+    /// `sin theta` below which a beam crossing uses the 2D (tube) estimate, in [0, 1].
+    #[serde(default)]
+    tube_sin: Option<f32>,
 }
 
 /// `ppb`'s settings from its object (the `type` taken out).
@@ -185,8 +188,14 @@ pub(crate) fn parse_ppb(object: Object) -> Result<PpbSettings, Located> {
             return Err(Located::new("alpha", format!("must be in (0, 1), got {alpha}")));
         }
     }
+    if let Some(x) = f.tube_sin {
+        if !(0.0..=1.0).contains(&x) {
+            return Err(Located::new("tube_sin", format!("must be in [0, 1], got {x}")));
+        }
+    }
     let d = PpbSettings::default();
     Ok(PpbSettings {
+        tube_sin: f.tube_sin.unwrap_or(d.tube_sin),
         photons: f.photons.unwrap_or(d.photons),
         radius: f.radius,
         surface_radius: f.surface_radius,
@@ -201,13 +210,15 @@ pub(crate) fn parse_ppb(object: Object) -> Result<PpbSettings, Located> {
 pub(crate) fn ppb_key(s: &PpbSettings) -> String {
     let radius = |r: Option<f32>| r.map_or("auto".to_string(), |r| format!("{r:?}"));
     format!(
-        "ppb(photons={}, radius={}, surface_radius={}, alpha={:?}, sampling={}, max_depth={}, store_direct={})",
+        "ppb(photons={}, radius={}, surface_radius={}, alpha={:?}, sampling={}, max_depth={}, store_direct={}, \
+         tube_sin={:?})",
         s.photons,
         radius(s.radius),
         radius(s.surface_radius),
         s.alpha,
         sampling_key(s.sampling),
         s.max_depth,
-        s.store_direct
+        s.store_direct,
+        s.tube_sin
     )
 }
