@@ -125,11 +125,11 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             single_ratio
         );
         for (name, multiple, calibration, surface) in [
-            ("hegeman", true, Calibration::None, true),
-            ("hegeman (unlit surfaces)", true, Calibration::None, false),
-            ("hegeman (mc_tables)", true, Calibration::McTables, true),
-            ("hegeman (mc_fluence)", true, Calibration::McFluence, true),
-            ("hegeman (single only)", false, Calibration::None, true),
+            ("hegeman", true, Calibration::None, false),
+            ("hegeman (lit surfaces)", true, Calibration::None, true),
+            ("hegeman (mc_tables)", true, Calibration::McTables, false),
+            ("hegeman (mc_fluence)", true, Calibration::McFluence, false),
+            ("hegeman (single only)", false, Calibration::None, false),
         ] {
             let settings = HegemanSettings {
                 multiple_scattering: multiple,

@@ -126,7 +126,11 @@ pub struct HegemanSettings {
     pub step_cells: f32,
     /// Light opaque surfaces inside a grid medium with the model's
     /// multiply scattered light too ([`HegemanIntegrator::surface_scattered`];
-    /// ours, not in Hegeman et al. 2005); `false`: direct light only.
+    /// ours, not in Hegeman et al. 2005); `false` (the default): direct
+    /// light only. On: the fog's floor is lit right on average, but under
+    /// the smoke plume the forward-energy assumption (all scattered light
+    /// reaches the receiver, as in a laterally unbounded medium) over-fills
+    /// the shadow (bench relative MSE 0.0053 -> 0.0099).
     pub surface_scattering: bool,
 }
 
@@ -138,7 +142,7 @@ impl Default for HegemanSettings {
             multiple_scattering: true,
             resolution: 48,
             step_cells: 1.0,
-            surface_scattering: true,
+            surface_scattering: false,
         }
     }
 }

@@ -26,7 +26,7 @@ struct HegemanFields {
     /// View-ray march step in lattice cells (> 0; default 1).
     #[serde(default)]
     step_cells: Option<f32>,
-    /// Light surfaces inside grid media with the model's scattered light (default true).
+    /// Light surfaces inside grid media with the model's scattered light (default false).
     #[serde(default)]
     surface_scattering: Option<bool>,
 }
