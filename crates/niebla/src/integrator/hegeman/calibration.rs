@@ -836,7 +836,7 @@ mod tests {
     }
 
     /// The irradiance of a profile: all in the first (narrowest) bin gives
-    /// the collimated `max(0, c)`; bins weighted by their solid angle
+    /// the collimated `max(0, c)` (to the bin's width); bins weighted by their solid angle
     /// (isotropic light) give `1/4` for every normal.
     #[test]
     fn irradiance_of_collimated_and_isotropic_profiles() {
@@ -850,7 +850,9 @@ mod tests {
         for j in [0usize, 20, 64, 100, 128] {
             let c = -1.0 + 2.0 * j as f32 / N_MU as f32;
             let collimated = c_table[j][0];
-            assert!((collimated - c.max(0.0)).abs() < 1e-4, "c {c}: {collimated}");
+            // The first bin is a cone of half-angle pi / 4096: at grazing
+            // normals its ring average reaches sin(pi / 4096) / pi = 2.4e-4.
+            assert!((collimated - c.max(0.0)).abs() < 3e-4, "c {c}: {collimated}");
             let isotropic = c_table[N_MU + 1 + j][1];
             assert!((isotropic - 0.25).abs() < 2e-3, "c {c}: {isotropic}");
         }
