@@ -434,7 +434,7 @@ impl HegemanIntegrator {
 
     /// Radiance leaving an opaque surface toward `wo` from the model's
     /// multiply scattered light (ours, not in Hegeman et al. 2005): at the
-    /// surface point `p` (normal `surface.n`) inside grid medium `id`, each
+    /// surface point `p` (shading normal) inside grid medium `id`'s box, each
     /// light's scattered fluence ratio `F` (the lattice factor, as for the
     /// medium) times the irradiance of its blurred angular distribution on
     /// the surface, `E_ms C(w, n . wi)` ([`BlurredPhaseTable::irradiance`],
@@ -453,6 +453,12 @@ impl HegemanIntegrator {
     ) -> Rgb {
         let Some(Some(model)) = self.models.get(id.0 as usize) else { return Rgb::ZERO };
         let p = surface.p;
+        // The lattice covers the medium's box only (its lookups clamp to the
+        // box): surfaces outside it get no scattered light from the model.
+        let margin = (model.hi - model.lo) * 1e-3;
+        if p.cmplt(model.lo - margin).any() || p.cmpgt(model.hi + margin).any() {
+            return Rgb::ZERO;
+        }
         let ns = surface.shading_normal(wo);
         let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
         let (base, weights) = model.corners(p);
