@@ -107,7 +107,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             start.elapsed().as_secs_f64()
         );
         println!(
-            "{:<22} {:>10} {:>10} {:>14} {:>12} {:>14} {:>9}",
+            "{:<25} {:>10} {:>10} {:>14} {:>12} {:>14} {:>9}",
             "method", "fps 256^2", "fps 512^2", "precompute s", "memory MiB", "rel MSE", "mean/ref"
         );
         let reference_mean = reference.mean().average();
@@ -115,7 +115,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
         let single = crate::preview_cmd::interactive_single();
         let (single_error, single_ratio) = measure(frame(&small, &single, args.spp, 7, threads));
         println!(
-            "{:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
+            "{:<25} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
             "single (ray march)",
             fps(&scene, &single, 256, args.frames, threads),
             fps(&scene, &single, 512, args.frames, threads),
@@ -124,21 +124,23 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             single_error,
             single_ratio
         );
-        for (name, multiple, calibration) in [
-            ("hegeman", true, Calibration::None),
-            ("hegeman (mc_tables)", true, Calibration::McTables),
-            ("hegeman (mc_fluence)", true, Calibration::McFluence),
-            ("hegeman (single only)", false, Calibration::None),
+        for (name, multiple, calibration, surface) in [
+            ("hegeman", true, Calibration::None, false),
+            ("hegeman (lit surfaces)", true, Calibration::None, true),
+            ("hegeman (mc_tables)", true, Calibration::McTables, false),
+            ("hegeman (mc_fluence)", true, Calibration::McFluence, false),
+            ("hegeman (single only)", false, Calibration::None, false),
         ] {
             let settings = HegemanSettings {
                 multiple_scattering: multiple,
                 calibration,
+                surface_scattering: surface,
                 ..hegeman_settings(built.settings.integrator)
             };
             let hegeman = HegemanIntegrator::new(&scene, settings);
             let (error, ratio) = measure(frame(&small, &hegeman, args.spp, 7, threads));
             println!(
-                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
+                "{name:<25} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}",
                 fps(&scene, &hegeman, 256, args.frames, threads),
                 fps(&scene, &hegeman, 512, args.frames, threads),
                 hegeman.precompute_seconds,
@@ -159,7 +161,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             let zhou = ZhouIntegrator::new(&scene, settings);
             let (error, ratio) = measure(frame(&small, &zhou, args.spp, 7, threads));
             println!(
-                "{name:<22} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}   (fit error {:.3})",
+                "{name:<25} {:>10.2} {:>10.2} {:>14.3} {:>12.2} {:>14.4} {:>9.3}   (fit error {:.3})",
                 fps(&scene, &zhou, 256, args.frames, threads),
                 fps(&scene, &zhou, 512, args.frames, threads),
                 zhou.fit_seconds + zhou.lighting_seconds,

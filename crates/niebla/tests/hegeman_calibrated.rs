@@ -309,3 +309,51 @@ fn bad_calibration_settings_name_the_field() {
     let e = with(r#"{"type": "zhou", "local_lights": "both"}"#);
     assert!(e.contains("local_lights"), "{e}");
 }
+
+/// `surface_scattering`: a floor under a fog slab (box `[-1, 1] x [0, 0.8] x
+/// [-1, 1]`, uniform density) lit by a point light inside it. Floor pixels
+/// whose camera ray hits outside the box are identical with and without the
+/// option (the lattice covers the box only); inside, the scattered light
+/// brings the floor's mean closer to `volpath` than direct light alone.
+#[test]
+fn surface_scattering_lights_the_floor_inside_the_medium_only() {
+    let cells = vec!["1"; 4 * 4 * 4].join(",");
+    let scene = scene_from(&format!(
+        r#"{{
+  "version": 1,
+  "camera": {{"type": "perspective", "position": [0, 4, 3], "target": [0, 0, 0], "fov_y": 60, "width": 32, "height": 32}},
+  "media": {{"fog": {{"type": "grid", "density": {{"type": "grid", "data": [{cells}], "dims": [4, 4, 4],
+            "bounds": {{"min": [-1, 0, -1], "max": [1, 0.8, 1]}}}}, "sigma_t": 1.5, "albedo": 0.95,
+            "phase": {{"type": "hg", "g": 0.7}}}}}},
+  "ambient_medium": "fog",
+  "shapes": [{{"type": "rectangle", "to_world": {{"scale": 3, "rotate_x": -90}}, "bsdf": {{"type": "diffuse", "reflectance": 0.5}}}}],
+  "lights": [{{"type": "point", "position": [0, 0.6, 0], "intensity": 2}}]
+}}"#
+    ));
+    let off = hegeman(&scene, settings(Calibration::None, true), 16);
+    let on = hegeman(&scene, HegemanSettings { surface_scattering: true, ..settings(Calibration::None, true) }, 16);
+    let reference = render_with(&scene, &VolPathIntegrator::new(64), &options(256, 5), &|_, _| {}, None).unwrap();
+    let (mut inside, mut outside) = (Vec::new(), 0usize);
+    for y in 0..32 {
+        for x in 0..32 {
+            let ray = scene.camera.generate_ray(x, y, niebla::math::Vec2::new(0.5, 0.5));
+            let Some(hit) = scene.intersect(&ray, 1e-4, f32::INFINITY) else { continue };
+            let p = hit.surface.p;
+            let reach = p.x.abs().max(p.z.abs());
+            let i = (y * 32 + x) as usize;
+            if reach > 1.3 {
+                assert_eq!(on.pixels[i], off.pixels[i], "pixel {x},{y} outside the box");
+                outside += 1;
+            } else if reach < 0.7 {
+                inside.push(i);
+            }
+        }
+    }
+    assert!(outside > 50 && inside.len() > 30, "{outside} outside, {} inside", inside.len());
+    let mean =
+        |image: &Image| inside.iter().map(|&i| image.pixels[i].average() as f64).sum::<f64>() / inside.len() as f64;
+    let (a, b, r) = (mean(&on), mean(&off), mean(&reference));
+    println!("floor under the slab: lit {a:.4}, direct only {b:.4}, volpath {r:.4}");
+    assert!(a > b, "the scattered light adds: {a} vs {b}");
+    assert!((a - r).abs() < (b - r).abs(), "closer to volpath: lit {a}, direct only {b}, volpath {r}");
+}

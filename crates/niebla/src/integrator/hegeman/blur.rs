@@ -34,40 +34,42 @@ impl BlurredPhaseTable {
         let gd = (g as f64).clamp(-0.99, 0.99);
         let l_max =
             if gd.abs() < 1e-6 { 1 } else { ((1e-7f64).ln() / gd.abs().ln()).ceil().clamp(1.0, 2000.0) as usize };
-        let mut values = vec![0f32; (N_W + 1) * (N_MU + 1)];
-        let mut legendre = vec![0f64; l_max + 1];
-        for j in 0..=N_MU {
-            let mu = -1.0 + 2.0 * j as f64 / N_MU as f64;
-            // P_l(mu) by the three-term recurrence.
-            legendre[0] = 1.0;
-            if l_max >= 1 {
-                legendre[1] = mu;
-            }
-            for l in 2..=l_max {
-                legendre[l] = ((2 * l - 1) as f64 * mu * legendre[l - 1] - (l - 1) as f64 * legendre[l - 2]) / l as f64;
-            }
-            for i in 0..=N_W {
-                let w = W_MAX * i as f64 / N_W as f64;
-                let value = if i == 0 {
-                    (1.0 - gd * gd) / (4.0 * PI * (1.0 + gd * gd - 2.0 * gd * mu).powf(1.5))
-                } else {
-                    let mut sum = 0.0;
-                    let mut gl = 1.0;
-                    for (l, p) in legendre.iter().enumerate() {
-                        let lf = l as f64;
-                        let blur = (-lf * (lf + 1.0) * w * w * 0.5).exp();
-                        if blur * gl < 1e-12 {
-                            break;
-                        }
-                        sum += (2.0 * lf + 1.0) * gl * blur * p;
-                        gl *= gd;
-                    }
-                    (sum / (4.0 * PI)).max(0.0)
-                };
-                values[i * (N_MU + 1) + j] = value as f32;
-            }
-        }
+        let values = tabulate(
+            l_max,
+            |l| gd.powi(l as i32),
+            |mu| (1.0 - gd * gd) / (4.0 * PI * (1.0 + gd * gd - 2.0 * gd * mu).powf(1.5)),
+        );
         BlurredPhaseTable { g, values }
+    }
+
+    /// The irradiance kernel of the blurred light: `eval(w, c)` is
+    /// `int max(0, -n . w') K_w(w' . d) dw'`, the irradiance on a surface of
+    /// normal `n` from unit fluence whose propagation directions `w'` are
+    /// spread around `d` by the heat kernel `K_w` of per-axis width `w`, at
+    /// `c = -n . d` (the cosine between the normal and the direction toward
+    /// the light). `w = 0` gives `max(0, c)` (a collimated beam), a wide
+    /// blur `1/4` (isotropic radiance: irradiance `pi L`, fluence `4 pi L`).
+    /// Legendre moments of the clamped cosine, `2 int_0^1 t P_l(t) dt`
+    /// (Funk-Hecke), summed until the blur factor falls below 1e-12.
+    pub fn irradiance() -> BlurredPhaseTable {
+        // Row 1 (w = W_MAX / N_W) has blur factors below 1e-12 from l ~ 180.
+        const L_MAX: usize = 400;
+        // m_l = 2 int_0^1 t P_l(t) dt: 1, 2/3, 1/4, zero for odd l >= 3,
+        // and for even l >= 4 the ratio m_l / m_{l-2} = -(l - 3) / (l + 2).
+        let mut moments = vec![0f64; L_MAX + 1];
+        moments[0] = 1.0;
+        moments[1] = 2.0 / 3.0;
+        if L_MAX >= 2 {
+            moments[2] = 0.25;
+        }
+        let mut l = 4;
+        while l <= L_MAX {
+            moments[l] = -moments[l - 2] * (l as f64 - 3.0) / (l as f64 + 2.0);
+            l += 2;
+        }
+        // The kernel max(0, t) has moments 2 pi int max(0, t) P_l(t) dt = pi m_l.
+        let values = tabulate(L_MAX, |l| PI * moments[l], |mu| mu.max(0.0));
+        BlurredPhaseTable { g: f32::NAN, values }
     }
 
     /// Bytes held by the table.
@@ -75,7 +77,7 @@ impl BlurredPhaseTable {
         self.values.len() * 4
     }
 
-    /// Asymmetry the table was built for.
+    /// Asymmetry the table was built for (NaN for [`BlurredPhaseTable::irradiance`]).
     pub fn g(&self) -> f32 {
         self.g
     }
@@ -93,6 +95,45 @@ impl BlurredPhaseTable {
         let b = at(i + 1, j) * (1.0 - fy) + at(i + 1, j + 1) * fy;
         a * (1.0 - fx) + b * fx
     }
+}
+
+/// `(N_W + 1) x (N_MU + 1)` values of `sum_l (2l + 1)/(4 pi) m_l
+/// exp(-l (l + 1) w^2 / 2) P_l(mu)` (clamped at zero), with `m_l =
+/// moment(l)` for `l <= l_max`; the `w = 0` row is `exact(mu)`.
+fn tabulate(l_max: usize, moment: impl Fn(usize) -> f64, exact: impl Fn(f64) -> f64) -> Vec<f32> {
+    let mut values = vec![0f32; (N_W + 1) * (N_MU + 1)];
+    let moments: Vec<f64> = (0..=l_max).map(moment).collect();
+    let mut legendre = vec![0f64; l_max + 1];
+    for j in 0..=N_MU {
+        let mu = -1.0 + 2.0 * j as f64 / N_MU as f64;
+        // P_l(mu) by the three-term recurrence.
+        legendre[0] = 1.0;
+        if l_max >= 1 {
+            legendre[1] = mu;
+        }
+        for l in 2..=l_max {
+            legendre[l] = ((2 * l - 1) as f64 * mu * legendre[l - 1] - (l - 1) as f64 * legendre[l - 2]) / l as f64;
+        }
+        for i in 0..=N_W {
+            let w = W_MAX * i as f64 / N_W as f64;
+            let value = if i == 0 {
+                exact(mu)
+            } else {
+                let mut sum = 0.0;
+                for (l, (p, m)) in legendre.iter().zip(&moments).enumerate() {
+                    let lf = l as f64;
+                    let blur = (-lf * (lf + 1.0) * w * w * 0.5).exp();
+                    if blur < 1e-12 {
+                        break;
+                    }
+                    sum += (2.0 * lf + 1.0) * m * blur * p;
+                }
+                (sum / (4.0 * PI)).max(0.0)
+            };
+            values[i * (N_MU + 1) + j] = value as f32;
+        }
+    }
+    values
 }
 
 #[cfg(test)]
@@ -127,5 +168,30 @@ mod tests {
         assert!((table.eval(3.9, 0.3) - iso).abs() < 1e-4);
         let hg = crate::phase::PhaseFunction::hg(0.6).eval_mu(-0.5);
         assert!((table.eval(0.0, -0.5) - hg).abs() < 1e-3 * hg);
+    }
+
+    /// The irradiance table against closed forms: `w = 0` is `max(0, c)`;
+    /// `C(w, c) - C(w, -c) = c exp(-w^2)` for every `w` (the clamped cosine
+    /// minus its mirror is the cosine, whose heat-kernel moment is
+    /// `exp(-l (l + 1) w^2 / 2)` at `l = 1`); a narrow lobe (`w = 0.3`, all
+    /// its mass above the horizon to 1e-6) at normal incidence gives the
+    /// lobe's mean cosine `exp(-w^2)`; a wide one the isotropic `1/4`.
+    #[test]
+    fn irradiance_closed_forms() {
+        let table = BlurredPhaseTable::irradiance();
+        for c in [-1.0f32, -0.4, 0.0, 0.25, 0.7, 1.0] {
+            assert!((table.eval(0.0, c) - c.max(0.0)).abs() < 1e-6, "w 0 c {c}");
+        }
+        for w in [0.125f32, 0.5, 1.0, 2.0] {
+            for c in [0.125f32, 0.5, 0.875] {
+                let odd = table.eval(w, c) - table.eval(w, -c);
+                let exact = c * (-w * w).exp();
+                assert!((odd - exact).abs() < 2e-4, "w {w} c {c}: {odd} vs {exact}");
+            }
+        }
+        let narrow = table.eval(0.291_666_66, 1.0);
+        assert!((narrow - (-0.291_666_66f32 * 0.291_666_66).exp()).abs() < 2e-3, "{narrow}");
+        assert!((table.eval(3.9, 0.3) - 0.25).abs() < 1e-4);
+        assert!((table.eval(3.9, -0.8) - 0.25).abs() < 1e-4);
     }
 }

@@ -377,6 +377,9 @@ pub struct CalibrationTable {
     profile: Vec<Rgb>,
     /// `P(tau_k, mu_j)`: `[(row * (N_MU + 1) + j)]`, RGB, 1/sr.
     phase: Vec<Rgb>,
+    /// `C(tau_k, c_j)`: `[(row * (N_MU + 1) + j)]`, RGB: the irradiance on a
+    /// surface per unit `F` (see [`CalibrationTable::irradiance`]).
+    irradiance: Vec<Rgb>,
 }
 
 impl CalibrationTable {
@@ -398,7 +401,8 @@ impl CalibrationTable {
             profile[b] = profile[N_THETA + b];
         }
         let phase = convolve_profiles(g as f64, &profile);
-        CalibrationTable { geometry, estimator, g, fluence, profile, phase }
+        let irradiance = irradiance_of_profiles(&profile);
+        CalibrationTable { geometry, estimator, g, fluence, profile, phase, irradiance }
     }
 
     /// Simulate and build: `photons` photons with stream `seed`.
@@ -452,10 +456,78 @@ impl CalibrationTable {
         a * (1.0 - fy) + b * fy
     }
 
+    /// `C` at fractional row `row` and cosine `c` between a surface's normal
+    /// and the direction toward the light, bilinear: the irradiance on the
+    /// surface per unit scattered fluence `F`, `int max(0, -n . w) A(w) dw`
+    /// with the angle histogram `A` around the propagation direction (a
+    /// narrow `A` gives `max(0, c)`, an isotropic one `1/4`).
+    #[inline]
+    pub fn irradiance(&self, row: f32, c: f32) -> Rgb {
+        let y = row.clamp(0.0, (N_TAU - 1) as f32);
+        let k = (y as usize).min(N_TAU - 2);
+        let fy = y - k as f32;
+        let x = (c.clamp(-1.0, 1.0) + 1.0) * 0.5 * N_MU as f32;
+        let j = (x as usize).min(N_MU - 1);
+        let fx = x - j as f32;
+        let at = |k: usize, j: usize| self.irradiance[k * (N_MU + 1) + j];
+        let a = at(k, j) * (1.0 - fx) + at(k, j + 1) * fx;
+        let b = at(k + 1, j) * (1.0 - fx) + at(k + 1, j + 1) * fx;
+        a * (1.0 - fy) + b * fy
+    }
+
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        (self.fluence.len() + self.profile.len() + self.phase.len()) * std::mem::size_of::<Rgb>()
+        (self.fluence.len() + self.profile.len() + self.phase.len() + self.irradiance.len())
+            * std::mem::size_of::<Rgb>()
     }
+}
+
+/// Azimuthal average of `max(0, cos)` between a unit normal at cosine `c`
+/// to an axis and the directions at angle `theta` (cosine `ct`, sine `st`)
+/// from it: the average of `max(0, a + b cos phi)` with `a = ct c`,
+/// `b = st sqrt(1 - c^2)`, `(a acos(-a/b) + sqrt(b^2 - a^2)) / pi` where
+/// the ring crosses the horizon.
+#[inline]
+pub fn ring_clamped_cosine(c: f64, ct: f64, st: f64) -> f64 {
+    let a = ct * c;
+    let b = st * (1.0 - c * c).max(0.0).sqrt();
+    if a >= b {
+        a
+    } else if a <= -b {
+        0.0
+    } else {
+        (a * (-a / b).acos() + (b * b - a * a).sqrt()) / PI
+    }
+}
+
+/// `C(tau_k, c_j)` from the angle histograms: each bin's weight times the
+/// ring average of the clamped cosine ([`ring_clamped_cosine`]), averaged
+/// over 8 solid-angle strata of the bin.
+fn irradiance_of_profiles(profile: &[Rgb]) -> Vec<Rgb> {
+    const SUB: usize = 8;
+    let mut rings = vec![0.0f64; N_THETA * (N_MU + 1)];
+    for b in 0..N_THETA {
+        let (c0, c1) = (theta_edge(b).cos(), theta_edge(b + 1).cos());
+        for j in 0..=N_MU {
+            let c = -1.0 + 2.0 * j as f64 / N_MU as f64;
+            let mut sum = 0.0;
+            for s in 0..SUB {
+                let ct = c0 + (c1 - c0) * (s as f64 + 0.5) / SUB as f64;
+                sum += ring_clamped_cosine(c, ct, (1.0 - ct * ct).max(0.0).sqrt());
+            }
+            rings[b * (N_MU + 1) + j] = sum / SUB as f64;
+        }
+    }
+    let mut out = vec![Rgb::ZERO; N_TAU * (N_MU + 1)];
+    for k in 0..N_TAU {
+        for j in 0..=N_MU {
+            for c in 0..3 {
+                let v: f64 = (0..N_THETA).map(|b| profile[k * N_THETA + b][c] as f64 * rings[b * (N_MU + 1) + j]).sum();
+                out[k * (N_MU + 1) + j][c] = v as f32;
+            }
+        }
+    }
+    out
 }
 
 /// `P(tau_k, mu_j)` from the angle histograms: Legendre moments of each
@@ -739,5 +811,50 @@ mod tests {
             .install(|| simulate(Geometry::Point, e, 0.7, Rgb::splat(0.95), 5000, 9));
         assert_eq!(a.fluence, b.fluence);
         assert_eq!(a.histogram, b.histogram);
+    }
+
+    /// The ring average of the clamped cosine against a 20000-point
+    /// azimuth quadrature.
+    #[test]
+    fn ring_clamped_cosine_matches_quadrature() {
+        for c in [-0.9, -0.3, 0.0, 0.2, 0.8, 1.0] {
+            for theta in [0.0f64, 0.3, 1.2, 1.7, 2.9] {
+                let (ct, st) = (theta.cos(), theta.sin());
+                let n = 20000;
+                let s = (1.0f64 - c * c).sqrt();
+                let q: f64 = (0..n)
+                    .map(|k| {
+                        let phi = 2.0 * PI * (k as f64 + 0.5) / n as f64;
+                        (ct * c + st * s * phi.cos()).max(0.0)
+                    })
+                    .sum::<f64>()
+                    / n as f64;
+                let r = ring_clamped_cosine(c, ct, st);
+                assert!((r - q).abs() < 1e-6, "c {c} theta {theta}: {r} vs {q}");
+            }
+        }
+    }
+
+    /// The irradiance of a profile: all in the first (narrowest) bin gives
+    /// the collimated `max(0, c)` (to the bin's width); bins weighted by their solid angle
+    /// (isotropic light) give `1/4` for every normal.
+    #[test]
+    fn irradiance_of_collimated_and_isotropic_profiles() {
+        let mut profile = vec![Rgb::ZERO; N_TAU * N_THETA];
+        profile[0] = Rgb::ONE;
+        for b in 0..N_THETA {
+            let share = (theta_edge(b).cos() - theta_edge(b + 1).cos()) / 2.0;
+            profile[N_THETA + b] = Rgb::splat(share as f32);
+        }
+        let c_table = irradiance_of_profiles(&profile);
+        for j in [0usize, 20, 64, 100, 128] {
+            let c = -1.0 + 2.0 * j as f32 / N_MU as f32;
+            let collimated = c_table[j][0];
+            // The first bin is a cone of half-angle pi / 4096: at grazing
+            // normals its ring average reaches sin(pi / 4096) / pi = 2.4e-4.
+            assert!((collimated - c.max(0.0)).abs() < 3e-4, "c {c}: {collimated}");
+            let isotropic = c_table[N_MU + 1 + j][1];
+            assert!((isotropic - 0.25).abs() < 2e-3, "c {c}: {isotropic}");
+        }
     }
 }

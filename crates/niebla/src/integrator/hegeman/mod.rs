@@ -64,9 +64,12 @@ use crate::medium::{GridMedium, Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
 use crate::tracking::{MarchStep, TransmittanceMethod};
-use crate::world::Scene;
+use crate::world::{Hit, Scene};
 
-use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
+use super::{
+    direct_surface_radiance, walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps,
+    SegmentRadiance,
+};
 use blur::BlurredPhaseTable;
 use calibration::{CalibrationTable, Geometry};
 use line_integrals::{LightSource, LineIntegralLattice};
@@ -121,6 +124,14 @@ pub struct HegemanSettings {
     pub resolution: u32,
     /// View-ray march step in lattice cells (> 0).
     pub step_cells: f32,
+    /// Light opaque surfaces inside a grid medium with the model's
+    /// multiply scattered light too ([`HegemanIntegrator::surface_scattered`];
+    /// ours, not in Hegeman et al. 2005); `false` (the default): direct
+    /// light only. On: the fog's floor is lit right on average, but under
+    /// the smoke plume the forward-energy assumption (all scattered light
+    /// reaches the receiver, as in a laterally unbounded medium) over-fills
+    /// the shadow (bench relative MSE 0.0053 -> 0.0099).
+    pub surface_scattering: bool,
 }
 
 impl Default for HegemanSettings {
@@ -131,6 +142,7 @@ impl Default for HegemanSettings {
             multiple_scattering: true,
             resolution: 48,
             step_cells: 1.0,
+            surface_scattering: false,
         }
     }
 }
@@ -218,6 +230,8 @@ pub struct HegemanIntegrator {
     lights: Vec<ModelLight>,
     models: Vec<Option<GridModel>>,
     analytic: AnalyticIntegrator,
+    /// The clamped cosine convolved with the blur (uncalibrated surface irradiance).
+    irradiance: BlurredPhaseTable,
     /// Whether only point, spot and area lights are modelled
     /// ([`HegemanIntegrator::local_lights_only`]).
     local_only: bool,
@@ -294,6 +308,7 @@ impl HegemanIntegrator {
             lights,
             models,
             analytic: AnalyticIntegrator::new(),
+            irradiance: BlurredPhaseTable::irradiance(),
             local_only,
             precompute_seconds: start.elapsed().as_secs_f64(),
         }
@@ -413,6 +428,80 @@ impl HegemanIntegrator {
                 };
             }
             l += e * s;
+        }
+        l
+    }
+
+    /// Radiance leaving an opaque surface toward `wo` from the model's
+    /// multiply scattered light (ours, not in Hegeman et al. 2005): at the
+    /// surface point `p` (shading normal) inside grid medium `id`'s box, each
+    /// light's scattered fluence ratio `F` (the lattice factor, as for the
+    /// medium) times the irradiance of its blurred angular distribution on
+    /// the surface, `E_ms C(w, n . wi)` ([`BlurredPhaseTable::irradiance`],
+    /// or the calibration table's [`CalibrationTable::irradiance`]), times
+    /// the BSDF at the light direction (at the normal where the light lies
+    /// below the surface: exact for Lambertian surfaces, an approximation
+    /// for glossy ones, whose lobe the blurred light does not resolve).
+    /// Visibility of the light is the line integral's; surfaces do not
+    /// shadow the medium's scattered light.
+    fn surface_scattered(
+        &self,
+        id: MediumId,
+        surface: &crate::geometry::SurfaceHit,
+        wo: Vec3,
+        bsdf: &crate::bsdf::Bsdf,
+    ) -> Rgb {
+        let Some(Some(model)) = self.models.get(id.0 as usize) else { return Rgb::ZERO };
+        let p = surface.p;
+        // The lattice covers the medium's box only (its lookups clamp to the
+        // box): surfaces outside it get no scattered light from the model.
+        let margin = (model.hi - model.lo) * 1e-3;
+        if p.cmplt(model.lo - margin).any() || p.cmpgt(model.hi + margin).any() {
+            return Rgb::ZERO;
+        }
+        let ns = surface.shading_normal(wo);
+        let n = if ns.dot(wo) < 0.0 { -ns } else { ns };
+        let (base, weights) = model.corners(p);
+        let stride = model.stride;
+        let mut l = Rgb::ZERO;
+        for (index, light) in self.lights.iter().filter(|l| !l.ambient).enumerate() {
+            let mut f = [0f32; FACTORS];
+            for (corner, w) in base.iter().zip(weights) {
+                let o = corner * stride + AMBIENT + index * FACTORS;
+                for (k, v) in f.iter_mut().enumerate() {
+                    *v += w * model.factors[o + k];
+                }
+            }
+            let scattered = Rgb::new(f[3], f[4], f[5]);
+            if scattered.is_black() {
+                continue;
+            }
+            let (wi, mut e) = match light.source {
+                LightSource::Point(c) => {
+                    let v = c - p;
+                    let d2 = v.length_squared();
+                    if d2 == 0.0 {
+                        continue;
+                    }
+                    (v / d2.sqrt(), light.power / d2)
+                }
+                LightSource::Direction(w) => (w, light.power),
+            };
+            e *= light.emission.factor(-wi);
+            let c = n.dot(wi);
+            let cosine = match &model.tables {
+                Some(t) => {
+                    let table = match light.source {
+                        LightSource::Point(_) => &t.point,
+                        LightSource::Direction(_) => &t.collimated,
+                    };
+                    table.irradiance(f[6], c)
+                }
+                None => Rgb::splat(self.irradiance.eval(f[6], c)),
+            };
+            let toward = if c > 1e-3 { wi } else { n };
+            let response = bsdf.eval(ns, wo, toward);
+            l += response * e * scattered * cosine;
         }
         l
     }
@@ -702,15 +791,56 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
     lights
 }
 
+/// The camera-ray walk of [`HegemanIntegrator`]: grid segments by the
+/// model, surfaces lit directly and, with `surface_scattering`, by the
+/// model's scattered light.
+struct HegemanWalk<'a> {
+    integrator: &'a HegemanIntegrator,
+}
+
+impl CameraRayVisitor for HegemanWalk<'_> {
+    #[inline]
+    fn segment(
+        &mut self,
+        scene: &Scene,
+        m: &Medium,
+        id: MediumId,
+        ray: &Ray,
+        t_end: f32,
+        sampler: &mut PixelSampler,
+    ) -> SegmentRadiance {
+        let h = self.integrator;
+        match m {
+            Medium::Grid(g) => match &h.models[id.0 as usize] {
+                Some(model) => h.grid_segment(g, model, ray, t_end, sampler),
+                None => h.analytic.segment(scene, id, ray, t_end, sampler),
+            },
+            Medium::Homogeneous(_) => h.analytic.segment(scene, id, ray, t_end, sampler),
+        }
+    }
+
+    #[inline]
+    fn opaque_surface(
+        &mut self,
+        scene: &Scene,
+        hit: &Hit,
+        wo: Vec3,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let bsdf = &scene.surface_bsdf(hit);
+        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
+        let mut l = direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler);
+        let h = self.integrator;
+        if let (Some(id), true, true) = (medium, h.settings.surface_scattering, h.settings.multiple_scattering) {
+            l += h.surface_scattered(id, &hit.surface, wo, bsdf);
+        }
+        l
+    }
+}
+
 impl Integrator for HegemanIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
-        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
-        trace_camera_ray(scene, ray, medium, surfaces, sampler, |m, id, ray, t_end, sampler| match m {
-            Medium::Grid(g) => match &self.models[id.0 as usize] {
-                Some(model) => self.grid_segment(g, model, ray, t_end, sampler),
-                None => self.analytic.segment(scene, id, ray, t_end, sampler),
-            },
-            Medium::Homogeneous(_) => self.analytic.segment(scene, id, ray, t_end, sampler),
-        })
+        walk_camera_ray(scene, ray, medium, sampler, &mut HegemanWalk { integrator: self })
     }
 }

@@ -26,6 +26,9 @@ struct HegemanFields {
     /// View-ray march step in lattice cells (> 0; default 1).
     #[serde(default)]
     step_cells: Option<f32>,
+    /// Light surfaces inside grid media with the model's scattered light (default false).
+    #[serde(default)]
+    surface_scattering: Option<bool>,
 }
 
 /// `hegeman`'s settings from its object (the `type` taken out).
@@ -50,6 +53,7 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
         multiple_scattering: fields.multiple_scattering.unwrap_or(defaults.multiple_scattering),
         resolution: fields.resolution.unwrap_or(defaults.resolution),
         step_cells: fields.step_cells.unwrap_or(defaults.step_cells),
+        surface_scattering: fields.surface_scattering.unwrap_or(defaults.surface_scattering),
     };
     within("resolution", settings.resolution, 2, 512)?;
     within("calibration_photons", settings.calibration_photons, 1000, 1 << 24)?;
@@ -60,11 +64,13 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
 /// The stable key of `hegeman`'s settings.
 pub(crate) fn key(s: &HegemanSettings) -> String {
     format!(
-        "hegeman(multiple_scattering={}, resolution={}, step_cells={:?}, calibration={}, calibration_photons={})",
+        "hegeman(multiple_scattering={}, resolution={}, step_cells={:?}, calibration={}, calibration_photons={}, \
+         surface_scattering={})",
         s.multiple_scattering,
         s.resolution,
         s.step_cells,
         s.calibration.name(),
-        s.calibration_photons
+        s.calibration_photons,
+        s.surface_scattering
     )
 }
