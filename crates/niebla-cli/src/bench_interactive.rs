@@ -1,7 +1,10 @@
 //! `niebla bench interactive`: the interactive methods side by side, one
 //! table per scene: frames per second at 256x256 and 512x512 (1 spp per
 //! frame, precomputation excluded), precomputation time and memory, and the
-//! relative MSE against a high-spp `volpath` reference at a small size.
+//! relative MSE against a high-spp `volpath` reference at a small size. A
+//! second reference of another seed is measured the same way first: its
+//! relative MSE is the floor below which the reference cannot tell methods
+//! apart (raise `--reference-spp` until the methods sit well above it).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -112,6 +115,15 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
         );
         let reference_mean = reference.mean().average();
         let measure = |image: Image| (image.relative_mse(&reference), image.mean().average() / reference_mean);
+        // The reference's own noise: a second volpath render of the same spp
+        // and another seed, measured like the methods. A method's relative MSE
+        // below this floor is not resolved by the reference.
+        let (floor_error, floor_ratio) =
+            measure(frame(&small, &VolPathIntegrator::new(256), args.reference_spp, 2_000_003, threads));
+        println!(
+            "{:<25} {:>10} {:>10} {:>14} {:>12} {:>14.4} {:>9.3}",
+            "volpath (2nd reference)", "-", "-", "-", "-", floor_error, floor_ratio
+        );
         let single = crate::preview_cmd::interactive_single();
         let (single_error, single_ratio) = measure(frame(&small, &single, args.spp, 7, threads));
         println!(
