@@ -5,6 +5,7 @@ use std::sync::atomic::AtomicBool;
 
 use crate::film::{quantize_sample, SampleSums};
 use crate::integrator::Integrator;
+use crate::math::Ray;
 use crate::render::{map_pixels, ProgressFn, RenderError, RenderOptions};
 use crate::sampling::{PixelSampler, SamplerKind};
 use crate::world::Scene;
@@ -15,6 +16,30 @@ use super::{AovChannel, AovSample, AovSet, AovSums, LayerSplit};
 /// Added to the seed of the features' random stream, so that it is
 /// independent of the integrator's numbers (which it never changes).
 const FEATURE_STREAM: u64 = 0x5bd1_e995_aa0f_7e31;
+
+/// Sample `s` of pixel `(x, y)`: the camera ray and its radiance split into
+/// the layers (`split`) or whole ([`LayerSplit::unsplit`]). A non-finite
+/// sample is dropped like the beauty sample of a plain render: zero in every
+/// layer.
+#[inline]
+fn traced_sample<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    kind: SamplerKind,
+    seed: u64,
+    (x, y, s): (u32, u32, u64),
+    split: bool,
+) -> (Ray, LayerSplit) {
+    let mut sampler = PixelSampler::for_pixel(kind, seed, x, y, s);
+    let ray = scene.camera.sample_ray(x, y, &mut sampler);
+    let traced = if split {
+        integrator.radiance_split(scene, ray, scene.camera_medium, &mut sampler)
+    } else {
+        LayerSplit::unsplit(integrator.radiance(scene, ray, scene.camera_medium, &mut sampler))
+    };
+    debug_assert!(traced.total.is_finite(), "non-finite radiance {:?} at pixel ({x}, {y}) sample {s}", traced.total);
+    (ray, if traced.total.is_finite() { traced } else { Default::default() })
+}
 
 /// The beauty sums and the layer sums of `set` for samples
 /// `options.first_sample .. + options.spp` with a concrete integrator. The
@@ -56,18 +81,7 @@ pub fn render_aov_sums_masked_with<I: Integrator>(
             return (beauty, layers);
         }
         for s in options.first_sample..options.first_sample + options.spp as u64 {
-            let mut sampler = PixelSampler::for_pixel(options.sampler, options.seed, x, y, s);
-            let ray = scene.camera.sample_ray(x, y, &mut sampler);
-            let mut split = integrator.radiance_split(scene, ray, scene.camera_medium, &mut sampler);
-            debug_assert!(
-                split.total.is_finite(),
-                "non-finite radiance {:?} at pixel ({x}, {y}) sample {s}",
-                split.total
-            );
-            if !split.total.is_finite() {
-                // Dropped like the beauty sample (counted as zero in every split layer).
-                split = Default::default();
-            }
+            let (ray, split) = traced_sample(scene, integrator, options.sampler, options.seed, (x, y, s), true);
             for (sum, v) in beauty.iter_mut().zip(split.total.0) {
                 *sum += quantize_sample(v);
             }
@@ -145,22 +159,8 @@ pub fn render_segment_sums_with<I: Integrator>(
                 for (g, &(start, end)) in segments.iter().enumerate() {
                     let cell = &mut out[j * per_pixel + g * stride..][..stride];
                     for s in start..end {
-                        let mut sampler = PixelSampler::for_pixel(SamplerKind::Independent, seed, x, y, s);
-                        let ray = scene.camera.sample_ray(x, y, &mut sampler);
-                        let mut split = if needs_split {
-                            integrator.radiance_split(scene, ray, scene.camera_medium, &mut sampler)
-                        } else {
-                            LayerSplit::unsplit(integrator.radiance(scene, ray, scene.camera_medium, &mut sampler))
-                        };
-                        debug_assert!(
-                            split.total.is_finite(),
-                            "non-finite radiance {:?} at pixel ({x}, {y}) sample {s}",
-                            split.total
-                        );
-                        if !split.total.is_finite() {
-                            // Dropped like the beauty sample of a plain render.
-                            split = Default::default();
-                        }
+                        let (ray, split) =
+                            traced_sample(scene, integrator, SamplerKind::Independent, seed, (x, y, s), needs_split);
                         for (c, v) in split.total.0.into_iter().enumerate() {
                             cell[c] += quantize_sample(v);
                             cell[3 + c] += quantize_sample(v * v);
