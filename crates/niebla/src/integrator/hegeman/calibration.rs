@@ -444,16 +444,7 @@ impl CalibrationTable {
     /// cosine `mu` to the light direction (1 = forward), bilinear.
     #[inline]
     pub fn phase(&self, row: f32, mu: f32) -> Rgb {
-        let y = row.clamp(0.0, (N_TAU - 1) as f32);
-        let k = (y as usize).min(N_TAU - 2);
-        let fy = y - k as f32;
-        let x = (mu.clamp(-1.0, 1.0) + 1.0) * 0.5 * N_MU as f32;
-        let j = (x as usize).min(N_MU - 1);
-        let fx = x - j as f32;
-        let at = |k: usize, j: usize| self.phase[k * (N_MU + 1) + j];
-        let a = at(k, j) * (1.0 - fx) + at(k, j + 1) * fx;
-        let b = at(k + 1, j) * (1.0 - fx) + at(k + 1, j + 1) * fx;
-        a * (1.0 - fy) + b * fy
+        row_cosine_lookup(&self.phase, row, mu)
     }
 
     /// `C` at fractional row `row` and cosine `c` between a surface's normal
@@ -463,16 +454,7 @@ impl CalibrationTable {
     /// narrow `A` gives `max(0, c)`, an isotropic one `1/4`).
     #[inline]
     pub fn irradiance(&self, row: f32, c: f32) -> Rgb {
-        let y = row.clamp(0.0, (N_TAU - 1) as f32);
-        let k = (y as usize).min(N_TAU - 2);
-        let fy = y - k as f32;
-        let x = (c.clamp(-1.0, 1.0) + 1.0) * 0.5 * N_MU as f32;
-        let j = (x as usize).min(N_MU - 1);
-        let fx = x - j as f32;
-        let at = |k: usize, j: usize| self.irradiance[k * (N_MU + 1) + j];
-        let a = at(k, j) * (1.0 - fx) + at(k, j + 1) * fx;
-        let b = at(k + 1, j) * (1.0 - fx) + at(k + 1, j + 1) * fx;
-        a * (1.0 - fy) + b * fy
+        row_cosine_lookup(&self.irradiance, row, c)
     }
 
     /// Bytes held.
@@ -604,6 +586,23 @@ pub fn cached(geometry: Geometry, estimator: Estimator, g: f32, albedo: Rgb, pho
 
 /// The stream seed of the integrator's tables.
 pub const TABLE_SEED: u64 = 0x0048_6567_656d_616e;
+
+/// Bilinear lookup in a table of `N_TAU` rows of `N_MU + 1` values over a
+/// cosine in [-1, 1]: fractional row `row` (clamped to the table), cosine
+/// `c` (clamped to [-1, 1]).
+#[inline]
+fn row_cosine_lookup(table: &[Rgb], row: f32, c: f32) -> Rgb {
+    let y = row.clamp(0.0, (N_TAU - 1) as f32);
+    let k = (y as usize).min(N_TAU - 2);
+    let fy = y - k as f32;
+    let x = (c.clamp(-1.0, 1.0) + 1.0) * 0.5 * N_MU as f32;
+    let j = (x as usize).min(N_MU - 1);
+    let fx = x - j as f32;
+    let at = |k: usize, j: usize| table[k * (N_MU + 1) + j];
+    let a = at(k, j) * (1.0 - fx) + at(k, j + 1) * fx;
+    let b = at(k + 1, j) * (1.0 - fx) + at(k + 1, j + 1) * fx;
+    a * (1.0 - fy) + b * fy
+}
 
 #[cfg(test)]
 mod tests {
