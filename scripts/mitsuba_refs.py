@@ -1,13 +1,16 @@
 """Mitsuba 3 references for the XML test scenes in scenes/mitsuba/.
 
-    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--renders 16] [--spp 64] [NAME ...]
+    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--renders 16] [--spp 64] [NAME ...]
 
 (disk_roughplastic was made with `--renders 64 disk_roughplastic`: its
 image mean needs the smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
 uniform 16x8 sky, smoke.vol, a 16^3 smooth blob, and albedo_rgb.vol, a 3-channel
-10 x 8 x 6 albedo ramp for grid_albedo), all from fixed formulas.
+10 x 8 x 6 albedo ramp for grid_albedo), all from fixed formulas; `--data` or
+`--textures` (re)writes the images of the `textured` scene (tex_srgb.png, a
+16 x 8 8-bit sRGB image, and tex_raw.png, a 4 x 4 8-bit image read raw),
+also from fixed formulas.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
 statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
@@ -33,7 +36,7 @@ SCENES = os.path.join(ROOT, "scenes", "mitsuba")
 OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
-         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo"]
+         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured"]
 
 
 def write_data(mi):
@@ -67,6 +70,21 @@ def write_data(mi):
         f.write(a.astype("<f4").tobytes())
 
 
+def write_textures(mi):
+    """Images of the `textured` scene. Row 0 is the image's top."""
+    os.makedirs(os.path.join(SCENES, "data"), exist_ok=True)
+    # 16 x 8 sRGB: red ramps left to right, green is bright at the top and dark
+    # at the bottom (a v flip changes the picture), blue has a bar in row 1.
+    h, w = 8, 16
+    y, x = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
+    img = np.stack([20 + 14 * x, 235 - 30 * y, np.where(y == 1, 230, 40 + 5 * x)], axis=-1).astype(np.uint8)
+    mi.Bitmap(img, pixel_format=mi.Bitmap.PixelFormat.RGB).write(os.path.join(SCENES, "data", "tex_srgb.png"))
+    # 4 x 4 raw values: distinct levels per texel, darker toward the bottom right.
+    y, x = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
+    raw = np.stack([230 - 40 * x - 10 * y, 60 + 50 * y, 200 - 45 * y + 5 * x], axis=-1).astype(np.uint8)
+    mi.Bitmap(raw, pixel_format=mi.Bitmap.PixelFormat.RGB).write(os.path.join(SCENES, "data", "tex_raw.png"))
+
+
 def block_means(img: np.ndarray) -> np.ndarray:
     h, w, _ = img.shape
     return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, 3).mean(axis=(1, 3))
@@ -75,6 +93,7 @@ def block_means(img: np.ndarray) -> np.ndarray:
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", action="store_true")
+    ap.add_argument("--textures", action="store_true")
     ap.add_argument("--renders", type=int, default=16)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--variant", default="llvm_ad_rgb")
@@ -89,6 +108,8 @@ def main():
     mi.set_variant(a.variant)
     if a.data:
         write_data(mi)
+    if a.data or a.textures:
+        write_textures(mi)
     os.makedirs(OUT, exist_ok=True)
     for name in a.names or NAMES:
         scene = mi.load_file(os.path.join(SCENES, name + ".xml"), spp=str(a.spp))

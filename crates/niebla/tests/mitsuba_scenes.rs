@@ -187,3 +187,11 @@ fn disk_light_over_rough_plastics_matches_mitsuba() {
 fn sigma_t_and_rgb_albedo_grids_match_mitsuba() {
     check("grid_albedo");
 }
+
+/// Bitmap textures (sRGB and raw, bilinear and nearest, repeat, mirror and
+/// clamp, `to_uv`), on a rectangle, an OBJ mesh (flipped uvs) and a sphere,
+/// and a checkerboard: Mitsuba's uv origin (v = 0 at the image's top).
+#[test]
+fn bitmap_and_checkerboard_textures_match_mitsuba() {
+    check("textured");
+}

@@ -113,6 +113,15 @@ fn bad_textures_are_errors() {
         (r#"{"type": "bitmap", "file": "broken.png"}"#, vec!["shapes[0].bsdf.reflectance.file", "broken.png", "PNG"]),
         (r#"{"type": "bitmap", "file": "a.tga"}"#, vec!["shapes[0].bsdf.reflectance.file", "tga"]),
         (r#"{"type": "bitmap", "file": "a.png", "wrap": "tile"}"#, vec!["shapes[0].bsdf.reflectance.wrap", "tile"]),
+        (
+            r#"{"type": "bitmap", "file": "a.png", "filter": "cubic"}"#,
+            vec!["shapes[0].bsdf.reflectance.filter", "cubic"],
+        ),
+        (
+            r#"{"type": "bitmap", "file": "a.png", "to_uv": [[1, 0, 1e39], [0, 1, 0]]}"#,
+            vec!["shapes[0].bsdf.reflectance.to_uv[0][2]", "finite"],
+        ),
+        (r#"{"type": "checkerboard", "to_uv": [[1, 0], [0, 1]]}"#, vec!["shapes[0].bsdf.reflectance.to_uv"]),
         (r#"{"type": "checkerboard", "color0": 1.5}"#, vec!["shapes[0].bsdf.reflectance.color0"]),
         (r#"{"type": "checkerboard", "scale": [0, 1]}"#, vec!["shapes[0].bsdf.reflectance.scale[0]"]),
         (r#"{"type": "marble"}"#, vec!["shapes[0].bsdf.reflectance", "marble"]),

@@ -18,7 +18,7 @@ use crate::math::{Vec2, Vec3};
 
 /// What makes two mesh shapes share their mesh: the file, the OBJ object
 /// and the two options that change the data.
-type MeshKey = (PathBuf, Option<String>, bool, bool);
+type MeshKey = (PathBuf, Option<String>, bool, bool, bool);
 
 /// A loaded mesh and whether it is closed (checked once per mesh).
 #[derive(Clone)]
@@ -68,7 +68,8 @@ impl MeshLoader {
         let loaded = match &desc.file {
             Some(file) => {
                 let full = base_dir.join(file);
-                let key = (full.clone(), desc.object.clone(), desc.flip_normals, desc.face_normals);
+                let key =
+                    (full.clone(), desc.object.clone(), desc.flip_normals, desc.face_normals, desc.flip_tex_coords);
                 let field = format!("{path}.file");
                 match self.cache.get(&key) {
                     Some(l) => {
@@ -143,6 +144,13 @@ fn inline_error(e: niebla_mesh::MeshError, path: &str, source: &str) -> SceneErr
 fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, String> {
     if desc.face_normals {
         data.normals = None;
+    }
+    if desc.flip_tex_coords {
+        if let Some(uvs) = &mut data.uvs {
+            for uv in uvs.iter_mut() {
+                uv[1] = 1.0 - uv[1];
+            }
+        }
     }
     if desc.flip_normals {
         for t in &mut data.indices {

@@ -10,7 +10,7 @@ use super::desc::TextureDesc;
 use super::SceneError;
 use crate::limits::MemoryBudget;
 use crate::math::Vec2;
-use crate::texture::{Bitmap, Texture, WrapMode};
+use crate::texture::{Bitmap, Texture, UvMap, WrapMode};
 
 /// What makes two image textures share their image.
 type ImageKey = (PathBuf, bool, WrapMode);
@@ -48,10 +48,10 @@ impl TextureLoader {
         budget: &mut MemoryBudget,
     ) -> Result<Texture, SceneError> {
         Ok(match desc {
-            TextureDesc::Checkerboard { color0, color1, scale } => {
-                Texture::Checkerboard { color0: color0.to_rgb(), color1: color1.to_rgb(), scale: Vec2::from(*scale) }
+            TextureDesc::Checkerboard { color0, color1, scale, to_uv } => {
+                Texture::Checkerboard { color0: color0.to_rgb(), color1: color1.to_rgb(), uv_map: uv_map(scale, to_uv) }
             }
-            TextureDesc::Bitmap { file, wrap, raw, scale } => {
+            TextureDesc::Bitmap { file, wrap, raw, scale, filter, to_uv } => {
                 let full = base_dir.join(file);
                 let key = (full.clone(), *raw, *wrap);
                 let field = format!("{path}.file");
@@ -76,8 +76,17 @@ impl TextureLoader {
                         image
                     }
                 };
-                Texture::Bitmap { image, scale: Vec2::from(*scale) }
+                Texture::Bitmap { image, uv_map: uv_map(scale, to_uv), filter: *filter }
             }
         })
+    }
+}
+
+/// The uv map of a texture description: `scale` after `to_uv`.
+fn uv_map(scale: &[f32; 2], to_uv: &Option<[[f32; 3]; 2]>) -> UvMap {
+    let scale = UvMap::scale(Vec2::from(*scale));
+    match to_uv {
+        Some(m) => scale.after(&UvMap::from_rows(*m)),
+        None => scale,
     }
 }

@@ -721,6 +721,10 @@ struct RawBitmap {
     raw: bool,
     #[serde(default = "unit_uv_scale")]
     scale: [f32; 2],
+    #[serde(default)]
+    filter: Option<String>,
+    #[serde(default)]
+    to_uv: Option<[[f32; 3]; 2]>,
 }
 
 fn unit_uv_scale() -> [f32; 2] {
@@ -748,6 +752,8 @@ struct RawCheckerboard {
     color1: ColorDesc,
     #[serde(default = "checker_uv_scale")]
     scale: [f32; 2],
+    #[serde(default)]
+    to_uv: Option<[[f32; 3]; 2]>,
 }
 
 fn parse_texture(mut object: Object) -> Result<TextureDesc, Located> {
@@ -766,11 +772,21 @@ fn parse_texture(mut object: Object) -> Result<TextureDesc, Located> {
                     ))
                 }
             };
-            Ok(TextureDesc::Bitmap { file: raw.file, wrap, raw: raw.raw, scale: raw.scale })
+            let filter = match raw.filter.as_deref() {
+                None | Some("bilinear") => crate::texture::FilterMode::Bilinear,
+                Some("nearest") => crate::texture::FilterMode::Nearest,
+                Some(other) => {
+                    return Err(Located::new(
+                        "filter",
+                        format!("unknown filter \"{other}\"; expected \"bilinear\" or \"nearest\""),
+                    ))
+                }
+            };
+            Ok(TextureDesc::Bitmap { file: raw.file, wrap, raw: raw.raw, scale: raw.scale, filter, to_uv: raw.to_uv })
         }
         "checkerboard" => {
             let raw: RawCheckerboard = rest(object)?;
-            Ok(TextureDesc::Checkerboard { color0: raw.color0, color1: raw.color1, scale: raw.scale })
+            Ok(TextureDesc::Checkerboard { color0: raw.color0, color1: raw.color1, scale: raw.scale, to_uv: raw.to_uv })
         }
         _ => Err(unknown_type("texture", &tag, TextureDesc::TYPES)),
     }

@@ -738,18 +738,30 @@ fn validate_reflectance(base: &str, r: &ReflectanceDesc) -> Check {
         }
         Ok(())
     };
+    let to_uv = |m: &Option<[[f32; 3]; 2]>| -> Check {
+        for (i, row) in m.iter().flatten().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                if !v.is_finite() {
+                    return fail(format!("{base}.to_uv[{i}][{j}]"), format!("must be a finite number, got {v}"));
+                }
+            }
+        }
+        Ok(())
+    };
     match r {
         ReflectanceDesc::Color(c) => color(base, c, in_unit_interval),
-        ReflectanceDesc::Texture(TextureDesc::Bitmap { scale: s, file, .. }) => {
+        ReflectanceDesc::Texture(TextureDesc::Bitmap { scale: s, file, to_uv: m, .. }) => {
             if file.is_empty() {
                 return fail(format!("{base}.file"), "must name an image file (.png, .jpg or .exr)");
             }
-            scale(s)
+            scale(s)?;
+            to_uv(m)
         }
-        ReflectanceDesc::Texture(TextureDesc::Checkerboard { color0, color1, scale: s }) => {
+        ReflectanceDesc::Texture(TextureDesc::Checkerboard { color0, color1, scale: s, to_uv: m }) => {
             color(&format!("{base}.color0"), color0, in_unit_interval)?;
             color(&format!("{base}.color1"), color1, in_unit_interval)?;
-            scale(s)
+            scale(s)?;
+            to_uv(m)
         }
     }
 }

@@ -21,6 +21,16 @@ pub enum WrapMode {
     Clamp,
 }
 
+/// How an image is looked up between texel centers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum FilterMode {
+    /// Bilinear interpolation of the four nearest texel centers (the default).
+    #[default]
+    Bilinear,
+    /// The texel containing the point.
+    Nearest,
+}
+
 /// Why an image texture could not be loaded. Each message starts with the file.
 #[derive(Debug, thiserror::Error)]
 pub enum TextureError {
@@ -206,22 +216,30 @@ impl Bitmap {
         self.pixels[(wrap(y, h) * w + wrap(x, w)) as usize]
     }
 
-    /// Bilinearly filtered color at `uv`: texel centers at
+    /// Color at `uv` with `filter`. Texel centers lie at
     /// `((i + 1/2) / width, 1 - (j + 1/2) / height)` for column `i`, row `j`
-    /// from the top (`v` grows upward).
+    /// from the top (`v` grows upward); a nearest lookup takes the texel
+    /// whose cell `[i / width, (i + 1) / width) x (1 - (j + 1) / height, 1 - j / height]`
+    /// holds `uv`.
     #[inline]
-    pub fn eval(&self, uv: Vec2) -> Rgb {
+    pub fn eval(&self, uv: Vec2, filter: FilterMode) -> Rgb {
         if !uv.is_finite() {
             return Rgb::ZERO;
         }
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = (1.0 - uv.y) * self.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
-        let top = self.texel(x0, y0) * (1.0 - fx) + self.texel(x0 + 1, y0) * fx;
-        let bottom = self.texel(x0, y0 + 1) * (1.0 - fx) + self.texel(x0 + 1, y0 + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
+        let x = uv.x * self.width as f32;
+        let y = (1.0 - uv.y) * self.height as f32;
+        match filter {
+            FilterMode::Nearest => self.texel(x.floor() as i64, y.floor() as i64),
+            FilterMode::Bilinear => {
+                let (x, y) = (x - 0.5, y - 0.5);
+                let (x0, y0) = (x.floor(), y.floor());
+                let (fx, fy) = (x - x0, y - y0);
+                let (x0, y0) = (x0 as i64, y0 as i64);
+                let top = self.texel(x0, y0) * (1.0 - fx) + self.texel(x0 + 1, y0) * fx;
+                let bottom = self.texel(x0, y0 + 1) * (1.0 - fx) + self.texel(x0 + 1, y0 + 1) * fx;
+                top * (1.0 - fy) + bottom * fy
+            }
+        }
     }
 }
 
@@ -246,17 +264,56 @@ mod tests {
     fn bilinear_lookup_hits_texel_centers_and_interpolates() {
         let b = two_by_two(WrapMode::Clamp);
         // v grows upward: the bottom-left texel center is (0.25, 0.25).
-        assert_eq!(b.eval(Vec2::new(0.25, 0.25)), Rgb::splat(2.0));
-        assert_eq!(b.eval(Vec2::new(0.75, 0.75)), Rgb::splat(1.0));
-        assert_eq!(b.eval(Vec2::new(0.5, 0.5)), Rgb::splat(1.5));
+        assert_eq!(b.eval(Vec2::new(0.25, 0.25), FilterMode::Bilinear), Rgb::splat(2.0));
+        assert_eq!(b.eval(Vec2::new(0.75, 0.75), FilterMode::Bilinear), Rgb::splat(1.0));
+        assert_eq!(b.eval(Vec2::new(0.5, 0.5), FilterMode::Bilinear), Rgb::splat(1.5));
         // Clamped beyond the border.
-        assert_eq!(b.eval(Vec2::new(-3.0, 0.25)), Rgb::splat(2.0));
+        assert_eq!(b.eval(Vec2::new(-3.0, 0.25), FilterMode::Bilinear), Rgb::splat(2.0));
         // Repeat: u = 1.25 is u = 0.25.
         let r = two_by_two(WrapMode::Repeat);
-        assert_eq!(r.eval(Vec2::new(1.25, 0.25)), Rgb::splat(2.0));
+        assert_eq!(r.eval(Vec2::new(1.25, 0.25), FilterMode::Bilinear), Rgb::splat(2.0));
         // Mirror: u = 1.25 is u = 0.75.
         let m = two_by_two(WrapMode::Mirror);
-        assert_eq!(m.eval(Vec2::new(1.25, 0.25)), Rgb::splat(3.0));
+        assert_eq!(m.eval(Vec2::new(1.25, 0.25), FilterMode::Bilinear), Rgb::splat(3.0));
+    }
+
+    #[test]
+    fn nearest_lookup_takes_the_texel_holding_the_point() {
+        let b = two_by_two(WrapMode::Repeat);
+        let near = |u: f32, v: f32| b.eval(Vec2::new(u, v), FilterMode::Nearest).r();
+        // Texel centers give the values written (row 0 is the top, v = 1).
+        assert_eq!([near(0.25, 0.75), near(0.75, 0.75), near(0.25, 0.25), near(0.75, 0.25)], [0.0, 1.0, 2.0, 3.0]);
+        // Anywhere inside a texel's cell gives that texel, not a blend.
+        assert_eq!(near(0.01, 0.99), 0.0);
+        assert_eq!(near(0.49, 0.51), 0.0);
+        assert_eq!(near(0.51, 0.49), 3.0);
+        // Repeat wraps the cell index.
+        assert_eq!(near(1.6, 0.75), 1.0);
+    }
+
+    /// Mitsuba 3.9.1's `bitmap` (scalar_rgb) evaluated on the same 2x2 image
+    /// at uv points `(u, v_m)`, where Mitsuba's `v_m = 0` is the image's top:
+    /// niebla looks up `(u, 1 - v_m)`.
+    #[test]
+    fn lookups_match_mitsuba_bitmap_values() {
+        let points = [(0.25, 0.25), (0.75, 0.75), (0.25, 0.75), (0.5, 0.5), (1.25, 0.25), (-0.25, 0.25), (1.6, 0.25)];
+        let more = [(0.1, 0.1), (2.3, 0.25)];
+        #[rustfmt::skip]
+        let table: [(WrapMode, FilterMode, [f32; 9]); 6] = [
+            (WrapMode::Repeat, FilterMode::Bilinear, [0.0, 3.0, 2.0, 1.5, 0.0, 1.0, 0.7, 0.9, 0.1]),
+            (WrapMode::Repeat, FilterMode::Nearest, [0.0, 3.0, 2.0, 3.0, 0.0, 1.0, 1.0, 0.0, 0.0]),
+            (WrapMode::Mirror, FilterMode::Bilinear, [0.0, 3.0, 2.0, 1.5, 1.0, 0.0, 0.3, 0.0, 0.1]),
+            (WrapMode::Mirror, FilterMode::Nearest, [0.0, 3.0, 2.0, 3.0, 1.0, 0.0, 0.0, 0.0, 0.0]),
+            (WrapMode::Clamp, FilterMode::Bilinear, [0.0, 3.0, 2.0, 1.5, 1.0, 0.0, 1.0, 0.0, 1.0]),
+            (WrapMode::Clamp, FilterMode::Nearest, [0.0, 3.0, 2.0, 3.0, 1.0, 0.0, 1.0, 0.0, 1.0]),
+        ];
+        for (wrap, filter, want) in table {
+            let b = two_by_two(wrap);
+            for (&(u, v), w) in points.iter().chain(more.iter()).zip(want) {
+                let got = b.eval(Vec2::new(u, 1.0 - v), filter).r();
+                assert!((got - w).abs() < 1e-5, "{wrap:?} {filter:?} at ({u}, {v}): {got} vs Mitsuba's {w}");
+            }
+        }
     }
 
     #[test]

@@ -12,30 +12,76 @@
 
 mod bitmap;
 
-pub use bitmap::{Bitmap, TextureError, WrapMode};
+pub use bitmap::{Bitmap, FilterMode, TextureError, WrapMode};
 
 use crate::color::Rgb;
 use crate::math::Vec2;
 
+/// An affine map of uv coordinates, `uv' = (m[0][0] u + m[0][1] v + m[0][2],
+/// m[1][0] u + m[1][1] v + m[1][2])` (Mitsuba 3's `to_uv`, rows of its 3x3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvMap {
+    /// The two rows of the map.
+    pub m: [[f32; 3]; 2],
+}
+
+impl UvMap {
+    /// The identity map.
+    pub const IDENTITY: UvMap = UvMap { m: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] };
+
+    /// Scaling by `s` (per axis).
+    pub fn scale(s: Vec2) -> UvMap {
+        UvMap { m: [[s.x, 0.0, 0.0], [0.0, s.y, 0.0]] }
+    }
+
+    /// The map from the rows `m`.
+    pub fn from_rows(m: [[f32; 3]; 2]) -> UvMap {
+        UvMap { m }
+    }
+
+    /// `self` after `first`: `uv -> self(first(uv))`.
+    pub fn after(&self, first: &UvMap) -> UvMap {
+        let (a, b) = (&self.m, &first.m);
+        let row = |r: usize| {
+            [
+                a[r][0] * b[0][0] + a[r][1] * b[1][0],
+                a[r][0] * b[0][1] + a[r][1] * b[1][1],
+                a[r][0] * b[0][2] + a[r][1] * b[1][2] + a[r][2],
+            ]
+        };
+        UvMap { m: [row(0), row(1)] }
+    }
+
+    /// The mapped point.
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let m = &self.m;
+        Vec2::new(m[0][0] * uv.x + m[0][1] * uv.y + m[0][2], m[1][0] * uv.x + m[1][1] * uv.y + m[1][2])
+    }
+}
+
 /// A texture: a color per uv point, linear Rec.709 RGB.
 #[derive(Clone, Debug)]
 pub enum Texture {
-    /// An image, filtered bilinearly, `uv` scaled by `scale` first.
+    /// An image looked up at `uv_map(uv)`.
     Bitmap {
         /// The image (linear RGB).
         image: std::sync::Arc<Bitmap>,
-        /// uv scale (repetitions over the surface's uv range).
-        scale: Vec2,
+        /// Map applied to the surface's uv before the lookup (the JSON
+        /// `scale`, after `to_uv` when given).
+        uv_map: UvMap,
+        /// Bilinear or nearest-texel lookup.
+        filter: FilterMode,
     },
-    /// Two colors alternating on a grid of `scale` cells per unit of uv
-    /// (Mitsuba 3's `checkerboard` has `scale` 2: four squares over `[0, 1]^2`).
+    /// Two colors alternating on a unit grid in `uv_map(uv)` (Mitsuba 3's
+    /// `checkerboard` is the JSON `scale` 2: four squares over `[0, 1]^2`).
     Checkerboard {
         /// Color of the cells whose integer coordinates sum to an even number.
         color0: Rgb,
         /// Color of the other cells.
         color1: Rgb,
-        /// Cells per unit of uv along u and v.
-        scale: Vec2,
+        /// Map from the surface's uv to cell coordinates.
+        uv_map: UvMap,
     },
 }
 
@@ -44,9 +90,9 @@ impl Texture {
     #[inline]
     pub fn eval(&self, uv: Vec2) -> Rgb {
         match self {
-            Texture::Bitmap { image, scale } => image.eval(uv * *scale),
-            Texture::Checkerboard { color0, color1, scale } => {
-                let c = (uv * *scale).floor();
+            Texture::Bitmap { image, uv_map, filter } => image.eval(uv_map.apply(uv), *filter),
+            Texture::Checkerboard { color0, color1, uv_map } => {
+                let c = uv_map.apply(uv).floor();
                 if (c.x as i64 + c.y as i64).rem_euclid(2) == 0 {
                     *color0
                 } else {
@@ -85,10 +131,27 @@ mod tests {
 
     #[test]
     fn checkerboard_alternates_by_cell() {
-        let t = Texture::Checkerboard { color0: Rgb::splat(0.1), color1: Rgb::splat(0.9), scale: Vec2::splat(2.0) };
+        let t = Texture::Checkerboard {
+            color0: Rgb::splat(0.1),
+            color1: Rgb::splat(0.9),
+            uv_map: UvMap::scale(Vec2::splat(2.0)),
+        };
         assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Rgb::splat(0.1));
         assert_eq!(t.eval(Vec2::new(0.6, 0.1)), Rgb::splat(0.9));
         assert_eq!(t.eval(Vec2::new(0.6, 0.6)), Rgb::splat(0.1));
         assert_eq!(t.eval(Vec2::new(-0.1, 0.1)), Rgb::splat(0.9));
+    }
+
+    #[test]
+    fn uv_maps_compose_in_order() {
+        // First scale by (2, 3), then translate by (0.5, -1) and swap axes.
+        let first = UvMap::scale(Vec2::new(2.0, 3.0));
+        let then = UvMap::from_rows([[0.0, 1.0, 0.5], [1.0, 0.0, -1.0]]);
+        let both = then.after(&first);
+        for uv in [Vec2::new(0.1, 0.7), Vec2::new(-2.0, 5.0)] {
+            let want = then.apply(first.apply(uv));
+            assert!((both.apply(uv) - want).length() < 1e-6, "{uv}");
+        }
+        assert_eq!(both.apply(Vec2::new(1.0, 1.0)), Vec2::new(3.5, 1.0));
     }
 }

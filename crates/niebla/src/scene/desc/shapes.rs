@@ -80,6 +80,10 @@ pub struct MeshDesc {
     /// normals (Mitsuba 3's `face_normals`). Default false.
     #[serde(default)]
     pub face_normals: bool,
+    /// Replace every vertex uv `(u, v)` by `(u, 1 - v)` (Mitsuba 3's
+    /// `flip_tex_coords`; meshes without uvs are unaffected). Default false.
+    #[serde(default)]
+    pub flip_tex_coords: bool,
     /// Let an open mesh (boundary edges, inconsistent winding) bound a
     /// medium: it then acts like a rectangle, with the `interior` medium
     /// behind its normals. Default false (such a mesh is an error).
@@ -165,6 +169,11 @@ pub enum TextureDesc {
         raw: bool,
         /// uv scale `[su, sv]` (default `[1, 1]`): repetitions of the image.
         scale: [f32; 2],
+        /// `"bilinear"` (default) or `"nearest"`.
+        filter: crate::texture::FilterMode,
+        /// Optional affine map of uv applied before `scale`: rows
+        /// `[[a, b, c], [d, e, f]]` give `(a u + b v + c, d u + e v + f)`.
+        to_uv: Option<[[f32; 3]; 2]>,
     },
     /// `"checkerboard"`: two colors on a grid of `scale` cells per unit uv.
     Checkerboard {
@@ -175,6 +184,8 @@ pub enum TextureDesc {
         /// Cells per unit of u and v (default `[2, 2]`, four cells over the
         /// unit square, as Mitsuba 3's checkerboard).
         scale: [f32; 2],
+        /// Optional affine map of uv applied before `scale` (as for `bitmap`).
+        to_uv: Option<[[f32; 3]; 2]>,
     },
 }
 

@@ -2,12 +2,15 @@
 //! `null` map to niebla's own; `roughconductor`, `roughdielectric`,
 //! `thindielectric`, `plastic`, `roughplastic` and `twosided` are written
 //! with Mitsuba's names and defaults (named indices of refraction replaced by
-//! their numbers).
+//! their numbers). A diffuse `reflectance`, a plastic's
+//! `diffuse_reflectance` and a rough conductor's `specular_reflectance` may
+//! be textures (`textures`); other parameters take constants.
 
 use serde_json::{json, Map, Value};
 
 use super::convert::{color_json, Converter};
 use super::props::Props;
+use super::textures::{color_or_texture, has_texture};
 use super::xml::Node;
 use crate::scene::SceneError;
 
@@ -70,6 +73,15 @@ fn unit_only(p: &Props, name: &str) -> Result<(), SceneError> {
 
 /// Microfacet keys: `distribution` (default beckmann) and `alpha` or `alpha_u` + `alpha_v`.
 fn microfacet(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneError> {
+    for name in ["alpha", "alpha_u", "alpha_v"] {
+        if let Some(t) = p.plugin_named(name) {
+            return Err(t.loc.error(format!(
+                "{}: `{name}` as {}: a textured roughness is not supported (give a <float>)",
+                p.what(),
+                t.describe()
+            )));
+        }
+    }
     let d = p.string("distribution")?.unwrap_or("beckmann");
     if d != "beckmann" && d != "ggx" {
         return Err(p.error(format!("`distribution` \"{d}\": expected beckmann or ggx")));
@@ -129,7 +141,8 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
     match t {
         "null" => {}
         "diffuse" => {
-            out.insert("reflectance".into(), color_json(p.color("reflectance")?.unwrap_or([0.5; 3])));
+            let r = color_or_texture(c, &p, "reflectance")?.unwrap_or_else(|| json!(0.5));
+            out.insert("reflectance".into(), r);
         }
         "dielectric" => {
             out.insert("int_ior".into(), json!(ior(&p, "int_ior", "bk7")?));
@@ -150,7 +163,9 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
         "roughconductor" => {
             microfacet(&p, &mut out)?;
             conductor_index(&p, &mut out)?;
-            copy_color(&p, "specular_reflectance", &mut out)?;
+            if let Some(r) = color_or_texture(c, &p, "specular_reflectance")? {
+                out.insert("specular_reflectance".into(), r);
+            }
         }
         "roughdielectric" | "thindielectric" => {
             if t == "roughdielectric" {
@@ -168,7 +183,8 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
                     return Err(p.error("roughplastic is isotropic: give `alpha`"));
                 }
             }
-            out.insert("diffuse_reflectance".into(), color_json(p.color("diffuse_reflectance")?.unwrap_or([0.5; 3])));
+            let d = color_or_texture(c, &p, "diffuse_reflectance")?.unwrap_or_else(|| json!(0.5));
+            out.insert("diffuse_reflectance".into(), d);
             out.insert("specular_reflectance".into(), color_json(p.color("specular_reflectance")?.unwrap_or([1.0; 3])));
             out.insert("int_ior".into(), json!(ior(&p, "int_ior", "polypropylene")?));
             out.insert("ext_ior".into(), json!(ior(&p, "ext_ior", "air")?));
@@ -184,6 +200,9 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
                     convert_bsdf(c, n)
                 })
                 .collect::<Result<Vec<_>, _>>()?;
+            if sides.len() == 2 && sides[0] != sides[1] && has_texture(&sides[0]) && has_texture(&sides[1]) {
+                return Err(p.error("textures on both sides are not supported (niebla textures one color per surface)"));
+            }
             match sides.len() {
                 1 => out.insert("bsdf".into(), sides.into_iter().next().unwrap_or(Value::Null)),
                 2 => out.insert("bsdf".into(), Value::Array(sides)),

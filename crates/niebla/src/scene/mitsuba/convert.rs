@@ -175,7 +175,7 @@ impl<'a> Converter<'a> {
                     self.medium(n)?;
                 }
                 // Declarations used through <ref>; checked where they are used.
-                "bsdf" | "phase" | "volume" if n.attr("id").is_some() => {}
+                "bsdf" | "phase" | "volume" | "texture" if n.attr("id").is_some() => {}
                 _ => return Err(n.loc.error(format!("{}: not supported at the top level of a scene", n.describe()))),
             }
         }

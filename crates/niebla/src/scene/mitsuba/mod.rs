@@ -8,7 +8,7 @@
 //! `<include>`, `<path>`, positions), `props` (typed properties),
 //! `transform` (`<transform>` operations), `convert` (ids, `<ref>`s, the
 //! top level), `sensor` (camera, film, sampler, integrator), `shapes`,
-//! `emitters`, `media` (media, phases, volumes), `bsdfs`.
+//! `emitters`, `media` (media, phases, volumes), `bsdfs`, `textures`.
 //!
 //! Conventions are Mitsuba's, converted exactly: `max_depth` N is niebla's
 //! `volpath` N - 1 (Mitsuba counts path segments, niebla scattering
@@ -24,6 +24,7 @@ mod media;
 mod props;
 mod sensor;
 mod shapes;
+mod textures;
 mod transform;
 mod xml;
 

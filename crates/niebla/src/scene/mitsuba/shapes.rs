@@ -55,6 +55,10 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     };
     let flip = p.boolean("flip_normals")?.unwrap_or(false);
     let mut shape = Map::new();
+    // Why a texture on this shape would not look as in Mitsuba, if it would not.
+    let mut untexturable: Option<&str> = None;
+    // Mitsuba's flip_tex_coords (default true for OBJ, false for PLY).
+    let mut flip_tex_coords = false;
     match t {
         "sphere" => {
             let center = p.vec3("center")?.unwrap_or([0.0; 3]);
@@ -70,11 +74,16 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             if !(radius > 0.0) {
                 return Err(p.error(format!("`radius` must be > 0, got {radius}")));
             }
+            let r = |i: usize, j: usize| m[i][j] / s - if i == j { 1.0 } else { 0.0 };
+            if (0..3).any(|i| (0..3).any(|j| r(i, j).abs() > 1e-6)) {
+                untexturable = Some("a sphere rotated by its to_world (niebla's spheres have no orientation for uvs)");
+            }
             shape.insert("type".into(), json!("sphere"));
             shape.insert("center".into(), json!(point(&m, center)));
             shape.insert("radius".into(), json!(radius * s));
         }
         "cube" => {
+            untexturable = Some("a cube (its uv layout is not converted)");
             if is_axis_aligned(&m) && !flip {
                 let lo = point(&m, [-1.0; 3]);
                 let hi = point(&m, [1.0; 3]);
@@ -113,7 +122,7 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             if p.boolean("face_normals")?.unwrap_or(false) {
                 shape.insert("face_normals".into(), json!(true));
             }
-            p.harmless(&["flip_tex_coords"], "ignored (niebla's importer reads no textures)", &mut c.notes);
+            flip_tex_coords = p.boolean("flip_tex_coords")?.unwrap_or(t == "obj");
         }
         _ => return Err(p.error("not supported")),
     }
@@ -146,6 +155,14 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         // Mitsuba's default surface.
         None => json!({"type": "diffuse", "reflectance": 0.5}),
     };
+    if super::textures::has_texture(&bsdf) {
+        if let Some(why) = untexturable {
+            return Err(p.error(format!("a textured bsdf on {why} is not supported")));
+        }
+        if flip_tex_coords {
+            shape.insert("flip_tex_coords".into(), json!(true));
+        }
+    }
     p.finish()?;
     if emitters.len() > 1 {
         return Err(emitters[1].loc.error("a shape has at most one emitter"));

@@ -249,8 +249,8 @@ fn errors_name_file_line_and_element() {
         e.starts_with("t.xml:8: <shape type=\"sphere\">: property `radiuss` (<float name=\"radiuss\">): not supported"),
         "{e}"
     );
-    let e = err("<shape type=\"sphere\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">\
-                 <string name=\"filename\" value=\"a.png\"/></texture></bsdf></shape>");
+    let e = err("<shape type=\"sphere\"><bsdf type=\"dielectric\"><texture type=\"checkerboard\" \
+                 name=\"specular_reflectance\"/></bsdf></shape>");
     assert!(e.starts_with("t.xml:8: ") && e.contains("textures and volumes are not supported here"), "{e}");
     let e = err("<shape type=\"cylinder\"/>");
     assert!(e.starts_with("t.xml:8: <shape type=\"cylinder\">: not supported"), "{e}");
@@ -380,4 +380,130 @@ fn albedo_gridvolumes_become_albedo_grids() {
     let e = run(&medium(rgb_sigma_t, "a1.vol", "")).unwrap_err().to_string();
     assert!(e.starts_with("t.xml:9: ") && e.contains("has 3 channels") && e.contains("one channel"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Imports `body` with a folder holding `a.png` (the importer only checks
+/// that the file exists).
+fn import_with_png(body: &str) -> Result<MitsubaImport, crate::scene::SceneError> {
+    let dir = std::env::temp_dir().join(format!("niebla_mitsuba_tex_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("a.png"), b"not decoded here").unwrap();
+    let text = format!("<scene version=\"3.0.0\">\n{SENSOR}\n{body}\n</scene>");
+    import_mitsuba_str(&text, "t.xml", &dir, &[])
+}
+
+/// Mitsuba's bitmap reads row `v * height` from the image's top, niebla's
+/// `(1 - v) * height`: the imported `to_uv` is Mitsuba's followed by
+/// `v -> 1 - v`; Mitsuba's 4x4 `to_uv` contributes rows/columns 0, 1, 3.
+#[test]
+fn bitmap_textures_convert_with_mitsubas_uv_origin() {
+    let s = import_with_png(
+        r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+           <string name="filename" value="a.png"/><string name="filter_type" value="nearest"/>
+           <string name="wrap_mode" value="mirror"/><boolean name="raw" value="true"/>
+           <transform name="to_uv"><scale x="2" y="4"/><translate x="0.5" y="0.25"/></transform>
+           </texture></bsdf></shape>"#,
+    )
+    .unwrap()
+    .scene;
+    let r = &s["shapes"][0]["bsdf"]["reflectance"];
+    assert_eq!(r["type"], json!("bitmap"));
+    assert_eq!(r["file"], json!("a.png"));
+    assert_eq!((&r["filter"], &r["wrap"], &r["raw"]), (&json!("nearest"), &json!("mirror"), &json!(true)));
+    // u' = 2u + 0.5; Mitsuba's v' = 4v + 0.25 becomes niebla's 1 - v' = -4v + 0.75.
+    assert_eq!(r["to_uv"], json!([[2.0, 0.0, 0.5], [0.0, -4.0, 0.75]]));
+    crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+    // Defaults: bilinear, repeat, sRGB, and the flip alone.
+    let s = import_with_png(
+        r#"<texture type="bitmap" id="t"><string name="filename" value="a.png"/></texture>
+           <shape type="obj"><string name="filename" value="a.png"/>
+           <bsdf type="roughconductor"><string name="material" value="Au"/><ref name="specular_reflectance" id="t"/></bsdf>
+           </shape>"#,
+    )
+    .unwrap()
+    .scene;
+    let shape = &s["shapes"][0];
+    // OBJ uvs are flipped on load, as Mitsuba's flip_tex_coords (default true for OBJ).
+    assert_eq!(shape["flip_tex_coords"], json!(true));
+    let r = &shape["bsdf"]["specular_reflectance"];
+    assert_eq!((&r["filter"], &r["wrap"], &r["raw"]), (&json!("bilinear"), &json!("repeat"), &json!(false)));
+    assert_eq!(r["to_uv"], json!([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0]]));
+    // PLY: Mitsuba's default is no flip.
+    let s = import_with_png(
+        r#"<shape type="ply"><string name="filename" value="a.png"/>
+           <bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="a.png"/></texture>
+           </bsdf></shape>"#,
+    )
+    .unwrap()
+    .scene;
+    assert!(s["shapes"][0].get("flip_tex_coords").is_none());
+}
+
+/// Mitsuba's checkerboard: color0 where frac(u) and frac(v) are both below
+/// 1/2 or both above (niebla's cells of half a unit: scale 2), defaults 0.4 and 0.2.
+#[test]
+fn checkerboard_converts_with_its_defaults() {
+    let s = import(
+        r#"<shape type="sphere"><bsdf type="plastic"><texture type="checkerboard" name="diffuse_reflectance">
+           <transform name="to_uv"><scale x="3" y="5"/></transform></texture></bsdf></shape>"#,
+    )
+    .unwrap()
+    .scene;
+    let r = &s["shapes"][0]["bsdf"]["diffuse_reflectance"];
+    assert_eq!(
+        *r,
+        json!({"type": "checkerboard", "color0": 0.4, "color1": 0.2, "scale": [2.0, 2.0],
+               "to_uv": [[3.0, 0.0, 0.0], [0.0, 5.0, 0.0]]})
+    );
+    crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+}
+
+#[test]
+fn texture_errors_name_file_line_and_attribute() {
+    let tex = |props: &str| {
+        format!(
+            "<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n<texture type=\"bitmap\" name=\"reflectance\">\n\
+             <string name=\"filename\" value=\"a.png\"/>\n{props}</texture></bsdf></shape>"
+        )
+    };
+    let e = import_with_png(&tex("<string name=\"filter_type\" value=\"cubic\"/>")).unwrap_err().to_string();
+    assert!(
+        e.starts_with("t.xml:11: <texture type=\"bitmap\">: `filter_type` \"cubic\": expected bilinear, nearest"),
+        "{e}"
+    );
+    let e = import_with_png(&tex("<string name=\"wrap_mode\" value=\"tile\"/>")).unwrap_err().to_string();
+    assert!(
+        e.starts_with("t.xml:11: <texture type=\"bitmap\">: `wrap_mode` \"tile\": expected repeat, mirror, clamp"),
+        "{e}"
+    );
+    let e = import_with_png(&tex("<float name=\"gamma\" value=\"2\"/>")).unwrap_err().to_string();
+    assert!(e.starts_with("t.xml:11: <texture type=\"bitmap\">: property `gamma`"), "{e}");
+    // A missing image: the texture's line and the file named.
+    let e = err("<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n<texture type=\"bitmap\" name=\"reflectance\">\
+                 <string name=\"filename\" value=\"missing.png\"/></texture></bsdf></shape>");
+    assert!(e.starts_with("t.xml:9: <texture type=\"bitmap\">: file \"missing.png\" not found"), "{e}");
+    let e = import_with_png(
+        "<shape type=\"rectangle\"><bsdf type=\"diffuse\">\n<texture type=\"mesh_attribute\" \
+                             name=\"reflectance\"/></bsdf></shape>",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("t.xml:9: <texture type=\"mesh_attribute\">: not supported"), "{e}");
+    // Textured roughness, and shapes whose uvs are not converted.
+    let e = import_with_png(
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/>\n\
+                             <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("t.xml:9: <bsdf type=\"roughconductor\">: `alpha` as <texture type=\"checkerboard\">"),
+        "{e}"
+    );
+    let e = err("<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/>\
+                 </bsdf></shape>");
+    assert!(e.starts_with("t.xml:8: <shape type=\"cube\">: a textured bsdf on a cube"), "{e}");
+    let e = err("<shape type=\"sphere\"><transform name=\"to_world\"><rotate z=\"1\" angle=\"30\"/></transform>\
+                 <bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/></bsdf></shape>");
+    assert!(e.contains("a textured bsdf on a sphere rotated"), "{e}");
 }
