@@ -57,6 +57,8 @@ pub(crate) mod settings;
 use std::sync::Arc;
 use std::time::Instant;
 
+use rayon::prelude::*;
+
 use crate::color::Rgb;
 use crate::light::{AreaShape, Light, SpotLight};
 use crate::math::{Ray, Vec3};
@@ -355,7 +357,12 @@ impl HegemanIntegrator {
             let (Some(model), Medium::Grid(g), true) = (model, medium, changed.get(index) == Some(&true)) else {
                 continue;
             };
-            model.blur = BlurredPhaseTable::new(g.phase.mean_cosine());
+            // The table depends on `g` alone: a drag of the density scale or
+            // the albedo keeps it (the same values a new table would hold).
+            let asymmetry = g.phase.mean_cosine();
+            if model.blur.g().to_bits() != asymmetry.to_bits() {
+                model.blur = BlurredPhaseTable::new(asymmetry);
+            }
             model.tables = calibration_tables(g, &self.settings);
             model.update_factors(g, &self.lights, self.settings.multiple_scattering);
         }
@@ -553,7 +560,8 @@ impl HegemanIntegrator {
 impl GridModel {
     /// Recompute the per-node factors from the line integrals for the
     /// medium's current coefficients (no marching: interactive editing of
-    /// `sigma_t`, albedo and `g`).
+    /// `sigma_t`, albedo and `g`). Nodes are independent, so they are
+    /// computed in parallel with the same values as one thread would give.
     fn update_factors(&mut self, g: &GridMedium, lights: &[ModelLight], multiple: bool) {
         let nodes = self.n[0] * self.n[1] * self.n[2];
         let extent = self.hi - self.lo;
@@ -562,20 +570,21 @@ impl GridModel {
         let power = sigma_s.average() * (1.0 - g.phase.mean_cosine()).max(0.0);
         let stride = AMBIENT + FACTORS * lights.iter().filter(|l| !l.ambient).count();
         let mut factors = vec![0f32; nodes * stride];
-        for (node, chunk) in factors.chunks_mut(stride).enumerate() {
-            let (x, y, z) = (node % self.n[0], (node / self.n[0]) % self.n[1], node / (self.n[0] * self.n[1]));
+        let model = &*self;
+        factors.par_chunks_mut(stride).enumerate().with_min_len(512).for_each(|(node, chunk)| {
+            let (x, y, z) = (node % model.n[0], (node / model.n[0]) % model.n[1], node / (model.n[0] * model.n[1]));
             let f = Vec3::new(
-                x as f32 / (self.n[0] - 1) as f32,
-                y as f32 / (self.n[1] - 1) as f32,
-                z as f32 / (self.n[2] - 1) as f32,
+                x as f32 / (model.n[0] - 1) as f32,
+                y as f32 / (model.n[1] - 1) as f32,
+                z as f32 / (model.n[2] - 1) as f32,
             );
-            let p = self.lo + extent * f;
+            let p = model.lo + extent * f;
             let mut slot = 0;
             for (index, light) in lights.iter().enumerate() {
-                let [d0, d1, d2] = self.volumes[index].node(node);
+                let [d0, d1, d2] = model.volumes[index].node(node);
                 let sharp = (sigma_t * d0).exp_neg();
                 let tau = sigma_t * d0;
-                let table = self.tables.as_ref().map(|t| match light.source {
+                let table = model.tables.as_ref().map(|t| match light.source {
                     LightSource::Point(_) => &t.point,
                     LightSource::Direction(_) => &t.collimated,
                 });
@@ -607,7 +616,7 @@ impl GridModel {
                 };
                 out[..3].copy_from_slice(&sharp.0);
                 out[3..6].copy_from_slice(&scattered.0);
-                out[6] = if self.tables.is_some() {
+                out[6] = if model.tables.is_some() {
                     // M2 correction: the shape of a homogeneous medium whose
                     // width moment M2 = T s^3 / 3 equals the actual one,
                     // i.e. at depth tau * 3 M2 / (s^2 D0) (1 for a plane wave,
@@ -625,7 +634,7 @@ impl GridModel {
                     w2.max(0.0).sqrt()
                 };
             }
-        }
+        });
         self.factors = factors;
         self.stride = stride;
     }

@@ -194,13 +194,41 @@ struct GridModel {
     fit: FitReport,
     /// Lit on the coarser preview lattice ([`ZhouIntegrator::update_media_preview`]).
     preview: bool,
+    /// The optical depths of `D~` from the centres, kept for the next relight.
+    depths: CentreDepths,
+}
+
+/// Optical depths (density x length) of `D~` seen from the RBF centres:
+/// toward the environment ([`lighting::centre_depth_sh`], or the exact one
+/// per quadrature direction) and toward each model light
+/// ([`lighting::centre_light_depths`]). They depend on the fit and on the
+/// lights' positions or directions only, not on the medium's coefficients,
+/// so a medium edit (a density-scale drag) reuses them unchanged and a light
+/// edit recomputes only the light depths, when a light moved.
+#[derive(Clone, Debug, Default)]
+struct CentreDepths {
+    /// Whether computed exactly (`exact_transmittance`), with the values:
+    /// `N x order^2` SH coefficients, or `N x directions` exact depths.
+    environment: Option<(bool, Vec<f64>)>,
+    /// The lights' geometry ([`light_geometry`]) and `N x lights` depths.
+    lights: Option<(Vec<[f32; 4]>, Vec<f64>)>,
+}
+
+/// What a model light's depths depend on: its position (tag 0) or its
+/// direction toward the light (tag 1).
+fn light_geometry(light: &ModelLight) -> [f32; 4] {
+    match *light {
+        ModelLight::Point { position, .. } => [0.0, position.x, position.y, position.z],
+        ModelLight::Directional { toward, .. } => [1.0, toward.x, toward.y, toward.z],
+    }
 }
 
 /// A preview relight ([`ZhouIntegrator::update_media_preview`]) lights a
 /// lattice with `resolution / PREVIEW_DIVISOR` cells along the longest
 /// side (at least 8): about `PREVIEW_DIVISOR^3` times fewer nodes to
-/// interpolate the source to and to solve the diffusion on.
-pub const PREVIEW_DIVISOR: usize = 2;
+/// interpolate the source to, to solve the diffusion on and to run the
+/// per-view pass over (16^3 instead of 48^3 at the default resolution).
+pub const PREVIEW_DIVISOR: usize = 3;
 
 /// The integrator with its precomputation.
 #[derive(Clone, Debug)]
@@ -259,7 +287,9 @@ impl ZhouIntegrator {
                     let (lattice, rbfs, smooth, fit) = decompose(g, &settings, cancel)?;
                     fit_seconds += start.elapsed().as_secs_f64();
                     let start = Instant::now();
-                    let mut model = light_model(scene, g, &settings, &lights, lattice, rbfs, smooth, fit, cancel)?;
+                    let depths = CentreDepths::default();
+                    let mut model =
+                        light_model(scene, g, &settings, &lights, lattice, rbfs, smooth, fit, depths, cancel)?;
                     model.set_view(scene.camera.position, settings.sh_order as usize);
                     lighting_seconds += start.elapsed().as_secs_f64();
                     Some(model)
@@ -420,7 +450,9 @@ impl ZhouIntegrator {
                 &mut model.fit,
                 FitReport { relative_error: 0.0, history: Vec::new(), teleports_kept: 0 },
             );
-            let Some(relit) = light_model(scene, g, &self.settings, &self.lights, lattice, rbfs, smooth, fit, cancel)
+            let depths = std::mem::take(&mut model.depths);
+            let Some(relit) =
+                light_model(scene, g, &self.settings, &self.lights, lattice, rbfs, smooth, fit, depths, cancel)
             else {
                 return false;
             };
@@ -596,6 +628,7 @@ fn light_model(
     rbfs: Vec<Rbf>,
     smooth: Vec<f32>,
     fit: FitReport,
+    mut depths: CentreDepths,
     cancel: Option<&AtomicBool>,
 ) -> Option<GridModel> {
     let cancelled = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
@@ -608,29 +641,24 @@ fn light_model(
     let environment = lighting::environment_sh(&scene.lights, order);
     let n = rbfs.len();
     let j_ss = if environment.iter().any(|e| e.iter().any(|v| *v != 0.0)) && n > 0 {
-        if settings.exact_transmittance {
-            let depth = lighting::centre_depth_exact(&rbfs, &quadrature);
-            lighting::single_scattering_sh(
-                n,
-                &quadrature,
-                &environment,
-                CentreDepth::Exact(&depth),
-                sigma_t,
-                albedo,
-                &convolution,
-            )
-        } else {
-            let depth = lighting::centre_depth_sh(&rbfs, &ZonalDepthTable::new(order));
-            lighting::single_scattering_sh(
-                n,
-                &quadrature,
-                &environment,
-                CentreDepth::Sh(&depth),
-                sigma_t,
-                albedo,
-                &convolution,
-            )
-        }
+        let exact = settings.exact_transmittance;
+        let depth = match depths.environment.take() {
+            // Kept from the last relight (same fit, order and method).
+            Some((kept_exact, depth)) if kept_exact == exact => depth,
+            _ if exact => lighting::centre_depth_exact(&rbfs, &quadrature),
+            _ => lighting::centre_depth_sh(&rbfs, &ZonalDepthTable::new(order)),
+        };
+        let j_ss = lighting::single_scattering_sh(
+            n,
+            &quadrature,
+            &environment,
+            if exact { CentreDepth::Exact(&depth) } else { CentreDepth::Sh(&depth) },
+            sigma_t,
+            albedo,
+            &convolution,
+        );
+        depths.environment = Some((exact, depth));
+        j_ss
     } else {
         vec![0.0; n * 3 * nc]
     };
@@ -641,7 +669,11 @@ fn light_model(
     // the band-0/1 source of the lights (3 x 4) for the diffusion.
     let nl = lights.len();
     let stride = 3 * nc + 3 * nl + 12;
-    let light_depth = lighting::centre_light_depths(&rbfs, lights);
+    let geometry: Vec<[f32; 4]> = lights.iter().map(light_geometry).collect();
+    let light_depth = match depths.lights.take() {
+        Some((kept, depth)) if kept == geometry => depth,
+        _ => lighting::centre_light_depths(&rbfs, lights),
+    };
     let mut per_centre = vec![0.0f64; n * stride];
     for (l, row) in per_centre.chunks_mut(stride).enumerate() {
         row[..3 * nc].copy_from_slice(&j_ss[l * 3 * nc..(l + 1) * 3 * nc]);
@@ -740,6 +772,7 @@ fn light_model(
         rbfs,
         fit,
         preview: false,
+        depths: CentreDepths { lights: Some((geometry, light_depth)), ..depths },
     })
 }
 

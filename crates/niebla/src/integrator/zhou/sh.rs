@@ -26,6 +26,7 @@ pub const fn coefficient_count(order: usize) -> usize {
 pub fn eval_basis(order: usize, w: [f64; 3], out: &mut [f64]) {
     debug_assert!(order <= MAX_ORDER && out.len() >= order * order);
     let [x, y, z] = w;
+    let norms = normalizations();
     // (x + i y)^m = sin^m(theta) e^{i m phi}: cos/sin parts without atan2.
     let mut cm = [0f64; MAX_ORDER];
     let mut sm = [0f64; MAX_ORDER];
@@ -54,7 +55,7 @@ pub fn eval_basis(order: usize, w: [f64; 3], out: &mut [f64]) {
                 prev2 = prev;
                 prev = p;
             }
-            let k = normalization(l, m);
+            let k = norms[l * l + l + m];
             if m == 0 {
                 out[l * l + l] = k * p;
             } else {
@@ -64,6 +65,22 @@ pub fn eval_basis(order: usize, w: [f64; 3], out: &mut [f64]) {
             }
         }
     }
+}
+
+/// [`normalization`] of every `(l, m >= 0)` up to [`MAX_ORDER`], at index
+/// `l*l + l + m`, computed once per process (the per-view pass evaluates the
+/// basis at every lattice node).
+fn normalizations() -> &'static [f64; MAX_ORDER * MAX_ORDER] {
+    static TABLE: std::sync::OnceLock<[f64; MAX_ORDER * MAX_ORDER]> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut table = [0.0; MAX_ORDER * MAX_ORDER];
+        for l in 0..MAX_ORDER {
+            for m in 0..=l {
+                table[l * l + l + m] = normalization(l, m);
+            }
+        }
+        table
+    })
 }
 
 /// `K_lm = sqrt((2l+1)/(4pi) (l-m)!/(l+m)!)`.
