@@ -14,7 +14,7 @@
 
 use super::LightError;
 use crate::color::Rgb;
-use crate::geometry::{Disk, Rectangle, Sphere, SurfaceHit};
+use crate::geometry::{sphere_at, Disk, Rectangle, Sphere, SurfaceHit, TransformMotion};
 use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, PI};
 use crate::sampling::sample_uniform_sphere;
 
@@ -50,6 +50,17 @@ impl AreaShape {
             AreaShape::Sphere(s) => s.intersect(ray, t_min, t_max),
         }
     }
+}
+
+/// How a moving [`AreaLight`] gets from its `shape` (time 0) to its pose at
+/// time 1 (frames); see [`crate::geometry::MovingShape`] for the
+/// interpolation.
+#[derive(Clone, Copy, Debug)]
+pub enum AreaMotion {
+    /// A sphere's center and radius at time 1 (interpolated linearly).
+    Sphere(Sphere),
+    /// A rectangle's or disk's transform, from time 0 to time 1.
+    Transform(TransformMotion),
 }
 
 /// A sampled point on an area light as seen from a receiver.
@@ -93,6 +104,11 @@ pub struct AreaLight {
     pub radiance: Rgb,
     /// Emit from the back side (rectangle local -z, sphere inside) as well.
     pub two_sided: bool,
+    /// The light's motion during the shutter (`None`: still). A moving
+    /// light is sampled and intersected as the still light
+    /// [`AreaLight::at_time`] at the camera sample's time, so its estimates
+    /// stay unbiased at every instant.
+    pub motion: Option<AreaMotion>,
 }
 
 impl AreaLight {
@@ -119,7 +135,23 @@ impl AreaLight {
         if !(area > 0.0) || !area.is_finite() {
             return Err(LightError::InvalidParameter { source_name: source_name(), name: "area", value: area });
         }
-        Ok(AreaLight { shape, radiance, two_sided })
+        Ok(AreaLight { shape, radiance, two_sided, motion: None })
+    }
+
+    /// The still light in its pose at `time` (frames): itself without motion.
+    #[inline]
+    pub fn at_time(&self, time: f32) -> AreaLight {
+        let shape = match (&self.motion, &self.shape) {
+            (None, _) => return *self,
+            (Some(AreaMotion::Sphere(end)), AreaShape::Sphere(start)) => AreaShape::Sphere(sphere_at(start, end, time)),
+            (Some(AreaMotion::Transform(m)), AreaShape::Rectangle(_)) => {
+                AreaShape::Rectangle(Rectangle::new(m.at(time)))
+            }
+            (Some(AreaMotion::Transform(m)), AreaShape::Disk(_)) => AreaShape::Disk(Disk::new(m.at(time))),
+            // The scene builder pairs motions with their shapes only.
+            _ => self.shape,
+        };
+        AreaLight { shape, motion: None, ..*self }
     }
 
     /// World-space area of the emitting surface.
@@ -303,6 +335,7 @@ mod tests {
             shape: AreaShape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
             radiance: Rgb::ONE,
             two_sided: false,
+            motion: None,
         };
         assert_eq!(l.le(Vec3::Z, Vec3::new(0.0, 0.6, 0.8)), Rgb::ONE);
         assert_eq!(l.le(Vec3::Z, -Vec3::Z), Rgb::ZERO);
