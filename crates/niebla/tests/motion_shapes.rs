@@ -200,14 +200,21 @@ fn moving_area_light_lights_the_floor_as_the_average_of_still_renders() {
 }
 
 /// A moving sphere light: the same check for a sphere emitter, whose cone
-/// sampling depends on the center's position at the sample's time.
+/// sampling depends on the center's position at the sample's time; with
+/// volpath and with single (its direct lighting of surfaces).
 #[test]
 fn moving_sphere_light_lights_the_floor_as_the_average_of_still_renders() {
+    for integrator in ["volpath", "single"] {
+        sphere_light_floor(integrator);
+    }
+}
+
+fn sphere_light_floor(integrator: &str) {
     let scene = |center: f32, motion: &str, camera_extra: &str| {
         format!(
             r#""camera": {{"type": "perspective", "position": [0, 4, 4], "target": [0, 0, 0], "fov_y": 45,
                            "width": 16, "height": 16 {camera_extra}}},
-                "render": {{"integrator": {{"type": "volpath", "max_depth": 2}}, "spp": 16, "seed": 5}},
+                "render": {{"integrator": {{"type": "{integrator}"}}, "spp": 16, "seed": 5}},
                 "shapes": [{{"type": "rectangle", "to_world": {{"scale": 3, "rotate_x": -90}},
                              "bsdf": {{"type": "diffuse", "reflectance": 0.8}}}}],
                 "lights": [{{"type": "area", "radiance": 10,
@@ -216,7 +223,7 @@ fn moving_sphere_light_lights_the_floor_as_the_average_of_still_renders() {
     };
     let blurred = build(&scene(-1.0, r#", "motion": {"center": [1, 0.7, 0]}"#, SHUTTER));
     let still = |t: f32| build(&scene(lerp(-1.0, 1.0, t), "", ""));
-    assert_blur_matches(&blurred, still, "moving sphere light");
+    assert_blur_matches(&blurred, still, &format!("moving sphere light ({integrator})"));
 }
 
 fn same_bits(a: &Image, b: &Image) -> bool {

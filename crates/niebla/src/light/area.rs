@@ -96,7 +96,7 @@ pub struct AreaLightSample {
 /// assert_eq!(s.li, Rgb::splat(2.0));
 /// assert!((light.pdf_li(Vec3::ZERO, s.wi) - s.pdf).abs() < 1e-4 * s.pdf);
 /// ```
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AreaLight {
     /// The emitting surface.
     pub shape: AreaShape,
@@ -108,7 +108,9 @@ pub struct AreaLight {
     /// light is sampled and intersected as the still light
     /// [`AreaLight::at_time`] at the camera sample's time, so its estimates
     /// stay unbiased at every instant.
-    pub motion: Option<AreaMotion>,
+    /// Boxed: most lights do not move, and the pose pair would double the
+    /// size of every [`super::Light`].
+    pub motion: Option<Box<AreaMotion>>,
 }
 
 impl AreaLight {
@@ -138,20 +140,19 @@ impl AreaLight {
         Ok(AreaLight { shape, radiance, two_sided, motion: None })
     }
 
-    /// The still light in its pose at `time` (frames): itself without motion.
+    /// The still light in its pose at `time` (frames); `None` for a light
+    /// without motion (which is its own pose at every time).
     #[inline]
-    pub fn at_time(&self, time: f32) -> AreaLight {
-        let shape = match (&self.motion, &self.shape) {
-            (None, _) => return *self,
-            (Some(AreaMotion::Sphere(end)), AreaShape::Sphere(start)) => AreaShape::Sphere(sphere_at(start, end, time)),
-            (Some(AreaMotion::Transform(m)), AreaShape::Rectangle(_)) => {
-                AreaShape::Rectangle(Rectangle::new(m.at(time)))
-            }
-            (Some(AreaMotion::Transform(m)), AreaShape::Disk(_)) => AreaShape::Disk(Disk::new(m.at(time))),
+    pub fn at_time(&self, time: f32) -> Option<AreaLight> {
+        let motion = self.motion.as_deref()?;
+        let shape = match (motion, &self.shape) {
+            (AreaMotion::Sphere(end), AreaShape::Sphere(start)) => AreaShape::Sphere(sphere_at(start, end, time)),
+            (AreaMotion::Transform(m), AreaShape::Rectangle(_)) => AreaShape::Rectangle(Rectangle::new(m.at(time))),
+            (AreaMotion::Transform(m), AreaShape::Disk(_)) => AreaShape::Disk(Disk::new(m.at(time))),
             // The scene builder pairs motions with their shapes only.
             _ => self.shape,
         };
-        AreaLight { shape, motion: None, ..*self }
+        Some(AreaLight { shape, radiance: self.radiance, two_sided: self.two_sided, motion: None })
     }
 
     /// World-space area of the emitting surface.
@@ -339,7 +340,7 @@ mod tests {
         };
         assert_eq!(l.le(Vec3::Z, Vec3::new(0.0, 0.6, 0.8)), Rgb::ONE);
         assert_eq!(l.le(Vec3::Z, -Vec3::Z), Rgb::ZERO);
-        assert_eq!(AreaLight { two_sided: true, ..l }.le(Vec3::Z, -Vec3::Z), Rgb::ONE);
+        assert_eq!(AreaLight { two_sided: true, ..l.clone() }.le(Vec3::Z, -Vec3::Z), Rgb::ONE);
         // From inside a one-sided sphere nothing is visible.
         assert!(l.sample_li(Vec3::new(0.1, 0.2, 0.0), Vec2::new(0.3, 0.4)).is_none());
     }

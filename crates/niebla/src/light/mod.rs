@@ -150,7 +150,10 @@ impl Light {
                 is_delta: true,
             }),
             Light::Area(a) => {
-                let s = a.at_time(time).sample_li(p, u)?;
+                let s = match a.at_time(time) {
+                    Some(posed) => posed.sample_li(p, u)?,
+                    None => a.sample_li(p, u)?,
+                };
                 // Stop shadow rays just short of the emitting surface itself.
                 let distance = s.distance * (1.0 - 1e-4);
                 Some(LightSample { wi: s.wi, distance, li: s.li, pdf: s.pdf, is_delta: false })
@@ -181,7 +184,7 @@ impl Light {
     #[inline]
     pub fn pdf_li(&self, p: Vec3, normal: Option<Vec3>, wi: Vec3, time: f32) -> f32 {
         match self {
-            Light::Area(a) => a.at_time(time).pdf_li(p, wi),
+            Light::Area(a) => a.at_time(time).map_or_else(|| a.pdf_li(p, wi), |posed| posed.pdf_li(p, wi)),
             Light::Environment(e) => e.pdf_li(wi),
             Light::Constant(_) => match normal {
                 Some(n) => cosine_hemisphere_pdf(wi.dot(n)),

@@ -290,13 +290,13 @@ fn build_with_loaders(
                     Some(m) => {
                         let moving = moving_shape(&a.shape.geometry, m, shape, shutter, &shape_path, source)?;
                         if let Shape::Moving(ms) = &moving {
-                            light.motion = Some(match &ms.motion {
+                            light.motion = Some(Box::new(match &ms.motion {
                                 Motion::Sphere { end, .. } => AreaMotion::Sphere(*end),
                                 Motion::Rectangle(t) | Motion::Disk(t) => AreaMotion::Transform(*t),
                                 Motion::Box { .. } | Motion::Mesh(..) => {
                                     unreachable!("area lights are not boxes or meshes")
                                 }
-                            });
+                            }));
                             // Sampling uses the interpolated pose from time 0.
                             if let Some(still) = ms.still_at(0.0) {
                                 light.shape = match still {

@@ -667,7 +667,7 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
     let interior = take::<String>(&mut object, "interior")?;
     let exterior = take::<String>(&mut object, "exterior")?;
     let bsdf = take::<BsdfDesc>(&mut object, "bsdf")?.unwrap_or_default();
-    let motion = take::<ShapeMotionDesc>(&mut object, "motion")?;
+    let motion = take::<ShapeMotionDesc>(&mut object, "motion")?.map(Box::new);
     let geometry = match tag.as_str() {
         "sphere" => rest(object).map(GeometryDesc::Sphere),
         "box" => rest(object).map(GeometryDesc::Box),

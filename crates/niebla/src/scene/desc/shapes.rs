@@ -21,8 +21,8 @@ pub struct ShapeDesc {
     /// Surface scattering; default `null` (an index-matched medium boundary).
     pub bsdf: BsdfDesc,
     /// The shape's pose one frame later (time 1), for motion blur; default:
-    /// the shape does not move.
-    pub motion: Option<ShapeMotionDesc>,
+    /// the shape does not move. Boxed, as few shapes move.
+    pub motion: Option<Box<ShapeMotionDesc>>,
 }
 
 /// `"motion"` of a shape: its pose one frame after the rendered frame (time
