@@ -467,6 +467,13 @@ mod tests {
         let h = shape.hit_t(&ray(0.5), inv, 0.0, f32::INFINITY).unwrap();
         assert!((h.t - 4.0).abs() < 1e-5);
         assert!((shape.surface_at(&ray(0.5), &h).n + Vec3::Z).length() < 1e-5);
+        // Texture coordinates come from the pose at the hit's time: off the
+        // axis by 0.6 in y at time 0.5 the normal is (0, 0.6, -0.8), azimuth
+        // u = 1/4 (the center at time 0 would give atan2(0.6, 1) / 2 pi).
+        let off = Ray::at_time(Vec3::new(1.0, 0.6, 0.0), Vec3::Z, 0.5);
+        let h = shape.hit_t(&off, inv, 0.0, f32::INFINITY).unwrap();
+        let uv = shape.uv(&shape.surface_at(&off, &h), &h, 0.5);
+        assert!((uv.x - 0.25).abs() < 1e-5 && (uv.y - (-0.8f32).acos() / crate::math::PI).abs() < 1e-5, "{uv}");
         // At time 0 the ray grazes x = 1: it hits at t = 5 only to rounding.
         assert!(shape.hit_t(&Ray::at_time(Vec3::new(1.2, 0.0, 0.0), Vec3::Z, 0.0), inv, 0.0, 1e9).is_none());
         assert!(shape.hit_t(&Ray::at_time(Vec3::new(1.2, 0.0, 0.0), Vec3::Z, 0.9), inv, 0.0, 1e9).is_some());
