@@ -98,21 +98,7 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
     println!("shapes ({}):", s.objects.len());
     for (i, o) in s.objects.iter().enumerate() {
         let (lo, hi) = o.shape.bounds();
-        let kind = match &o.shape {
-            niebla::geometry::Shape::Sphere(_) => "sphere".to_string(),
-            niebla::geometry::Shape::Box(_) => "box".to_string(),
-            niebla::geometry::Shape::Rectangle(_) => "rectangle".to_string(),
-            niebla::geometry::Shape::Disk(_) => "disk".to_string(),
-            niebla::geometry::Shape::Mesh(m) => format!(
-                "mesh ({} triangles, {} vertices{}, {} degenerate triangles skipped, {}, {})",
-                m.mesh.triangle_count(),
-                m.mesh.positions.len(),
-                if m.mesh.normals.is_some() { " with normals" } else { "" },
-                m.mesh.degenerate,
-                if m.closed { "closed" } else { "open" },
-                niebla::limits::format_bytes(m.mesh.memory_bytes() as u64)
-            ),
-        };
+        let kind = shape_kind(&o.shape);
         let media = if o.bounds_medium {
             format!(", interior {}, exterior {}", name_of(o.interior), name_of(o.exterior))
         } else {
@@ -140,4 +126,26 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
         }
     }
     Ok(())
+}
+
+/// How `niebla info` names a shape: its type, with a mesh's sizes; a moving
+/// shape as "moving" and its type (its bounds cover the shutter).
+fn shape_kind(shape: &niebla::geometry::Shape) -> String {
+    use niebla::geometry::Shape;
+    match shape {
+        Shape::Sphere(_) => "sphere".to_string(),
+        Shape::Box(_) => "box".to_string(),
+        Shape::Rectangle(_) => "rectangle".to_string(),
+        Shape::Disk(_) => "disk".to_string(),
+        Shape::Mesh(m) => format!(
+            "mesh ({} triangles, {} vertices{}, {} degenerate triangles skipped, {}, {})",
+            m.mesh.triangle_count(),
+            m.mesh.positions.len(),
+            if m.mesh.normals.is_some() { " with normals" } else { "" },
+            m.mesh.degenerate,
+            if m.closed { "closed" } else { "open" },
+            niebla::limits::format_bytes(m.mesh.memory_bytes() as u64)
+        ),
+        Shape::Moving(m) => format!("moving {} (bounds over the shutter)", shape_kind(&m.at_zero)),
+    }
 }

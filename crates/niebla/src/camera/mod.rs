@@ -97,10 +97,11 @@ impl PerspectiveCamera {
         let u = sampler.next_2d();
         let time = self.sample_time(sampler);
         sampler.set_time(time);
-        match &self.motion {
+        let ray = match &self.motion {
             None => self.generate_ray(x, y, u),
             Some(m) => self.at_time(m, time).generate_ray(x, y, u),
-        }
+        };
+        Ray { time, ..ray }
     }
 
     /// The static camera posed as `motion` is at `time` (frames); the

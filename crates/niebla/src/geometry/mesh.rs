@@ -251,6 +251,13 @@ impl TriangleMesh {
     }
 }
 
+/// `ray` mapped into the object space of `transform` (the direction is not
+/// renormalized, so ray parameters are the same in both spaces).
+#[inline]
+fn ray_to_object(transform: &Transform, ray: &Ray) -> Ray {
+    Ray::at_time(transform.to_local.transform_point3(ray.o), transform.to_local.transform_vector3(ray.d), ray.time)
+}
+
 /// A mesh placed in the world: shared mesh data and its object-to-world transform.
 #[derive(Clone, Debug)]
 pub struct MeshInstance {
@@ -298,7 +305,7 @@ impl MeshInstance {
         if self.identity {
             *ray
         } else {
-            Ray::new(self.transform.to_local.transform_point3(ray.o), self.transform.to_local.transform_vector3(ray.d))
+            ray_to_object(&self.transform, ray)
         }
     }
 
@@ -314,29 +321,56 @@ impl MeshInstance {
         self.mesh.occluded(&self.to_object(ray), t_min, t_max)
     }
 
+    /// [`MeshInstance::hit`] with the mesh placed by `pose` instead of its
+    /// own transform (a moving instance at a ray's time).
+    #[inline]
+    pub fn hit_posed(&self, pose: &Transform, ray: &Ray, t_min: f32, t_max: f32) -> Option<PrimitiveHit> {
+        self.mesh.intersect(&ray_to_object(pose, ray), t_min, t_max)
+    }
+
+    /// [`MeshInstance::occluded`] with the mesh placed by `pose`.
+    #[inline]
+    pub fn occluded_posed(&self, pose: &Transform, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        self.mesh.occluded(&ray_to_object(pose, ray), t_min, t_max)
+    }
+
     /// The hit record of `hit` (found by [`MeshInstance::hit`] on `ray`):
     /// the point interpolated on the triangle, the outward geometric normal,
     /// the shading normal interpolated from the vertex normals (turned to the
     /// geometric normal's side; the geometric one without vertex normals).
     #[inline]
     pub fn surface_at(&self, _ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit)
+    }
+
+    /// [`MeshInstance::surface_at`] of a hit found by [`MeshInstance::hit_posed`] with `pose`.
+    #[inline]
+    pub fn surface_at_posed(&self, pose: &Transform, hit: &PrimitiveHit) -> SurfaceHit {
+        self.surface_by(Some(pose), hit)
+    }
+
+    /// The hit record with the mesh placed by `pose` (`None`: the identity).
+    #[inline]
+    fn surface_by(&self, pose: Option<&Transform>, hit: &PrimitiveHit) -> SurfaceHit {
         let mesh = &*self.mesh;
         let tri = mesh.triangles[hit.prim as usize];
         let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
         let b0 = 1.0 - hit.b1 - hit.b2;
         let p_obj = a * b0 + b * hit.b1 + c * hit.b2;
         let ng_obj = (b - a).cross(c - a);
-        let (p, n) = if self.identity {
-            (p_obj, ng_obj.normalize())
-        } else {
-            (self.transform.point_to_world(p_obj), self.transform.normal_to_world(ng_obj))
+        let (p, n) = match pose {
+            None => (p_obj, ng_obj.normalize()),
+            Some(t) => (t.point_to_world(p_obj), t.normal_to_world(ng_obj)),
         };
         let ns = match &mesh.normals {
             Some(normals) => {
                 let [na, nb, nc] = tri.map(|i| normals[i as usize]);
                 let s = na * b0 + nb * hit.b1 + nc * hit.b2;
                 if s.length_squared() > 0.0 {
-                    let s = if self.identity { s.normalize() } else { self.transform.normal_to_world(s) };
+                    let s = match pose {
+                        None => s.normalize(),
+                        Some(t) => t.normal_to_world(s),
+                    };
                     if s.dot(n) < 0.0 {
                         -s
                     } else {

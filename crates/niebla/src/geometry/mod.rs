@@ -10,6 +10,7 @@ mod aabb_box;
 pub mod bvh;
 mod disk;
 pub mod mesh;
+mod motion;
 mod rectangle;
 mod sphere;
 mod transform;
@@ -19,6 +20,7 @@ pub use aabb_box::AxisAlignedBox;
 pub use bvh::Bvh;
 pub use disk::Disk;
 pub use mesh::{MeshDataError, MeshInstance, TriangleMesh};
+pub use motion::{box_at, sphere_at, Motion, MotionError, MovingShape, Pose, TransformMotion};
 pub use rectangle::Rectangle;
 pub use sphere::Sphere;
 pub use transform::Transform;
@@ -101,6 +103,9 @@ pub enum Shape {
     Disk(Disk),
     /// A triangle mesh placed by a transform.
     Mesh(MeshInstance),
+    /// One of the above moving during the shutter: intersected in its pose
+    /// at the ray's [`Ray::time`].
+    Moving(Box<MovingShape>),
 }
 
 impl Shape {
@@ -113,6 +118,7 @@ impl Shape {
             Shape::Rectangle(r) => r.intersect(ray, t_min, t_max),
             Shape::Disk(d) => d.intersect(ray, t_min, t_max),
             Shape::Mesh(m) => m.hit(ray, t_min, t_max).map(|h| m.surface_at(ray, &h)),
+            Shape::Moving(m) => m.hit_t(ray, ray.d.recip(), t_min, t_max).map(|h| m.surface_at(ray, &h)),
         }
     }
 
@@ -127,6 +133,7 @@ impl Shape {
             Shape::Rectangle(r) => r.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
             Shape::Disk(d) => d.hit_t(ray, t_min, t_max).map(PrimitiveHit::at),
             Shape::Mesh(m) => m.hit(ray, t_min, t_max),
+            Shape::Moving(m) => m.hit_t(ray, inv, t_min, t_max),
         }
     }
 
@@ -136,6 +143,7 @@ impl Shape {
     pub fn occludes(&self, ray: &Ray, inv: Vec3, t_min: f32, t_max: f32) -> bool {
         match self {
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
+            Shape::Moving(m) => m.occludes(ray, inv, t_min, t_max),
             _ => self.hit_t(ray, inv, t_min, t_max).is_some(),
         }
     }
@@ -150,14 +158,16 @@ impl Shape {
             Shape::Rectangle(r) => r.surface_at(ray, hit.t),
             Shape::Disk(d) => d.surface_at(ray, hit.t),
             Shape::Mesh(m) => m.surface_at(ray, hit),
+            Shape::Moving(m) => m.surface_at(ray, hit),
         }
     }
 
     /// Texture coordinates of a hit found on this shape (the conventions of
     /// [`crate::texture`]): interpolated vertex uvs on meshes (else the
     /// barycentric `(b1, b2)`), azimuth and polar angle on spheres, the
-    /// local square on rectangles, the face's coordinates on boxes.
-    pub fn uv(&self, surface: &SurfaceHit, local: &PrimitiveHit) -> crate::math::Vec2 {
+    /// local square on rectangles, the face's coordinates on boxes; a moving
+    /// shape's in its pose at `time`, the time of the ray that found the hit.
+    pub fn uv(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> crate::math::Vec2 {
         use crate::math::{Vec2, INV_PI, PI};
         match self {
             Shape::Sphere(s) => {
@@ -182,6 +192,7 @@ impl Shape {
                 }
             }
             Shape::Mesh(m) => m.mesh.uv_at(local.prim, local.b1, local.b2),
+            Shape::Moving(m) => m.uv(surface, local, time),
         }
     }
 
@@ -190,31 +201,37 @@ impl Shape {
         match self {
             Shape::Rectangle(_) | Shape::Disk(_) => false,
             Shape::Mesh(m) => m.closed,
+            Shape::Moving(m) => m.at_zero.is_closed(),
             _ => true,
         }
     }
 
-    /// True when `p` lies strictly inside a closed shape (false for open shapes).
+    /// True when `p` lies strictly inside a closed shape (false for open
+    /// shapes); a moving shape in its pose at time 0.
     pub fn contains(&self, p: Vec3) -> bool {
         match self {
             Shape::Sphere(s) => (p - s.center).length_squared() < s.radius * s.radius,
             Shape::Box(b) => p.cmpgt(b.min).all() && p.cmplt(b.max).all(),
             Shape::Rectangle(_) | Shape::Disk(_) => false,
             Shape::Mesh(m) => m.contains(p),
+            Shape::Moving(m) => m.at_zero.contains(p),
         }
     }
 
-    /// Enclosed volume (0 for open shapes), used to find the innermost container.
+    /// Enclosed volume (0 for open shapes), used to find the innermost
+    /// container; a moving shape's at time 0.
     pub fn volume(&self) -> f32 {
         match self {
             Shape::Sphere(s) => 4.0 / 3.0 * crate::math::PI * s.radius.powi(3),
             Shape::Box(b) => (b.max - b.min).element_product(),
             Shape::Rectangle(_) | Shape::Disk(_) => 0.0,
             Shape::Mesh(m) => m.volume(),
+            Shape::Moving(m) => m.at_zero.volume(),
         }
     }
 
-    /// World-space bounding box `(min, max)`.
+    /// World-space bounding box `(min, max)`; a moving shape's holds all it
+    /// sweeps while the shutter is open.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         match self {
             Shape::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
@@ -222,6 +239,7 @@ impl Shape {
             Shape::Rectangle(r) => r.bounds(),
             Shape::Disk(d) => d.bounds(),
             Shape::Mesh(m) => m.bounds(),
+            Shape::Moving(m) => m.bounds(),
         }
     }
 }

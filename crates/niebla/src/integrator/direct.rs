@@ -34,7 +34,7 @@ pub fn direct_surface_radiance(
     let mut l = Rgb::ZERO;
     for (index, light) in scene.lights.iter().enumerate() {
         let u = sampler.next_2d();
-        let Some(ls) = light.sample_li(p, Some(ng), u) else {
+        let Some(ls) = light.sample_li(p, Some(ng), u, sampler.time()) else {
             continue;
         };
         if ls.pdf == 0.0 || ls.li.is_black() {
@@ -93,7 +93,7 @@ pub fn light_in_scattered_radiance(
 ) -> Rgb {
     let light = &scene.lights[light_index];
     let u = sampler.next_2d();
-    let Some(ls) = light.sample_li(p, None, u) else {
+    let Some(ls) = light.sample_li(p, None, u, sampler.time()) else {
         return Rgb::ZERO;
     };
     if ls.pdf == 0.0 || ls.li.is_black() {
@@ -160,7 +160,7 @@ fn transmittance_into_medium(
 ) -> Rgb {
     let mut tr = Rgb::ONE;
     let mut last = medium;
-    let reached = walk_shadow_ray(scene, origin, medium, wi, distance, None, |s| {
+    let reached = walk_shadow_ray(scene, origin, sampler.time(), medium, wi, distance, None, |s| {
         last = s.medium;
         if let Some(id) = s.medium {
             tr *= segment_transmittance(scene.medium(id), s.ray, 0.0, s.t_end, method, sampler);

@@ -501,6 +501,9 @@ impl PreparedIntegrator {
     /// each camera sample's time: those that precompute the media (hegeman,
     /// zhou), trace photons (photon, ppm, ppb) or use closed forms
     /// (analytic). Emission, single and volpath track at the sample's time.
+    ///
+    /// Likewise for a moving shape or area light (a shape with `motion`):
+    /// emission, single and volpath intersect each ray at its time.
     fn check_motion(&self, scene: &Scene) -> Result<(), RenderError> {
         let name = match self {
             PreparedIntegrator::Emission(_) | PreparedIntegrator::Single(_) | PreparedIntegrator::VolPath(_) => {
@@ -513,6 +516,15 @@ impl PreparedIntegrator {
             PreparedIntegrator::Ppm(_) => "ppm",
             PreparedIntegrator::Ppb(_) => "ppb",
         };
+        if let Some(shape) = scene.moving_shape_name() {
+            return Err(RenderError::Unsupported {
+                integrator: name,
+                reason: format!(
+                    "{shape} moves during the shutter (its `motion`); motion blur of shapes and area lights is \
+                     rendered by volpath, single and emission"
+                ),
+            });
+        }
         let moving = scene.media.iter().position(|m| matches!(m, crate::medium::Medium::Grid(g) if g.motion.is_some()));
         match moving {
             None => Ok(()),

@@ -14,7 +14,7 @@
 
 use super::LightError;
 use crate::color::Rgb;
-use crate::geometry::{Disk, Rectangle, Sphere, SurfaceHit};
+use crate::geometry::{sphere_at, Disk, Rectangle, Sphere, SurfaceHit, TransformMotion};
 use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, PI};
 use crate::sampling::sample_uniform_sphere;
 
@@ -52,6 +52,17 @@ impl AreaShape {
     }
 }
 
+/// How a moving [`AreaLight`] gets from its `shape` (time 0) to its pose at
+/// time 1 (frames); see [`crate::geometry::MovingShape`] for the
+/// interpolation.
+#[derive(Clone, Copy, Debug)]
+pub enum AreaMotion {
+    /// A sphere's center and radius at time 1 (interpolated linearly).
+    Sphere(Sphere),
+    /// A rectangle's or disk's transform, from time 0 to time 1.
+    Transform(TransformMotion),
+}
+
 /// A sampled point on an area light as seen from a receiver.
 #[derive(Clone, Copy, Debug)]
 pub struct AreaLightSample {
@@ -85,7 +96,7 @@ pub struct AreaLightSample {
 /// assert_eq!(s.li, Rgb::splat(2.0));
 /// assert!((light.pdf_li(Vec3::ZERO, s.wi) - s.pdf).abs() < 1e-4 * s.pdf);
 /// ```
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AreaLight {
     /// The emitting surface.
     pub shape: AreaShape,
@@ -93,6 +104,13 @@ pub struct AreaLight {
     pub radiance: Rgb,
     /// Emit from the back side (rectangle local -z, sphere inside) as well.
     pub two_sided: bool,
+    /// The light's motion during the shutter (`None`: still). A moving
+    /// light is sampled and intersected as the still light
+    /// [`AreaLight::at_time`] at the camera sample's time, so its estimates
+    /// stay unbiased at every instant.
+    /// Boxed: most lights do not move, and the pose pair would double the
+    /// size of every [`super::Light`].
+    pub motion: Option<Box<AreaMotion>>,
 }
 
 impl AreaLight {
@@ -119,7 +137,22 @@ impl AreaLight {
         if !(area > 0.0) || !area.is_finite() {
             return Err(LightError::InvalidParameter { source_name: source_name(), name: "area", value: area });
         }
-        Ok(AreaLight { shape, radiance, two_sided })
+        Ok(AreaLight { shape, radiance, two_sided, motion: None })
+    }
+
+    /// The still light in its pose at `time` (frames); `None` for a light
+    /// without motion (which is its own pose at every time).
+    #[inline]
+    pub fn at_time(&self, time: f32) -> Option<AreaLight> {
+        let motion = self.motion.as_deref()?;
+        let shape = match (motion, &self.shape) {
+            (AreaMotion::Sphere(end), AreaShape::Sphere(start)) => AreaShape::Sphere(sphere_at(start, end, time)),
+            (AreaMotion::Transform(m), AreaShape::Rectangle(_)) => AreaShape::Rectangle(Rectangle::new(m.at(time))),
+            (AreaMotion::Transform(m), AreaShape::Disk(_)) => AreaShape::Disk(Disk::new(m.at(time))),
+            // The scene builder pairs motions with their shapes only.
+            _ => self.shape,
+        };
+        Some(AreaLight { shape, radiance: self.radiance, two_sided: self.two_sided, motion: None })
     }
 
     /// World-space area of the emitting surface.
@@ -303,10 +336,11 @@ mod tests {
             shape: AreaShape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
             radiance: Rgb::ONE,
             two_sided: false,
+            motion: None,
         };
         assert_eq!(l.le(Vec3::Z, Vec3::new(0.0, 0.6, 0.8)), Rgb::ONE);
         assert_eq!(l.le(Vec3::Z, -Vec3::Z), Rgb::ZERO);
-        assert_eq!(AreaLight { two_sided: true, ..l }.le(Vec3::Z, -Vec3::Z), Rgb::ONE);
+        assert_eq!(AreaLight { two_sided: true, ..l.clone() }.le(Vec3::Z, -Vec3::Z), Rgb::ONE);
         // From inside a one-sided sphere nothing is visible.
         assert!(l.sample_li(Vec3::new(0.1, 0.2, 0.0), Vec2::new(0.3, 0.4)).is_none());
     }

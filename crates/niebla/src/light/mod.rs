@@ -8,7 +8,7 @@ mod area;
 mod emitted_rays;
 mod envmap;
 
-pub use area::{AreaLight, AreaLightSample, AreaShape};
+pub use area::{AreaLight, AreaLightSample, AreaMotion, AreaShape};
 pub use emitted_rays::{spot_falloff_solid_angle, EmittedRay, SceneSphere};
 pub use envmap::{latlong_direction, latlong_uv, EnvironmentMap, EnvironmentSample, LightError};
 
@@ -111,10 +111,13 @@ pub struct LightSample {
 }
 
 impl Light {
-    /// Sample incident light at `p`. `normal` (if any) lets environment lights
-    /// sample the hemisphere around a surface normal with a cosine density.
+    /// Sample incident light at `p` at `time` (frames; a moving area light
+    /// is sampled in its pose at that instant, the camera sample's
+    /// [`crate::sampling::PixelSampler::time`]). `normal` (if any) lets
+    /// environment lights sample the hemisphere around a surface normal with
+    /// a cosine density.
     #[inline]
-    pub fn sample_li(&self, p: Vec3, normal: Option<Vec3>, u: Vec2) -> Option<LightSample> {
+    pub fn sample_li(&self, p: Vec3, normal: Option<Vec3>, u: Vec2, time: f32) -> Option<LightSample> {
         match self {
             Light::Point(l) => {
                 let to = l.position - p;
@@ -147,7 +150,10 @@ impl Light {
                 is_delta: true,
             }),
             Light::Area(a) => {
-                let s = a.sample_li(p, u)?;
+                let s = match a.at_time(time) {
+                    Some(posed) => posed.sample_li(p, u)?,
+                    None => a.sample_li(p, u)?,
+                };
                 // Stop shadow rays just short of the emitting surface itself.
                 let distance = s.distance * (1.0 - 1e-4);
                 Some(LightSample { wi: s.wi, distance, li: s.li, pdf: s.pdf, is_delta: false })
@@ -173,11 +179,12 @@ impl Light {
     }
 
     /// Density per steradian with which [`Light::sample_li`] at `p` (with the
-    /// same `normal` argument) returns direction `wi`; 0 for delta lights.
+    /// same `normal` and `time` arguments) returns direction `wi`; 0 for
+    /// delta lights.
     #[inline]
-    pub fn pdf_li(&self, p: Vec3, normal: Option<Vec3>, wi: Vec3) -> f32 {
+    pub fn pdf_li(&self, p: Vec3, normal: Option<Vec3>, wi: Vec3, time: f32) -> f32 {
         match self {
-            Light::Area(a) => a.pdf_li(p, wi),
+            Light::Area(a) => a.at_time(time).map_or_else(|| a.pdf_li(p, wi), |posed| posed.pdf_li(p, wi)),
             Light::Environment(e) => e.pdf_li(wi),
             Light::Constant(_) => match normal {
                 Some(n) => cosine_hemisphere_pdf(wi.dot(n)),
@@ -244,7 +251,7 @@ mod tests {
     #[test]
     fn point_light_follows_inverse_square() {
         let l = Light::Point(PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Rgb::splat(8.0) });
-        let s = l.sample_li(Vec3::ZERO, None, Vec2::ZERO).unwrap();
+        let s = l.sample_li(Vec3::ZERO, None, Vec2::ZERO, 0.0).unwrap();
         assert_eq!(s.li, Rgb::splat(2.0));
         assert!((s.wi - Vec3::Y).length() < 1e-6);
         assert_eq!(s.distance, 2.0);

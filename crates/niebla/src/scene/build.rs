@@ -11,10 +11,12 @@ use super::{RenderSettings, Scene, SceneError, SceneObject};
 use crate::bsdf::Bsdf;
 use crate::camera::{CameraMotion, PerspectiveCamera};
 use crate::color::Rgb;
-use crate::geometry::{AxisAlignedBox, Disk, Rectangle, Shape, Sphere, Transform};
+use crate::geometry::{
+    AxisAlignedBox, Disk, Motion, MotionError, MovingShape, Rectangle, Shape, Sphere, Transform, TransformMotion,
+};
 use crate::integrator::IntegratorSettings;
 use crate::light::{
-    AreaLight, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
+    AreaLight, AreaMotion, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
 };
 use crate::math::{Frame, Vec3};
 use crate::medium::MediumId;
@@ -176,7 +178,9 @@ fn build_with_loaders(
         name.as_ref().and_then(|n| medium_names.iter().position(|m| m == n)).map(|i| MediumId(i as u32))
     };
 
-    // Shapes.
+    // Shapes. Moving ones are bounded over the camera's shutter.
+    let CameraDesc::Perspective(camera_desc) = &desc.camera;
+    let shutter = [camera_desc.shutter_open, camera_desc.shutter_close];
     let mut objects = Vec::new();
     let mut explicit_exterior = Vec::new();
     for (i, s) in desc.shapes.iter().enumerate() {
@@ -200,6 +204,10 @@ fn build_with_loaders(
                     .ok_or_else(|| err(&format!("{path}.to_world"), "transform is singular (zero scale?)".into()))?;
                 Shape::Mesh(meshes.instance(d, t, bounds_medium, &path, source, base_dir, &mut budget)?)
             }
+        };
+        let shape = match &s.motion {
+            None => shape,
+            Some(m) => moving_shape(&s.geometry, m, shape, shutter, &path, source)?,
         };
         let mut texture = None;
         let bsdf = match &s.bsdf {
@@ -267,13 +275,40 @@ fn build_with_loaders(
                         return Err(err(&shape_path, "an area light is a rectangle, a disk or a sphere".into()))
                     }
                 };
-                let light = AreaLight::new(area_shape, a.radiance.to_rgb(), a.two_sided)
+                let mut light = AreaLight::new(area_shape, a.radiance.to_rgb(), a.two_sided)
                     .map_err(|e| err(&shape_path, e.to_string()))?;
                 // The emitter is also a black surface that rays hit.
                 let shape = match &light.shape {
                     AreaShape::Sphere(s) => Shape::Sphere(*s),
                     AreaShape::Rectangle(r) => Shape::Rectangle(*r),
                     AreaShape::Disk(d) => Shape::Disk(*d),
+                };
+                // A moving emitter: the surface rays hit and the light
+                // sampled move together (the same poses).
+                let shape = match &a.shape.motion {
+                    None => shape,
+                    Some(m) => {
+                        let moving = moving_shape(&a.shape.geometry, m, shape, shutter, &shape_path, source)?;
+                        if let Shape::Moving(ms) = &moving {
+                            light.motion = Some(Box::new(match &ms.motion {
+                                Motion::Sphere { end, .. } => AreaMotion::Sphere(*end),
+                                Motion::Rectangle(t) | Motion::Disk(t) => AreaMotion::Transform(*t),
+                                Motion::Box { .. } | Motion::Mesh(..) => {
+                                    unreachable!("area lights are not boxes or meshes")
+                                }
+                            }));
+                            // Sampling uses the interpolated pose from time 0.
+                            if let Some(still) = ms.still_at(0.0) {
+                                light.shape = match still {
+                                    Shape::Sphere(s) => AreaShape::Sphere(s),
+                                    Shape::Rectangle(r) => AreaShape::Rectangle(r),
+                                    Shape::Disk(d) => AreaShape::Disk(d),
+                                    _ => light.shape,
+                                };
+                            }
+                        }
+                        moving
+                    }
                 };
                 objects.push(SceneObject {
                     shape,
@@ -313,7 +348,6 @@ fn build_with_loaders(
     let camera = build_camera(&desc.camera, source)?;
     // Moving media see the shutter: their majorants grow by the largest
     // displacement over it.
-    let CameraDesc::Perspective(camera_desc) = &desc.camera;
     for m in &mut media {
         if let crate::medium::Medium::Grid(g) = m {
             g.set_shutter(camera.shutter, camera_desc.fps);
@@ -343,6 +377,63 @@ fn build_with_loaders(
         integrator_spec: desc.render.integrator.clone(),
         warnings: unused_media_warnings(desc, source),
     })
+}
+
+/// The shape `still` (built from `geometry`, its pose at time 0) moving to
+/// the pose `motion` gives at time 1, seen through `shutter` (errors at
+/// `path.motion`).
+fn moving_shape(
+    geometry: &GeometryDesc,
+    motion: &ShapeMotionDesc,
+    still: Shape,
+    shutter: [f32; 2],
+    path: &str,
+    source: &str,
+) -> Result<Shape, SceneError> {
+    let at = format!("{path}.motion");
+    let err = |path: &str, message: String| SceneError::new(source, path, message);
+    let end_transform = |to_world: &TransformDesc| -> Result<Transform, SceneError> {
+        build_transform(motion.to_world.as_ref().unwrap_or(to_world))
+            .ok_or_else(|| err(&format!("{at}.to_world"), "transform is singular (zero scale?)".into()))
+    };
+    let transform_motion = |t0: &Transform, to_world: &TransformDesc| {
+        let t1 = end_transform(to_world)?;
+        TransformMotion::new(&t0.to_world, &t1.to_world).map_err(|e| {
+            let field = if matches!(e, MotionError::NotDecomposable { time } if time == 0.0) {
+                format!("{path}.to_world")
+            } else {
+                format!("{at}.to_world")
+            };
+            err(&field, e.to_string())
+        })
+    };
+    let kind = match (geometry, still) {
+        (GeometryDesc::Sphere(d), Shape::Sphere(start)) => {
+            let end = Sphere {
+                center: Vec3::from(motion.center.unwrap_or(d.center)),
+                radius: motion.radius.unwrap_or(d.radius),
+            };
+            Motion::Sphere { start, end }
+        }
+        (GeometryDesc::Box(d), Shape::Box(start)) => {
+            let end = AxisAlignedBox {
+                min: Vec3::from(motion.min.unwrap_or(d.min)),
+                max: Vec3::from(motion.max.unwrap_or(d.max)),
+            };
+            Motion::Box { start, end }
+        }
+        (GeometryDesc::Rectangle(d), Shape::Rectangle(r)) => {
+            Motion::Rectangle(transform_motion(&r.transform, &d.to_world)?)
+        }
+        (GeometryDesc::Disk(d), Shape::Disk(r)) => Motion::Disk(transform_motion(&r.transform, &d.to_world)?),
+        (GeometryDesc::Mesh(d), Shape::Mesh(m)) => {
+            let t = transform_motion(&m.transform, &d.to_world)?;
+            Motion::Mesh(m, t)
+        }
+        _ => return Err(err(&at, "the shape and its description disagree (internal)".into())),
+    };
+    let moving = MovingShape::new(kind, shutter).map_err(|e| err(&at, e.to_string()))?;
+    Ok(Shape::Moving(Box::new(moving)))
 }
 
 /// A point, spot, directional or constant light (errors at `path`); `None`

@@ -135,9 +135,12 @@ pub fn rebuild_scene(
     source: &str,
     base_dir: &Path,
 ) -> Option<Result<(BuiltScene, SceneEdit), SceneError>> {
-    // A moving medium's majorant depends on the shutter: build afresh.
+    // A moving medium's majorant and a moving shape's box depend on the
+    // shutter: build afresh.
     let (CameraDesc::Perspective(a), CameraDesc::Perspective(b)) = (&old_desc.camera, &desc.camera);
-    let moving = desc.media.values().any(|m| matches!(m, MediumDesc::Grid(g) if g.velocity.is_some()));
+    let moving = desc.media.values().any(|m| matches!(m, MediumDesc::Grid(g) if g.velocity.is_some()))
+        || desc.shapes.iter().any(|s| s.motion.is_some())
+        || desc.lights.iter().any(|l| matches!(l, LightDesc::Area(a) if a.shape.motion.is_some()));
     if moving && (a.shutter_open != b.shutter_open || a.shutter_close != b.shutter_close || a.fps != b.fps) {
         return None;
     }

@@ -577,6 +577,84 @@ fn medium_exists(desc: &SceneDesc, path: &str, name: &str) -> Check {
     fail(path, format!("unknown medium {name:?}; known media: {}", known.join(", ")))
 }
 
+/// A shape's `motion`: only the fields of its own geometry, finite. Whether
+/// the shape stays non-degenerate over the shutter is checked when it is
+/// built (it needs the shutter and the transforms).
+fn validate_shape_motion(base: &str, shape: &ShapeDesc, m: &ShapeMotionDesc) -> Check {
+    let base = format!("{base}.motion");
+    let (kind, allowed): (&str, &[&str]) = match &shape.geometry {
+        GeometryDesc::Sphere(_) => ("a sphere", &["center", "radius"]),
+        GeometryDesc::Box(_) => ("a box", &["min", "max"]),
+        GeometryDesc::Rectangle(_) => ("a rectangle", &["to_world"]),
+        GeometryDesc::Disk(_) => ("a disk", &["to_world"]),
+        GeometryDesc::Mesh(_) => ("a mesh", &["to_world"]),
+    };
+    let given = [
+        ("center", m.center.is_some()),
+        ("radius", m.radius.is_some()),
+        ("min", m.min.is_some()),
+        ("max", m.max.is_some()),
+        ("to_world", m.to_world.is_some()),
+    ];
+    for (key, present) in given {
+        if present && !allowed.contains(&key) {
+            return fail(
+                format!("{base}.{key}"),
+                format!(
+                    "the motion of {kind} gives its pose one frame later by {}, not `{key}`",
+                    allowed.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(" and ")
+                ),
+            );
+        }
+    }
+    if !given.iter().any(|(_, present)| *present) {
+        return fail(
+            &base,
+            format!(
+                "an empty motion: give the pose of {kind} one frame later by {}",
+                allowed.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(" and ")
+            ),
+        );
+    }
+    if let Some(c) = &m.center {
+        vector(&format!("{base}.center"), c)?;
+    }
+    if let Some(r) = m.radius {
+        positive(&format!("{base}.radius"), r)?;
+    }
+    if let Some(v) = &m.min {
+        vector(&format!("{base}.min"), v)?;
+    }
+    if let Some(v) = &m.max {
+        vector(&format!("{base}.max"), v)?;
+    }
+    if let GeometryDesc::Box(b) = &shape.geometry {
+        let (lo, hi) = (m.min.unwrap_or(b.min), m.max.unwrap_or(b.max));
+        for axis in 0..3 {
+            if lo[axis] >= hi[axis] {
+                return fail(
+                    format!("{base}.max[{axis}]"),
+                    format!("at time 1 max[{axis}] must be greater than min[{axis}] = {}, got {}", lo[axis], hi[axis]),
+                );
+            }
+        }
+    }
+    if let Some(t) = &m.to_world {
+        validate_transform(&format!("{base}.to_world"), t)?;
+    }
+    if shape.interior.is_some() || shape.exterior.is_some() {
+        let side = if shape.interior.is_some() { "interior" } else { "exterior" };
+        return fail(
+            &base,
+            format!(
+                "a moving shape cannot bound a medium (it has an `{side}`): media stay where they are during the \
+                 shutter; leave out `motion` or the shape's media"
+            ),
+        );
+    }
+    Ok(())
+}
+
 fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
     match &shape.geometry {
         GeometryDesc::Sphere(s) => {
@@ -598,6 +676,9 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
         GeometryDesc::Rectangle(r) => validate_transform(&format!("{base}.to_world"), &r.to_world)?,
         GeometryDesc::Disk(d) => validate_transform(&format!("{base}.to_world"), &d.to_world)?,
         GeometryDesc::Mesh(m) => validate_mesh(base, m)?,
+    }
+    if let Some(m) = &shape.motion {
+        validate_shape_motion(base, shape, m)?;
     }
     if let Some(name) = &shape.interior {
         medium_exists(desc, &format!("{base}.interior"), name)?;

@@ -36,7 +36,8 @@ pub struct PathRay {
 }
 
 impl PathRay {
-    /// A path starting along `ray` in `medium`, accepting hits beyond `t_min`.
+    /// A path starting along `ray` in `medium`, accepting hits beyond
+    /// `t_min`. Every ray the path continues along keeps `ray`'s time.
     #[inline]
     pub fn new(ray: Ray, medium: Option<MediumId>, t_min: f32) -> PathRay {
         PathRay { ray, medium, t_min, crossings: 0 }
@@ -57,7 +58,7 @@ impl PathRay {
             return false;
         }
         self.medium = scene.medium_after_crossing(hit, self.ray.d, self.medium);
-        self.ray = Ray::new(hit.surface.p, self.ray.d);
+        self.ray = Ray::at_time(hit.surface.p, self.ray.d, self.ray.time);
         self.t_min = surface_epsilon(hit.surface.p);
         true
     }
@@ -69,14 +70,14 @@ impl PathRay {
         if transmitted {
             self.medium = scene.medium_after_crossing(hit, wi, self.medium);
         }
-        self.ray = Ray::new(hit.surface.p, wi);
+        self.ray = Ray::at_time(hit.surface.p, wi, self.ray.time);
         self.t_min = surface_epsilon(hit.surface.p);
     }
 
     /// Go on from a scattering point `p` inside the current medium toward unit `wi`.
     #[inline]
     pub fn scatter_in_medium(&mut self, p: Vec3, wi: Vec3) {
-        self.ray = Ray::new(p, wi);
+        self.ray = Ray::at_time(p, wi, self.ray.time);
         self.t_min = 0.0;
     }
 }
@@ -115,14 +116,16 @@ pub struct PaneCrossing {
 /// the ray unless it is object `ignore` (the sampled light's own surface,
 /// where the ray ends): an any-hit query over the opaque surfaces first, so
 /// a blocked ray visits nothing, then nearest hits among the crossed
-/// surfaces alone.
+/// surfaces alone. Moving shapes are in their pose at `time` (frames).
 /// Returns `true` when the ray reached its end, `false` when it was blocked,
 /// `visit` stopped it or it crossed more than [`MAX_BOUNDARY_CROSSINGS`]
 /// boundaries.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn walk_shadow_ray<F>(
     scene: &Scene,
     p: Vec3,
+    time: f32,
     mut medium: Option<MediumId>,
     wi: Vec3,
     distance: f32,
@@ -132,7 +135,7 @@ pub fn walk_shadow_ray<F>(
 where
     F: FnMut(ShadowSegment) -> ControlFlow<()>,
 {
-    let mut ray = Ray::new(p, wi);
+    let mut ray = Ray::at_time(p, wi, time);
     if scene.occluded(&ray, 0.0, distance, ignore) {
         return false;
     }
@@ -157,7 +160,7 @@ where
         };
         medium = scene.medium_after_crossing(&hit, wi, medium);
         remaining -= hit.surface.t;
-        ray = Ray::new(hit.surface.p, wi);
+        ray = Ray::at_time(hit.surface.p, wi, time);
         t_min = surface_epsilon(hit.surface.p);
         if remaining <= t_min {
             return true;
@@ -201,7 +204,7 @@ mod tests {
         let start = scene.medium_at(Vec3::ZERO);
         assert!(start.is_some());
         let mut pieces = Vec::new();
-        let reached = walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 2.5, None, |s| {
+        let reached = walk_shadow_ray(&scene, Vec3::ZERO, 0.0, start, Vec3::X, 2.5, None, |s| {
             pieces.push((s.medium, s.ray.o.x, s.t_end));
             ControlFlow::Continue(())
         });
@@ -220,12 +223,12 @@ mod tests {
         // any-hit query over opaque surfaces comes first), unless the wall is
         // the ignored object (the light's own surface).
         let mut visited = 0;
-        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, None, |_| {
+        assert!(!walk_shadow_ray(&scene, Vec3::ZERO, 0.0, start, Vec3::X, 10.0, None, |_| {
             visited += 1;
             ControlFlow::Continue(())
         }));
         assert_eq!(visited, 0);
-        assert!(walk_shadow_ray(&scene, Vec3::ZERO, start, Vec3::X, 10.0, Some(2), |_| ControlFlow::Continue(())));
+        assert!(walk_shadow_ray(&scene, Vec3::ZERO, 0.0, start, Vec3::X, 10.0, Some(2), |_| ControlFlow::Continue(())));
 
         // Scene::transmittance over the walk: exp(-(0.5 * 1 + 0.25 * 1)).
         let mut s = PixelSampler::from_key(1);
@@ -251,7 +254,7 @@ mod tests {
         // Normal incidence: R = ((1.5 - 1) / 2.5)^2 = 0.04, the sheet's R' = 2R / (1 + R).
         let r = 0.08 / 1.04;
         let mut panes = Vec::new();
-        assert!(walk_shadow_ray(&scene, Vec3::ZERO, None, Vec3::X, 2.0, None, |s| {
+        assert!(walk_shadow_ray(&scene, Vec3::ZERO, 0.0, None, Vec3::X, 2.0, None, |s| {
             panes.push(s.pane);
             ControlFlow::Continue(())
         }));

@@ -51,6 +51,9 @@ pub struct Hit {
     pub object: u32,
     /// The hit on the object's shape (for a mesh: triangle and barycentrics).
     pub local: PrimitiveHit,
+    /// The time of the ray that found the hit (frames; moving shapes were
+    /// hit in their pose at this instant).
+    pub time: f32,
 }
 
 /// Maximum number of index-matched boundaries a ray may cross before it is
@@ -100,12 +103,13 @@ pub fn surface_epsilon(p: Vec3) -> f32 {
 }
 
 impl Scene {
-    /// Nearest surface hit along `ray` with `t` in `(t_min, t_max)`.
+    /// Nearest surface hit along `ray` with `t` in `(t_min, t_max)`, moving
+    /// shapes in their pose at the ray's time.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         // Nearest hit first; the hit record only for the nearest object.
         let (i, h) = self.trees().all.closest(&self.objects, ray, t_min, t_max)?;
-        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h, time: ray.time })
     }
 
     /// Nearest hit among the surfaces shadow rays cross (index-matched medium
@@ -113,7 +117,7 @@ impl Scene {
     #[inline]
     pub fn intersect_boundaries(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<Hit> {
         let (i, h) = self.trees().boundaries.closest(&self.objects, ray, t_min, t_max)?;
-        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h })
+        Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h, time: ray.time })
     }
 
     /// The surface model at `hit`: the object's BSDF, with its textured
@@ -123,7 +127,7 @@ impl Scene {
         let object = self.object(hit);
         match &object.texture {
             Some(texture) => {
-                let uv = object.shape.uv(&hit.surface, &hit.local);
+                let uv = object.shape.uv(&hit.surface, &hit.local, hit.time);
                 object.bsdf.with_texture(texture.eval(uv))
             }
             None => object.bsdf,
@@ -198,7 +202,8 @@ impl Scene {
 
     /// Transmittance from `p` (inside `medium`) along unit `wi` over `distance`
     /// (may be infinite), crossing index-matched boundaries; zero if an opaque
-    /// surface is in the way.
+    /// surface is in the way. Moving shapes are in their pose at the camera
+    /// sample's time ([`PixelSampler::time`]).
     pub fn transmittance(
         &self,
         p: Vec3,
@@ -227,7 +232,7 @@ impl Scene {
         sampler: &mut PixelSampler,
     ) -> Rgb {
         let mut tr = Rgb::ONE;
-        let reached = walk_shadow_ray(self, p, medium, wi, distance, ignore, |s| {
+        let reached = walk_shadow_ray(self, p, sampler.time(), medium, wi, distance, ignore, |s| {
             if let Some(id) = s.medium {
                 tr *= segment_transmittance(self.medium(id), s.ray, 0.0, s.t_end, method, sampler);
             }
@@ -266,6 +271,18 @@ impl Scene {
             l += light.le_escaped(d);
         }
         l
+    }
+
+    /// Where the first moving shape (one with a `motion`) is in the scene
+    /// file: `shapes[i]`, or `lights[k].shape` for an area light (objects
+    /// are the file's shapes in order, then the area lights' surfaces);
+    /// `None` when nothing moves.
+    pub fn moving_shape_name(&self) -> Option<String> {
+        let i = self.objects.iter().position(|o| matches!(o.shape, Shape::Moving(_)))?;
+        Some(match self.objects[i].emitter {
+            Some(light) => format!("lights[{light}].shape"),
+            None => format!("shapes[{i}]"),
+        })
     }
 
     /// Length of the diagonal of the scene bounds (a scale for default steps).

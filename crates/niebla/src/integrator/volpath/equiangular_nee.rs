@@ -142,7 +142,7 @@ fn equiangular_ld_light(
     if sigma_s.is_black() {
         return Rgb::ZERO;
     }
-    let Some(ls) = light.sample_li(p, None, u_dir) else {
+    let Some(ls) = light.sample_li(p, None, u_dir, sampler.time()) else {
         return Rgb::ZERO;
     };
     let f = m.phase().eval(-ray.d, ls.wi);

@@ -207,7 +207,7 @@ fn sample_ld_light(
         Scatter::Surface(_, _, _, ng) => Some(ng),
         Scatter::Phase(_) => None,
     };
-    let Some(ls) = light.sample_li(p, normal, u_dir) else {
+    let Some(ls) = light.sample_li(p, normal, u_dir, sampler.time()) else {
         return Rgb::ZERO;
     };
     if ls.li.is_black() || !(ls.pdf > 0.0) {
@@ -274,7 +274,7 @@ pub(super) fn shadow_transmittance(
     let mut r_l = Rgb::ONE;
     let mut r_u = Rgb::ONE;
     let mut last = medium;
-    let reached = walk_shadow_ray(scene, p, medium, wi, distance, ignore, |s| {
+    let reached = walk_shadow_ray(scene, p, sampler.time(), medium, wi, distance, ignore, |s| {
         last = s.medium;
         if let Some(id) = s.medium {
             let m = scene.medium(id);

@@ -226,7 +226,7 @@ impl VolPathIntegrator {
                         l.add(beta * le / group.average(r_u), || PathClass::of(first, depth));
                     } else {
                         let pmf = lights.pmf_of(light);
-                        let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        let r_l_env = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d, ray.time));
                         l.add(beta * le / group.average(r_u + r_l_env), || PathClass::of(first, depth));
                     }
                 }
@@ -251,7 +251,7 @@ impl VolPathIntegrator {
                     } else {
                         let light = &scene.lights[index as usize];
                         let pmf = lights.pmf_of(light);
-                        let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d));
+                        let r_l_hit = r_l * (pmf * light.pdf_li(previous.p, previous.normal, ray.d, ray.time));
                         l.add(beta * le / group.average(r_u + r_l_hit), || PathClass::of(first, depth));
                     }
                 }

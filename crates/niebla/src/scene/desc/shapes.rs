@@ -20,6 +20,37 @@ pub struct ShapeDesc {
     pub exterior: Option<String>,
     /// Surface scattering; default `null` (an index-matched medium boundary).
     pub bsdf: BsdfDesc,
+    /// The shape's pose one frame later (time 1), for motion blur; default:
+    /// the shape does not move. Boxed, as few shapes move.
+    pub motion: Option<Box<ShapeMotionDesc>>,
+}
+
+/// `"motion"` of a shape: its pose one frame after the rendered frame (time
+/// 1, in frames; the shape's own fields are its pose at time 0), with the
+/// names of the shape's own fields: `center` and `radius` for a sphere,
+/// `min` and `max` for a box, `to_world` for a rectangle, disk or mesh.
+/// Fields left out keep the shape's own value. The pose at a camera
+/// sample's time is interpolated linearly (sphere and box) or by
+/// translation, rotation (slerp) and scale (transforms); see
+/// `geometry::MovingShape`.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeMotionDesc {
+    /// A sphere's center at time 1.
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub center: Option<[f32; 3]>,
+    /// A sphere's radius at time 1.
+    #[serde(default)]
+    pub radius: Option<f32>,
+    /// A box's minimum corner at time 1.
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub min: Option<[f32; 3]>,
+    /// A box's maximum corner at time 1.
+    #[serde(default, deserialize_with = "optional_vec3")]
+    pub max: Option<[f32; 3]>,
+    /// A rectangle's, disk's or mesh's object-to-world transform at time 1.
+    #[serde(default)]
+    pub to_world: Option<TransformDesc>,
 }
 
 /// The geometry of a shape.
