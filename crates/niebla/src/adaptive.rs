@@ -111,8 +111,9 @@ pub const MIN_EFFECTIVE: f64 = 6.0;
 /// the thread count. `niebla bench adaptive` prints the least-squares fit
 /// of measured time per sample against dimensions per sample: on fire,
 /// spot_haze and milk_cube the time is close to proportional (r = 0.93 to
-/// 0.999, intercepts between -1.2 and +0.9 dimensions), so the offset is
-/// small; 1 keeps the cost of a sample positive.
+/// 0.999, intercepts between -1.3 and +1.5 dimensions against 2 to 50
+/// dimensions per sample), so the offset is small; 1 keeps the cost of a
+/// sample positive.
 pub const COST_OFFSET: f64 = 1.0;
 
 /// When a pixel of an adaptive render stops (see the module documentation).
