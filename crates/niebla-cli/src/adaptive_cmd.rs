@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use niebla::adaptive::{render_adaptive, write_adaptive_exr, AdaptiveOptions};
+use niebla::adaptive::{render_adaptive, write_adaptive_exr, AdaptiveOptions, StopRule};
 use niebla::aov::{Aov, AovSet};
 use niebla::integrator::IntegratorSettings;
 use niebla::scene::Scene;
@@ -29,6 +29,8 @@ pub struct AdaptiveRun {
     pub quiet: bool,
     /// Layers to render (`--aovs`, the scene's `film.aovs`, alpha when transparent).
     pub layers: AovSet,
+    /// When a pixel stops (`--adaptive-cost`: by cost).
+    pub rule: StopRule,
 }
 
 /// Checks the request, renders and writes the outputs.
@@ -57,6 +59,7 @@ pub fn run(
         seed: run.seed,
         threads: run.threads,
         layers: run.layers,
+        rule: run.rule,
     };
     let start = Instant::now();
     let result = render_adaptive(scene, integrator, &options, &|_, _| {}, None)?;
@@ -73,10 +76,11 @@ pub fn run(
     let taken: u64 = result.spp.iter().sum();
     if !run.quiet {
         println!(
-            "rendered {}x{} adaptively (threshold {}, at most {} spp, mean {:.1} spp) with {} in {seconds:.2} s",
+            "rendered {}x{} adaptively (threshold {}{}, at most {} spp, mean {:.1} spp) with {} in {seconds:.2} s",
             scene.camera.width,
             scene.camera.height,
             run.threshold,
+            if run.rule == StopRule::Cost { " by cost" } else { "" },
             result.total_spp,
             taken as f64 / result.spp.len().max(1) as f64,
             integrator.name(),

@@ -1,8 +1,12 @@
 //! `niebla bench adaptive`: samples and seconds to reach a relative MSE
 //! (`--target`) with plain rendering (independent sampler) and with adaptive
 //! sampling (`niebla::adaptive`) at each `--thresholds` value, against a
-//! long plain reference, next to the most any allocation of samples over the
-//! pixels could gain (`niebla::adaptive::allocation_bound`).
+//! long plain reference, and with the cost rule (`--adaptive-cost`) at each
+//! `--cost-thresholds` value, next to the most any allocation of samples
+//! over the pixels could gain in samples and in time
+//! (`niebla::adaptive::allocation_bound`, `cost_allocation_bound`). It also
+//! fits the measured time per sample against the random dimensions a sample
+//! draws (the cost proxy of the cost rule, `niebla::adaptive::COST_OFFSET`).
 //!
 //! Each scene renders with its own integrator at `--width` (height keeps
 //! the aspect ratio). Plain renders sweep `--spp`; adaptive renders sweep
@@ -16,8 +20,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
-use niebla::adaptive::{allocation_bound, per_sample_relative_variance, render_adaptive, AdaptiveOptions};
-use niebla::aov::{Aov, AovSet};
+use niebla::adaptive::{
+    allocation_bound, cost_allocation_bound, per_sample_relative_variance, render_adaptive, AdaptiveOptions, StopRule,
+    COST_OFFSET,
+};
+use niebla::aov::{variance_of_mean, AovSet};
 use niebla::integrator::PreparedIntegrator;
 use niebla::render::RenderOptions;
 use niebla::sampling::SamplerKind;
@@ -48,6 +55,10 @@ pub struct AdaptiveBenchArgs {
     /// Adaptive thresholds measured (relative error per pixel, in (0, 1)), comma separated.
     #[arg(long, value_delimiter = ',', default_value = "0.1,0.07,0.05")]
     pub thresholds: Vec<f32>,
+    /// Thresholds measured with the cost rule (`render --adaptive-cost`),
+    /// comma separated (default: none).
+    #[arg(long, value_delimiter = ',')]
+    pub cost_thresholds: Vec<f32>,
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
@@ -124,7 +135,10 @@ fn to_reach(points: &[(f64, f64)], target: f64, precision: usize) -> String {
 struct Row {
     scene: String,
     bound: f64,
+    time_bound: f64,
     cells: Vec<String>,
+    /// Random dimensions per pixel to the target: plain, then each threshold.
+    work_cells: Vec<String>,
 }
 
 /// `niebla bench adaptive`.
@@ -146,6 +160,9 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
     }
     if let Some(t) = args.thresholds.iter().find(|t| !(**t > 0.0 && **t < 1.0)) {
         return Err(CliError::invalid_option("--thresholds", format!("each must lie in (0, 1), got {t}")));
+    }
+    if let Some(t) = args.cost_thresholds.iter().find(|t| !(**t > 0.0 && **t < 1.0)) {
+        return Err(CliError::invalid_option("--cost-thresholds", format!("each must lie in (0, 1), got {t}")));
     }
     if !(args.target > 0.0 && args.target.is_finite()) {
         return Err(CliError::invalid_option("--target", "must be a positive number"));
@@ -196,14 +213,42 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             args.reference_spp,
             start.elapsed().as_secs_f64()
         );
-        let set = AovSet::EMPTY.with(Aov::Variance);
+        // Per-pixel variance and random dimensions drawn, from the
+        // segment sums of adaptive rendering (7 sums per pixel: R, G, B,
+        // their squares, dimensions).
         let n = args.variance_spp as u64;
-        let (sums, layers) =
-            prepared.render_aov_sums(&scene, &plain_options(args.variance_spp, 3), set, &|_, _| {}, None)?;
-        let layers = layers.layers(&sums, n);
-        let variance = layers.get(Aov::Variance).expect("the variance layer was asked for");
-        let v = per_sample_relative_variance(&reference, n, |i| variance.rgb(i));
+        let pixels = (scene.camera.width * scene.camera.height) as usize;
+        let all: Vec<u32> = (0..pixels as u32).collect();
+        let pool = match threads {
+            Some(t) => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .map_err(|e| CliError::invalid_option("--threads", format!("cannot start {t} threads: {e}")))?,
+            ),
+            None => None,
+        };
+        let segment_sums = |list: &[u32]| {
+            let render = || prepared.render_segment_sums(&scene, 3, AovSet::EMPTY, list, &[(0, n)], None);
+            match &pool {
+                Some(pool) => pool.install(render),
+                None => render(),
+            }
+        };
+        let sums = segment_sums(&all)?;
+        let variance = |i: usize| {
+            let cell = &sums[i * 7..][..7];
+            niebla::color::Rgb::new(
+                variance_of_mean(cell[0], cell[3], n),
+                variance_of_mean(cell[1], cell[4], n),
+                variance_of_mean(cell[2], cell[5], n),
+            )
+        };
+        let v = per_sample_relative_variance(&reference, n, variance);
+        let dimensions: Vec<f64> = (0..pixels).map(|i| sums[i * 7 + 6] as f64 / n as f64).collect();
+        let cost: Vec<f64> = dimensions.iter().map(|d| d + COST_OFFSET).collect();
         let bound = allocation_bound(&v);
+        let time_bound = cost_allocation_bound(&v, &cost);
         let mut sorted = v.clone();
         sorted.sort_by(f64::total_cmp);
         let q = |f: f64| sorted[((sorted.len() - 1) as f64 * f) as usize];
@@ -214,8 +259,47 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             q(0.5),
             q(0.9)
         );
+        println!(
+            "  cost per sample (random dimensions + {COST_OFFSET}): mean {:.1}, max {:.1}; time allocation bound {time_bound:.2}x",
+            cost.iter().sum::<f64>() / pixels as f64,
+            cost.iter().copied().fold(0.0, f64::max)
+        );
+        // Time against dimensions: the pixels in 8 groups of equal size by
+        // their dimensions per sample, each group rendered again (same
+        // samples) and timed; least squares of seconds per sample on mean
+        // dimensions per sample over the groups.
+        let mut order = all.clone();
+        order.sort_by(|&a, &b| dimensions[a as usize].total_cmp(&dimensions[b as usize]));
+        let groups = 8.min(pixels);
+        let mut fit = Vec::new();
+        for g in 0..groups {
+            let list = &order[g * pixels / groups..(g + 1) * pixels / groups];
+            if list.is_empty() {
+                continue;
+            }
+            let watch = Stopwatch::start(args.clock)?;
+            segment_sums(list)?;
+            let seconds = watch.seconds()?;
+            let mean_dimensions = list.iter().map(|&i| dimensions[i as usize]).sum::<f64>() / list.len() as f64;
+            fit.push((mean_dimensions, seconds / (list.len() as f64 * n as f64)));
+        }
+        let m = fit.len() as f64;
+        let (mx, my) = (fit.iter().map(|p| p.0).sum::<f64>() / m, fit.iter().map(|p| p.1).sum::<f64>() / m);
+        let sxx = fit.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+        let sxy = fit.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>();
+        let syy = fit.iter().map(|p| (p.1 - my).powi(2)).sum::<f64>();
+        let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        let intercept = my - slope * mx;
+        let r = if sxx > 0.0 && syy > 0.0 { sxy / (sxx * syy).sqrt() } else { 0.0 };
+        println!(
+            "  time per sample = {:.3} us + {:.4} us x dimensions (8 groups, r = {r:.3}): offset {:.1} dimensions; groups (dimensions, us): {}",
+            intercept * 1e6,
+            slope * 1e6,
+            if slope > 0.0 { intercept / slope } else { f64::NAN },
+            fit.iter().map(|(d, t)| format!("({d:.1}, {:.3})", t * 1e6)).collect::<Vec<_>>().join(" ")
+        );
         let seeds = args.seeds as u64;
-        let (mut spp_points, mut time_points) = (Vec::new(), Vec::new());
+        let (mut spp_points, mut time_points, mut work_points) = (Vec::new(), Vec::new(), Vec::new());
         for &spp in &spp_list {
             let (mut error, mut time) = (0.0, 0.0);
             for seed in 0..seeds {
@@ -225,40 +309,57 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
                 error += image.relative_mse(&reference);
             }
             let (error, time) = (error / seeds as f64, time / seeds as f64);
-            println!("  plain          {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s");
+            // Expected dimensions of a plain render: spp times those of
+            // the variance pass per sample.
+            let work = spp as f64 * dimensions.iter().sum::<f64>() / pixels as f64;
+            println!(
+                "  plain          {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s, {work:.1} dimensions per pixel"
+            );
             spp_points.push((spp as f64, error));
             time_points.push((time, error));
+            work_points.push((work, error));
         }
         let mut cells = vec![to_reach(&spp_points, args.target, 1), to_reach(&time_points, args.target, 3)];
-        for &threshold in &args.thresholds {
-            let (mut spp_points, mut time_points) = (Vec::new(), Vec::new());
+        let mut work_cells = vec![to_reach(&work_points, args.target, 0)];
+        let runs = args.thresholds.iter().map(|&t| (StopRule::Error, t));
+        for (rule, threshold) in runs.chain(args.cost_thresholds.iter().map(|&t| (StopRule::Cost, t))) {
+            let label = if rule == StopRule::Cost { "cost" } else { "adaptive" };
+            let (mut spp_points, mut time_points, mut work_points) = (Vec::new(), Vec::new(), Vec::new());
             for &spp in &spp_list {
-                let (mut error, mut time, mut taken) = (0.0, 0.0, 0.0);
+                let (mut error, mut time, mut taken, mut work) = (0.0, 0.0, 0.0, 0.0);
                 for seed in 0..seeds {
-                    let options = AdaptiveOptions { spp, threshold, seed: 11 + seed, threads, layers: AovSet::EMPTY };
+                    let options =
+                        AdaptiveOptions { spp, threshold, seed: 11 + seed, threads, layers: AovSet::EMPTY, rule };
                     let watch = Stopwatch::start(args.clock)?;
                     let result = render_adaptive(&scene, &settings, &options, &|_, _| {}, None)?;
                     time += watch.seconds()?;
                     error += result.image.relative_mse(&reference);
                     taken += result.spp.iter().sum::<u64>() as f64 / result.spp.len() as f64;
+                    work += result.dimensions.iter().sum::<u64>() as f64 / result.spp.len() as f64;
                 }
                 let (error, time, taken) = (error / seeds as f64, time / seeds as f64, taken / seeds as f64);
+                let work = work / seeds as f64;
                 println!(
-                    "  adaptive {threshold:<5} {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s, {taken:.2} spp taken"
+                    "  {label:<8} {threshold:<5} {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s, {taken:.2} spp taken, {work:.1} dimensions per pixel"
                 );
                 spp_points.push((taken, error));
                 time_points.push((time, error));
+                work_points.push((work, error));
             }
             cells.push(to_reach(&spp_points, args.target, 1));
             cells.push(to_reach(&time_points, args.target, 3));
+            work_cells.push(to_reach(&work_points, args.target, 0));
         }
-        rows.push(Row { scene: stem, bound, cells });
+        rows.push(Row { scene: stem, bound, time_bound, cells, work_cells });
     }
     println!();
     println!("samples per pixel (spp) and seconds (s) to relative MSE {:.1e}:", args.target);
     let mut header = format!("{:<16} {:>7} {:>10} {:>10}", "scene", "bound", "plain_spp", "plain_s");
     for t in &args.thresholds {
         header += &format!(" {:>10} {:>10}", format!("a{t}_spp"), format!("a{t}_s"));
+    }
+    for t in &args.cost_thresholds {
+        header += &format!(" {:>10} {:>10}", format!("c{t}_spp"), format!("c{t}_s"));
     }
     println!("{header}");
     for row in &rows {
@@ -267,6 +368,28 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             line += &format!(" {cell:>10}");
         }
         println!("{line}");
+    }
+    if !args.cost_thresholds.is_empty() {
+        println!();
+        println!(
+            "random dimensions drawn per pixel (the cost proxy, about proportional to time) to relative MSE {:.1e}:",
+            args.target
+        );
+        let mut header = format!("{:<16} {:>7} {:>10}", "scene", "t_bound", "plain_dim");
+        for t in &args.thresholds {
+            header += &format!(" {:>10}", format!("a{t}_dim"));
+        }
+        for t in &args.cost_thresholds {
+            header += &format!(" {:>10}", format!("c{t}_dim"));
+        }
+        println!("{header}");
+        for row in &rows {
+            let mut line = format!("{:<16} {:>7}", row.scene, format!("{:.2}x", row.time_bound));
+            for cell in &row.work_cells {
+                line += &format!(" {cell:>10}");
+            }
+            println!("{line}");
+        }
     }
     Ok(())
 }

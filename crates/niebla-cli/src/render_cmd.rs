@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use niebla::adaptive::StopRule;
 use niebla::film::{read_checkpoint_full, render_memory, write_checkpoint, write_image, Checkpoint, CheckpointInfo};
 use niebla::integrator::IntegratorSettings;
 use niebla::progressive::{resume_progressive_sums, Accumulator, Budget, PassInfo, ProgressiveOptions};
@@ -111,6 +112,16 @@ pub struct RenderArgs {
     /// argument needs independent passes; `--sampler sobol` is refused).
     #[arg(long, value_name = "THRESHOLD", conflicts_with_all = ["time", "resume", "denoise"])]
     pub adaptive: Option<f32>,
+    /// With --adaptive: stop by cost instead of by error. A pixel stops
+    /// once the relative variance the next pass would remove from its value,
+    /// per unit of the pass's cost (random numbers its samples drew so far,
+    /// plus a fixed part), is below THRESHOLD^2 / (spp x the image's mean cost
+    /// per sample): the allocation of samples that minimises the image's
+    /// relative MSE for the time spent. About: a pixel stops after n samples
+    /// once its predicted relative error is below
+    /// THRESHOLD x sqrt((n / spp) (cost / mean cost)). Still unbiased.
+    #[arg(long, requires = "adaptive")]
+    pub adaptive_cost: bool,
     /// Render frames of a sequence: `N`, `FIRST-LAST` or `FIRST-LAST:STEP`
     /// (frame numbers >= 0). Frame patterns in the scene's file names
     /// (`smoke.####.vdb`, `{frame}`, `{frame:04}`) and keyframes of the
@@ -299,7 +310,9 @@ pub fn render_loaded(
         }
         let seed = args.seed.or(built.settings.seed);
         let quiet = args.quiet.quiet;
-        let run = crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet, layers: aovs };
+        let rule = if args.adaptive_cost { StopRule::Cost } else { StopRule::Error };
+        let run =
+            crate::adaptive_cmd::AdaptiveRun { threshold, spp, seed, threads, exposure, quiet, layers: aovs, rule };
         return crate::adaptive_cmd::run(scene, &integrator, &run, args.first_sample, outputs).map(|()| None);
     }
     let (start_acc, seed) = match &args.resume {

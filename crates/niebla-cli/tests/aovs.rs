@@ -218,4 +218,16 @@ fn adaptive_writes_the_spp_map_and_refuses_bad_thresholds() {
     assert!(layered.contains_key("albedo.G") && layered.contains_key("depth.Z"));
     let err = run_err(&dir, &["render", "fog.json", "-o", "c.exr", "--adaptive", "0.2", "--denoise"]);
     assert!(err.contains("--denoise") || err.contains("cannot be used"), "{err}");
+    // The cost rule: an spp map of the same schedule, the old rule's image
+    // unchanged without the flag, and the flag needs --adaptive.
+    run_ok(
+        &dir,
+        &["render", "fog.json", "-o", "d.exr", "--adaptive", "0.2", "--adaptive-cost", "--spp", "64", "--quiet"],
+    );
+    let cost = channels(&dir.join("d.exr"));
+    let cost_spp: Vec<f32> = cost["spp.Z"].iter().map(|&b| f32::from_bits(b)).collect();
+    assert!(cost_spp.iter().all(|&s| [16.0, 24.0, 32.0, 48.0, 64.0].contains(&s)), "{cost_spp:?}");
+    assert!(cost.contains_key("variance.G") && cost.contains_key("R"));
+    let err = run_err(&dir, &["render", "fog.json", "-o", "e.exr", "--adaptive-cost", "--spp", "8"]);
+    assert!(err.contains("--adaptive"), "{err}");
 }

@@ -30,7 +30,9 @@
 //! before the pass starting at `t`" depends on samples `< d(t)` only, and
 //! the stand-in samples `d(t) .. t` are independent of them, so
 //! `E[M 1{stop at t}] = mu P(stop at t)`. Hence `E[Z_j] = mu` for every
-//! `j`. (Averaging all the samples a pixel took until it looked converged
+//! `j`. (The same holds for any stopping rule that is a function of the
+//! pixel's decided samples and of other pixels' samples, such as the cost
+//! rule. Averaging all the samples a pixel took until it looked converged
 //! would not be unbiased: a pixel whose first samples happened to be bright
 //! shows a lower relative error and stops sooner.) The image mean used for
 //! the error floor and a neighbour's decision use other pixels' samples,
@@ -50,6 +52,29 @@
 //! pixel stops when it and its eight neighbours are converged (stopped
 //! neighbours count as converged): an isolated noisy pixel keeps its
 //! neighbourhood sampling.
+//!
+//! **Cost rule** ([`StopRule::Cost`]). The threshold rule equalises the
+//! pixels' errors; the image's relative MSE `mean_p v_p / n_p` for a given
+//! time `sum_p c_p n_p` (`c_p` the cost of a sample of pixel `p`) is least
+//! at `n_p ~ sqrt(v_p / c_p)` (Cauchy-Schwarz), where every pixel's
+//! marginal error reduction per unit cost, `v_p / (c_p n_p^2)`, is the
+//! same. So a pixel is converged when the relative variance the pass to
+//! the next decision `t'` would remove, `v (f(d, t) - f(d', t'))` (`f` the
+//! factor above, `d'` the cutoff at `t'`, `f = 1 / N` at `t' = N`), is
+//! below `mu c_p (t' - t)`, the pass's cost at the common level
+//! `mu = threshold^2 / (N c_mean)`; `c_mean` is the mean cost of the
+//! image's decided samples. In the continuous limit a pixel stops after
+//! `n` samples once its relative error is below
+//! `threshold sqrt((n / N) (c_p / c_mean))`: a pixel of mean cost that
+//! takes every sample is held to the threshold, a pixel that stops earlier
+//! or costs less per sample to a lower error, a costlier one to a higher.
+//! The cost of a sample is counted, not timed: [`COST_OFFSET`] plus the
+//! random dimensions it drew (each tracker step, scattering vertex and
+//! light sample draws some), a deterministic function of its numbers;
+//! `c_p` is the mean over the pixel's decided samples. The decision still
+//! depends on the pixel's samples `< d` only (its `v`, `c_p` and its share
+//! of `c_mean`) and on other pixels' samples, so the argument above holds
+//! unchanged.
 //!
 //! The argument needs the passes of a pixel to be independent, so adaptive
 //! renders use the independent sampler: Owen-scrambled Sobol points of a
@@ -79,6 +104,42 @@ pub const MIN_DECIDED: u64 = 8;
 /// [`MIN_DECIDED`], so that equal samples pass despite rounding).
 pub const MIN_EFFECTIVE: f64 = 6.0;
 
+/// Cost of a sample in units of one random dimension drawn, added to the
+/// dimensions a sample drew to give its cost proxy: the work of a sample
+/// that draws none (camera ray, first intersection, film). Counted, not
+/// timed, so that decisions and images do not depend on the machine or
+/// the thread count. `niebla bench adaptive` prints the least-squares fit
+/// of measured time per sample against dimensions per sample: on fire,
+/// spot_haze and milk_cube the time is close to proportional (r = 0.93 to
+/// 0.999, intercepts between -1.3 and +1.5 dimensions against 2 to 50
+/// dimensions per sample), so the offset is small; 1 keeps the cost of a
+/// sample positive.
+pub const COST_OFFSET: f64 = 1.0;
+
+/// When a pixel of an adaptive render stops (see the module documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StopRule {
+    /// Once the predicted relative standard error of its value is below
+    /// the threshold (equal error per pixel, whatever a sample costs).
+    #[default]
+    Error,
+    /// Once the predicted relative variance a further pass would remove,
+    /// per unit of its cost, is below the common level
+    /// `threshold^2 / (N c_mean)`: the allocation that minimises the image's
+    /// relative MSE for the time spent (`n_p ~ sqrt(v_p / c_p)`).
+    Cost,
+}
+
+impl StopRule {
+    /// The rule's name (`error`, `cost`), as written in the EXR header.
+    pub fn name(self) -> &'static str {
+        match self {
+            StopRule::Error => "error",
+            StopRule::Cost => "cost",
+        }
+    }
+}
+
 /// The result of an adaptive render.
 #[derive(Clone, Debug)]
 pub struct AdaptiveImage {
@@ -94,6 +155,11 @@ pub struct AdaptiveImage {
     /// each channel a pixel's value by the rule of the image, the variance
     /// layer [`AdaptiveImage::variance`].
     pub layers: Option<AovImage>,
+    /// The rule the pixels stopped by.
+    pub rule: StopRule,
+    /// Random dimensions each pixel's samples drew (the cost proxy of
+    /// [`StopRule::Cost`]; about proportional to the time they took).
+    pub dimensions: Vec<u64>,
 }
 
 /// How an adaptive render runs.
@@ -109,6 +175,8 @@ pub struct AdaptiveOptions {
     pub threads: Option<usize>,
     /// Layers (`crate::aov`) to render with the image ([`AovSet::EMPTY`]: none).
     pub layers: AovSet,
+    /// When a pixel stops.
+    pub rule: StopRule,
 }
 
 /// The sample counts at which the passes of an adaptive render of `spp`
@@ -143,6 +211,8 @@ struct Moments {
     sum: [i128; 3],
     square: [i128; 3],
     n: u64,
+    /// Random dimensions the `n` samples drew.
+    dimensions: u64,
 }
 
 impl Moments {
@@ -152,6 +222,13 @@ impl Moments {
             self.square[c] += other.square[c];
         }
         self.n += other.n;
+        self.dimensions += other.dimensions;
+    }
+
+    /// Cost per sample ([`COST_OFFSET`] plus the mean dimensions drawn;
+    /// [`COST_OFFSET`] without samples).
+    fn cost(&self) -> f64 {
+        COST_OFFSET + if self.n == 0 { 0.0 } else { self.dimensions as f64 / self.n as f64 }
     }
 
     /// Mean of channel `c` (0 without samples).
@@ -239,7 +316,7 @@ pub fn render_adaptive(
     let threshold2 = (options.threshold as f64).powi(2);
     let channels = segment_channels(options.layers);
     let k = channels.len();
-    let stride = 6 + k;
+    let stride = 7 + k;
     // Sample counts at which pixels may stop, and the boundaries of the
     // sample ranges whose sums stay apart (every cutoff of a decision is
     // one of them).
@@ -258,6 +335,7 @@ pub fn render_adaptive(
     let mut decided = vec![Moments::default(); pixels];
     let mut decided_layers = vec![0i128; pixels * k];
     let mut taken = vec![0u64; pixels];
+    let mut drawn = vec![0u64; pixels];
     let mut value = vec![Rgb::ZERO; pixels];
     let mut variance = vec![Rgb::ZERO; pixels];
     let mut layer_means = vec![0f64; pixels * k];
@@ -289,13 +367,25 @@ pub fn render_adaptive(
                 / pixels.max(1) as f64;
             let eps = (0.01 * image_mean).powi(2).max(f64::MIN_POSITIVE);
             let factor = stop_variance_factor(d, t, total);
+            // The cost rule: the relative variance the pass to `end` would
+            // remove (stopping there instead of now), against its cost at the
+            // level `threshold^2 / (N c_mean)`.
+            let removed = factor - stop_variance_factor(cutoff(&ends, end), end, total);
+            let (dimensions, decided_samples) =
+                decided.iter().fold((0u64, 0u64), |(a, b), m| (a + m.dimensions, b + m.n));
+            let mean_cost = COST_OFFSET + dimensions as f64 / decided_samples.max(1) as f64;
+            let level = threshold2 / (total as f64 * mean_cost) * (end - t) as f64;
             for i in 0..pixels {
                 converged[i] = !active[i] || {
                     let m = &decided[i];
                     let relative: f64 =
                         (0..3).map(|c| m.sample_variance(c) / (m.mean(c).powi(2) + eps)).sum::<f64>() / 3.0;
                     let trusted = (0..3).all(|c| m.effective_samples(c).is_none_or(|e| e >= MIN_EFFECTIVE));
-                    trusted && relative * factor < threshold2
+                    trusted
+                        && match options.rule {
+                            StopRule::Error => relative * factor < threshold2,
+                            StopRule::Cost => relative * removed < level * m.cost(),
+                        }
                 };
             }
             for y in 0..h {
@@ -355,10 +445,15 @@ pub fn render_adaptive(
             for (j, &i) in list.iter().enumerate() {
                 let i = i as usize;
                 let cell = &sums[(j * segments.len() + g) * stride..][..stride];
-                segment.moments[i] =
-                    Moments { sum: [cell[0], cell[1], cell[2]], square: [cell[3], cell[4], cell[5]], n: size };
-                segment.layers[i * k..(i + 1) * k].copy_from_slice(&cell[6..]);
+                segment.moments[i] = Moments {
+                    sum: [cell[0], cell[1], cell[2]],
+                    square: [cell[3], cell[4], cell[5]],
+                    n: size,
+                    dimensions: cell[6] as u64,
+                };
+                segment.layers[i * k..(i + 1) * k].copy_from_slice(&cell[7..]);
                 taken[i] += size;
+                drawn[i] += cell[6] as u64;
             }
             pending.push_back(segment);
         }
@@ -384,7 +479,7 @@ pub fn render_adaptive(
         (!options.layers.is_empty()).then(|| layer_image(options.layers, &channels, w, h, &layer_means, &variance));
     let mut image = Image::new(w as u32, h as u32);
     image.pixels = value;
-    Ok(AdaptiveImage { image, spp: taken, variance, total_spp: total, layers })
+    Ok(AdaptiveImage { image, spp: taken, variance, total_spp: total, layers, rule: options.rule, dimensions: drawn })
 }
 
 /// The per-pixel sums of one range of sample indices.
@@ -450,8 +545,9 @@ fn layer_image(set: AovSet, channels: &[AovChannel], w: usize, h: usize, means: 
 /// samples each pixel took (`spp.Z`), the variance of each pixel's value
 /// (`variance.R/G/B`) and the layers rendered (channels named as those of
 /// `niebla render --aovs`), with the threshold, the schedule's spp and the
-/// layers (`nieblaAovs`, so `aov::read_aov_exr` reads them) as header
-/// attributes. Not a checkpoint: an adaptive render cannot be resumed.
+/// layers (`nieblaAovs`, so `aov::read_aov_exr` reads them) and the stop
+/// rule (`nieblaAdaptiveRule`: `error` or `cost`) as header attributes.
+/// Not a checkpoint: an adaptive render cannot be resumed.
 pub fn write_adaptive_exr(
     result: &AdaptiveImage,
     threshold: f32,
@@ -479,6 +575,7 @@ pub fn write_adaptive_exr(
     let mut attributes = LayerAttributes::default();
     for (name, value) in [
         ("nieblaAdaptiveThreshold", threshold.to_string()),
+        ("nieblaAdaptiveRule", result.rule.name().to_string()),
         ("nieblaSpp", result.total_spp.to_string()),
         ("nieblaAovs", recorded),
     ] {
@@ -528,6 +625,25 @@ pub fn allocation_bound(v: &[f64]) -> f64 {
     }
 }
 
+/// The most any allocation of samples over the pixels can gain over a
+/// uniform one in time for relative MSE (ratio of the time to reach equal
+/// error) when a sample of pixel `p` costs `c[p]`:
+/// `mean(v) mean(c) / mean(sqrt(v c))^2`. Minimising `sum v_p / n_p` at a
+/// fixed `sum c_p n_p` gives `n_p` proportional to `sqrt(v_p / c_p)`
+/// (Cauchy-Schwarz). At least 1; 1 for empty or all-zero input. With equal
+/// costs it is [`allocation_bound`].
+pub fn cost_allocation_bound(v: &[f64], c: &[f64]) -> f64 {
+    let n = v.len().min(c.len()) as f64;
+    let mean_v = v.iter().sum::<f64>() / n;
+    let mean_c = c.iter().sum::<f64>() / n;
+    let mean_sqrt = v.iter().zip(c).map(|(v, c)| (v.max(0.0) * c.max(0.0)).sqrt()).sum::<f64>() / n;
+    if n == 0.0 || mean_sqrt <= 0.0 {
+        1.0
+    } else {
+        mean_v * mean_c / (mean_sqrt * mean_sqrt)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -556,8 +672,8 @@ mod tests {
     fn a_stopped_pixel_scales_its_standin_mean() {
         let q = |v: f64| (v * (2f64).powi(FRACTION_BITS)) as i128;
         // 4 decided samples of value 1, 4 standin samples of value 3, schedule 16.
-        let decided = Moments { sum: [q(4.0); 3], square: [q(4.0); 3], n: 4 };
-        let standin = Moments { sum: [q(12.0); 3], square: [q(36.0); 3], n: 4 };
+        let decided = Moments { sum: [q(4.0); 3], square: [q(4.0); 3], n: 4, dimensions: 0 };
+        let standin = Moments { sum: [q(12.0); 3], square: [q(36.0); 3], n: 4, dimensions: 0 };
         let (value, variance) = pixel_value(&decided, &standin, 16);
         // (4 + 3 * 12) / 16 = 2.5.
         assert!((value[0] - 2.5).abs() < 1e-6, "{value:?}");
@@ -581,6 +697,27 @@ mod tests {
         assert!((uniform / best - allocation_bound(&[v1, v2])).abs() < 1e-5, "{}", uniform / best);
         assert_eq!(allocation_bound(&[]), 1.0);
         assert_eq!(allocation_bound(&[0.0, 0.0]), 1.0);
+    }
+
+    #[test]
+    fn cost_allocation_bound_is_the_brute_force_optimum() {
+        // Equal costs: the sample bound.
+        let v = [1.0, 4.0, 9.0];
+        assert!((cost_allocation_bound(&v, &[3.0; 3]) - allocation_bound(&v)).abs() < 1e-12);
+        // v = (1, 4), c = (1, 16): sqrt(v c) = (1, 8); bound 2.5 * 8.5 / 4.5^2.
+        let (v, c) = ([1.0f64, 4.0], [1.0f64, 16.0]);
+        assert!((cost_allocation_bound(&v, &c) - 2.5 * 8.5 / 20.25).abs() < 1e-12);
+        // Brute force at a time budget of 17000 (uniform: 1000 samples each):
+        // uniform error / best error equals the bound.
+        let budget = 17_000.0;
+        let uniform = (v[0] + v[1]) / (budget / (c[0] + c[1]));
+        let best = (1..17_000)
+            .map(|n1| n1 as f64)
+            .filter(|n1| n1 * c[0] < budget)
+            .map(|n1| v[0] / n1 + v[1] / ((budget - n1 * c[0]) / c[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!((uniform / best - cost_allocation_bound(&v, &c)).abs() < 1e-4, "{}", uniform / best);
+        assert_eq!(cost_allocation_bound(&[], &[]), 1.0);
     }
 
     #[test]

@@ -17,10 +17,11 @@ use super::{AovChannel, AovSample, AovSet, AovSums, LayerSplit};
 /// independent of the integrator's numbers (which it never changes).
 const FEATURE_STREAM: u64 = 0x5bd1_e995_aa0f_7e31;
 
-/// Sample `s` of pixel `(x, y)`: the camera ray and its radiance split into
-/// the layers (`split`) or whole ([`LayerSplit::unsplit`]). A non-finite
-/// sample is dropped like the beauty sample of a plain render: zero in every
-/// layer.
+/// Sample `s` of pixel `(x, y)`: the camera ray, its radiance split into
+/// the layers (`split`) or whole ([`LayerSplit::unsplit`]), and the number of
+/// random dimensions the sample drew (its cost proxy, see
+/// `crate::adaptive::COST_OFFSET`). A non-finite sample is dropped like the
+/// beauty sample of a plain render: zero in every layer.
 #[inline]
 fn traced_sample<I: Integrator>(
     scene: &Scene,
@@ -29,7 +30,7 @@ fn traced_sample<I: Integrator>(
     seed: u64,
     (x, y, s): (u32, u32, u64),
     split: bool,
-) -> (Ray, LayerSplit) {
+) -> (Ray, LayerSplit, u64) {
     let mut sampler = PixelSampler::for_pixel(kind, seed, x, y, s);
     let ray = scene.camera.sample_ray(x, y, &mut sampler);
     let traced = if split {
@@ -38,7 +39,8 @@ fn traced_sample<I: Integrator>(
         LayerSplit::unsplit(integrator.radiance(scene, ray, scene.camera_medium, &mut sampler))
     };
     debug_assert!(traced.total.is_finite(), "non-finite radiance {:?} at pixel ({x}, {y}) sample {s}", traced.total);
-    (ray, if traced.total.is_finite() { traced } else { Default::default() })
+    let dimensions = sampler.dimension();
+    (ray, if traced.total.is_finite() { traced } else { Default::default() }, dimensions)
 }
 
 /// The beauty sums and the layer sums of `set` for samples
@@ -81,7 +83,7 @@ pub fn render_aov_sums_masked_with<I: Integrator>(
             return (beauty, layers);
         }
         for s in options.first_sample..options.first_sample + options.spp as u64 {
-            let (ray, split) = traced_sample(scene, integrator, options.sampler, options.seed, (x, y, s), true);
+            let (ray, split, _) = traced_sample(scene, integrator, options.sampler, options.seed, (x, y, s), true);
             for (sum, v) in beauty.iter_mut().zip(split.total.0) {
                 *sum += quantize_sample(v);
             }
@@ -120,9 +122,10 @@ pub fn segment_channels(set: AovSet) -> Vec<AovChannel> {
 /// Fixed-point sums of sample ranges of some pixels, the render loop of
 /// adaptive sampling (`crate::adaptive`). For each pixel `pixels[j]`
 /// (index `y * width + x`) and each range `segments[g] = (start, end)` of
-/// sample indices, `6 + k` sums at `out[(j * segments.len() + g) * (6 + k)..]`:
-/// the beauty's R, G, B, their squares, and the `k` channels of
-/// [`segment_channels`]`(set)`. Independent sampler; every sample is that of
+/// sample indices, `7 + k` sums at `out[(j * segments.len() + g) * (7 + k)..]`:
+/// the beauty's R, G, B, their squares, the random dimensions the samples
+/// drew (an integer count, the cost proxy of `crate::adaptive`), and the `k`
+/// channels of [`segment_channels`]`(set)`. Independent sampler; every sample is that of
 /// [`render_aov_sums_with`] with the same seed and index (the beauty's bit
 /// for bit: without split layers it calls `radiance`, whose value
 /// `radiance_split` reproduces). Runs on the current rayon pool in chunks
@@ -139,7 +142,7 @@ pub fn render_segment_sums_with<I: Integrator>(
     use rayon::prelude::*;
     use std::sync::atomic::Ordering;
     let channels = segment_channels(set);
-    let stride = 6 + channels.len();
+    let stride = 7 + channels.len();
     let per_pixel = stride * segments.len();
     let needs_split = channels.iter().any(|c| matches!(c, AovChannel::Split(..)));
     let needs_features = channels.iter().any(|c| !matches!(c, AovChannel::Split(..)));
@@ -159,12 +162,13 @@ pub fn render_segment_sums_with<I: Integrator>(
                 for (g, &(start, end)) in segments.iter().enumerate() {
                     let cell = &mut out[j * per_pixel + g * stride..][..stride];
                     for s in start..end {
-                        let (ray, split) =
+                        let (ray, split, dimensions) =
                             traced_sample(scene, integrator, SamplerKind::Independent, seed, (x, y, s), needs_split);
                         for (c, v) in split.total.0.into_iter().enumerate() {
                             cell[c] += quantize_sample(v);
                             cell[3 + c] += quantize_sample(v * v);
                         }
+                        cell[6] += dimensions as i128;
                         if channels.is_empty() {
                             continue;
                         }
@@ -180,7 +184,7 @@ pub fn render_segment_sums_with<I: Integrator>(
                         } else {
                             Default::default()
                         };
-                        AovSums::accumulate(&channels, &AovSample { split, features }, &mut cell[6..]);
+                        AovSums::accumulate(&channels, &AovSample { split, features }, &mut cell[7..]);
                     }
                 }
             }
