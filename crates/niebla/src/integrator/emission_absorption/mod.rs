@@ -11,7 +11,9 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{medium_range, segment_transmittance, MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
-use super::{default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance};
+use super::{
+    camera_layout, default_march_step, negligible_distance, trace_laid_out_camera_ray, Integrator, SegmentRadiance,
+};
 
 /// Emission and absorption only. With `TransmittanceMethod::Analytic` a
 /// homogeneous segment is integrated in closed form,
@@ -28,7 +30,7 @@ pub struct EmissionIntegrator {
 impl Integrator for EmissionIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, _, ray, t_end, sampler| {
+        trace_laid_out_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, _, ray, t_end, sampler| {
             emission_segment(m, ray, t_end, self.step, self.transmittance, diagonal, sampler)
         })
     }
@@ -66,6 +68,9 @@ pub(crate) fn emission_segment(
         }));
         return SegmentRadiance { radiance, transmittance };
     }
+    // The jitter of the march, or the first number of the transmittance
+    // estimate (a no-op outside a laid-out camera-ray walk).
+    camera_layout::enter(sampler, camera_layout::EMISSION_JITTER);
     if !m.is_emissive() {
         return SegmentRadiance {
             radiance: Rgb::ZERO,
