@@ -16,8 +16,11 @@
 //! first [`MARCH_STEPS`] steps its own light-sampling slots in a region
 //! after the blocks ([`enter_march_step`]).
 //!
-//! Numbers drawn past a slot's end (the tracking decisions of transmittance
-//! estimates) are independent, keyed by the slot; steps from
+//! The first collisions of the transmittance estimates across a segment and
+//! between march points have slots too (with a tracker they are the main
+//! noise of `emission`: left independent, they made it as noisy as
+//! independent numbers). Numbers drawn past a slot's end (later collisions,
+//! shadow rays) are independent, keyed by the slot; steps from
 //! [`LAID_OUT_STEPS`] on, and march steps from [`MARCH_STEPS`] on, draw
 //! independent numbers only. Several lights at one point share the light
 //! slot: each light's estimate is unbiased alone and they are added.
@@ -29,7 +32,7 @@ use crate::sampling::PixelSampler;
 pub(crate) const CAMERA: u64 = 4;
 
 /// Dimensions per walk step.
-pub(crate) const BLOCK: u64 = 22;
+pub(crate) const BLOCK: u64 = 32;
 
 /// Walk steps with Sobol slots; later ones draw independent numbers only.
 pub(crate) const LAID_OUT_STEPS: u32 = 4;
@@ -37,8 +40,9 @@ pub(crate) const LAID_OUT_STEPS: u32 = 4;
 /// Ray-march steps per walk step with their own light-sampling slots.
 pub(crate) const MARCH_STEPS: u32 = 64;
 
-/// Dimensions per ray-march step ([`STEP_LIGHT_POINT`], [`STEP_VOLUME_LIGHT`]).
-pub(crate) const MARCH_BLOCK: u64 = 8;
+/// Dimensions per ray-march step ([`STEP_LIGHT_POINT`], [`STEP_VOLUME_LIGHT`],
+/// [`STEP_TRANSMITTANCE`]).
+pub(crate) const MARCH_BLOCK: u64 = 16;
 
 /// First dimension of the ray-march region, after the blocks.
 const MARCH_BASE: u64 = CAMERA + LAID_OUT_STEPS as u64 * BLOCK;
@@ -60,8 +64,7 @@ pub(crate) const EQUIANGULAR: Slot = Slot { offset: 1, len: 1 };
 pub(crate) const LIGHT_POINT: Slot = Slot { offset: 2, len: 2 };
 /// Point on the light seen from the equiangular point (a pair).
 pub(crate) const EQUIANGULAR_LIGHT_POINT: Slot = Slot { offset: 4, len: 2 };
-/// Jitter of the emission ray march (its pair partner is [`SCATTER_JITTER`]);
-/// a segment without a march gives it to its transmittance estimate.
+/// Jitter of the emission ray march (its pair partner is [`SCATTER_JITTER`]).
 pub(crate) const EMISSION_JITTER: Slot = Slot { offset: 6, len: 1 };
 /// Jitter of `single`'s in-scattering ray march.
 pub(crate) const SCATTER_JITTER: Slot = Slot { offset: 7, len: 1 };
@@ -76,11 +79,18 @@ pub(crate) const LOBE: Slot = Slot { offset: 12, len: 1 };
 pub(crate) const VOLUME_LIGHT: Slot = Slot { offset: 13, len: 4 };
 /// Point in the emissive media seen from the opaque surface (17; 18, 19; 20).
 pub(crate) const SURFACE_VOLUME_LIGHT: Slot = Slot { offset: 17, len: 4 };
+/// The first numbers of the transmittance estimate across a segment without
+/// an emission march (the collisions of a tracker, one number each).
+pub(crate) const TRANSMITTANCE: Slot = Slot { offset: 22, len: 8 };
 
 /// Point on a light seen from a ray-march point (a pair).
 pub(crate) const STEP_LIGHT_POINT: Slot = Slot { offset: 0, len: 2 };
 /// Point in the emissive media seen from a ray-march point (3; 4, 5; 6).
 pub(crate) const STEP_VOLUME_LIGHT: Slot = Slot { offset: 3, len: 4 };
+/// The first numbers of the transmittance estimate from the previous
+/// ray-march point to this one (tracking collisions): the main noise of a
+/// march through a grid with a tracker, so they are stratified too.
+pub(crate) const STEP_TRANSMITTANCE: Slot = Slot { offset: 8, len: 8 };
 
 /// The first dimension of `slot` in the block of walk step `step`.
 #[inline]

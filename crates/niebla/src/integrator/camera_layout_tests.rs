@@ -21,8 +21,10 @@ fn slots_are_disjoint_and_inside_the_block() {
         LOBE,
         VOLUME_LIGHT,
         SURFACE_VOLUME_LIGHT,
+        TRANSMITTANCE,
     ];
-    for (slots, size) in [(&block[..], BLOCK), (&[STEP_LIGHT_POINT, STEP_VOLUME_LIGHT][..], MARCH_BLOCK)] {
+    let step = [STEP_LIGHT_POINT, STEP_VOLUME_LIGHT, STEP_TRANSMITTANCE];
+    for (slots, size) in [(&block[..], BLOCK), (&step[..], MARCH_BLOCK)] {
         let mut owner = vec![usize::MAX; size as usize];
         for (i, s) in slots.iter().enumerate() {
             for d in s.offset..s.offset + s.len {
@@ -81,7 +83,7 @@ fn single_decisions(kind: SamplerKind, s: u64) -> (Vec2, Vec2) {
     let mut sampler = PixelSampler::for_pixel(kind, 9, 5, 3, s);
     let _pixel = sampler.next_2d();
     sampler.set_layout_block(Some(0));
-    enter(&mut sampler, EMISSION_JITTER);
+    enter(&mut sampler, TRANSMITTANCE);
     tracking(&mut sampler, s, 1, 9);
     enter(&mut sampler, DISTANCE);
     let distance = sampler.next_1d();
@@ -145,10 +147,13 @@ fn later_walk_steps_are_stratified_whatever_came_before() {
 }
 
 /// Ray-march steps: the light point of step 5 is a (0, k, 2)-net over the
-/// pixel's samples whatever the tracking draws of the steps before it.
+/// pixel's samples, and the first tracking number of step 5 has one value
+/// in each of the `2^k` intervals of [0, 1), whatever the tracking draws
+/// of the steps before.
 #[test]
 fn march_steps_are_stratified_whatever_came_before() {
     let k = 8;
+    let mut first_collision = vec![0u32; 1 << k];
     let points: Vec<Vec2> = (0..1u64 << k)
         .map(|s| {
             let mut sampler = PixelSampler::for_pixel(SamplerKind::Sobol, 3, 1, 4, s);
@@ -158,17 +163,23 @@ fn march_steps_are_stratified_whatever_came_before() {
             let _ = sampler.next_1d();
             let mut light = Vec2::ZERO;
             for i in 0..8 {
-                tracking(&mut sampler, s, 7 + i as u64, 6);
+                enter_march_step(&mut sampler, i, STEP_TRANSMITTANCE);
+                if i == 5 {
+                    first_collision[(sampler.next_1d() * (1 << k) as f32) as usize] += 1;
+                }
+                tracking(&mut sampler, s, 7 + i as u64, 12);
                 enter_march_step(&mut sampler, i, STEP_LIGHT_POINT);
                 let u = sampler.next_2d();
                 if i == 5 {
                     light = u;
                 }
+                tracking(&mut sampler, s, 30 + i as u64, 4);
             }
             light
         })
         .collect();
     assert_eq!(bad_intervals(&points, k), 0);
+    assert!(first_collision.iter().all(|&c| c == 1), "{first_collision:?}");
 }
 
 /// A slot's numbers are the Sobol sequence's at the slot's dimensions
