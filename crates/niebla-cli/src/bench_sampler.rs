@@ -2,10 +2,13 @@
 //! scene's integrator with each sampler kind (independent numbers, Sobol in
 //! draw order, Sobol with the integrator's dimension layout).
 //!
-//! The reference is two renders with independent numbers and other seeds
-//! than the measured renders; its own error, estimated from the two halves
-//! as `relMSE(a, b) / 4`, is printed and subtracted from every figure. Each
-//! figure is the mean over `--seeds` renders with different seeds.
+//! The reference is two renders with other seeds than the measured renders,
+//! with independent numbers (or `--reference-sampler`: two Sobol renders
+//! with different seeds are independent too, and have a much smaller error
+//! where Sobol converges faster); its own error, estimated from the two
+//! halves as `relMSE(a, b) / 4`, is printed and subtracted from every
+//! figure. Each figure is the mean over `--seeds` renders with different
+//! seeds, followed by the standard error of that mean over the seeds.
 
 use std::path::PathBuf;
 
@@ -35,6 +38,10 @@ pub struct SamplerBenchArgs {
     #[arg(long, value_delimiter = ',', default_value = "independent,sobol_sequential,sobol",
           value_parser = clap::builder::PossibleValuesParser::new(SamplerKind::NAMES))]
     pub samplers: Vec<String>,
+    /// Sampler of the two reference renders.
+    #[arg(long, default_value = "independent",
+          value_parser = clap::builder::PossibleValuesParser::new(SamplerKind::NAMES))]
+    pub reference_sampler: String,
     /// Renders (seeds) averaged per figure.
     #[arg(long, default_value_t = 2)]
     pub seeds: u32,
@@ -65,34 +72,43 @@ pub fn run(args: &SamplerBenchArgs) -> Result<(), CliError> {
         Ok((image, start.elapsed().as_secs_f64()))
     };
     println!(
-        "bench sampler: {} ({}), {}x{} pixels, threads {}, reference 2 x {} spp (independent)",
+        "bench sampler: {} ({}), {}x{} pixels, threads {}, reference 2 x {} spp ({})",
         args.scene.display(),
         settings.key(),
         scene.camera.width,
         scene.camera.height,
         threads.map_or("all".to_string(), |t| t.to_string()),
-        args.reference_spp
+        args.reference_spp,
+        args.reference_sampler
     );
-    let (a, ta) = go(args.reference_spp, 1_000_003, SamplerKind::Independent)?;
-    let (b, tb) = go(args.reference_spp, 2_000_003, SamplerKind::Independent)?;
+    let reference_kind = SamplerKind::parse(&args.reference_sampler).expect("names are checked by clap");
+    let (a, ta) = go(args.reference_spp, 1_000_003, reference_kind)?;
+    let (b, tb) = go(args.reference_spp, 2_000_003, reference_kind)?;
     let reference_error = a.relative_mse(&b) / 4.0;
     let mut reference = a.clone();
     for (r, p) in reference.pixels.iter_mut().zip(&b.pixels) {
         *r = (*r + *p) * 0.5;
     }
     println!("reference rendered in {:.1} s; its estimated relative MSE {reference_error:.3e} (subtracted)", ta + tb);
-    println!("{:<18} {:>6} {:>12} {:>10}", "sampler", "spp", "rel MSE", "time s");
+    println!("{:<18} {:>6} {:>12} {:>10} {:>10}", "sampler", "spp", "rel MSE", "+- (seeds)", "time s");
     for name in &args.samplers {
         let kind = SamplerKind::parse(name).expect("names are checked by clap");
         for &spp in &args.spp {
-            let (mut error, mut time) = (0.0, 0.0);
+            let (mut errors, mut time) = (Vec::new(), 0.0);
             for seed in 0..args.seeds as u64 {
                 let (image, seconds) = go(spp, 11 + seed, kind)?;
-                error += image.relative_mse(&reference) - reference_error;
+                errors.push(image.relative_mse(&reference) - reference_error);
                 time += seconds;
             }
             let n = args.seeds as f64;
-            println!("{name:<18} {spp:>6} {:>12.4e} {:>10.3}", error / n, time / n);
+            let mean = errors.iter().sum::<f64>() / n;
+            // Standard error of the mean over the seeds (0 for one seed).
+            let spread = if errors.len() > 1 {
+                (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt()
+            } else {
+                0.0
+            };
+            println!("{name:<18} {spp:>6} {mean:>12.4e} {spread:>10.2e} {:>10.3}", time / n);
         }
     }
     Ok(())

@@ -40,10 +40,16 @@ pub struct RenderOptions {
 /// sampler: the settings' stable key, followed by `"; sampler=sobol"` for
 /// Sobol renders with dimensions in draw order ([`SamplerKind::SobolSequential`],
 /// which is what `sobol` meant in checkpoints written before integrators had
-/// a dimension layout) and `"; sampler=sobol; layout=per-vertex"` for
-/// [`SamplerKind::Sobol`]. Independent renders record the bare key, as
-/// checkpoints written before samplers had kinds do. So an old Sobol
-/// checkpoint continues only with the sampler whose numbers it was made with.
+/// a dimension layout) and, for [`SamplerKind::Sobol`], `"; sampler=sobol;
+/// layout=camera-ray"` for the integrators with the camera-ray layout
+/// (`single`, `emission`, `analytic`) and `"; sampler=sobol;
+/// layout=per-vertex"` for the others (`volpath`'s per-bounce layout; the
+/// rest draw in order). Checkpoints of `single`, `emission` and `analytic`
+/// written with `layout=per-vertex` were made before those integrators had a
+/// layout, so they read as [`SamplerKind::SobolSequential`]. Independent
+/// renders record the bare key, as checkpoints written before samplers had
+/// kinds do. So an old Sobol checkpoint continues only with the sampler
+/// whose numbers it was made with.
 ///
 /// ```
 /// use niebla::render::{recorded_key, split_recorded_key};
@@ -54,27 +60,46 @@ pub struct RenderOptions {
 /// assert_eq!(split_recorded_key(&key), ("volpath(max_depth=1024)", Some(SamplerKind::Sobol)));
 /// assert_eq!(split_recorded_key("volpath(max_depth=1024); sampler=sobol"), ("volpath(max_depth=1024)", Some(SamplerKind::SobolSequential)));
 /// assert_eq!(split_recorded_key("volpath(max_depth=1024)"), ("volpath(max_depth=1024)", Some(SamplerKind::Independent)));
+/// let a = niebla::integrator::registry::defaults("analytic").unwrap();
+/// assert_eq!(recorded_key(&a, SamplerKind::Sobol), "analytic; sampler=sobol; layout=camera-ray");
+/// assert_eq!(split_recorded_key("analytic; sampler=sobol; layout=camera-ray"), ("analytic", Some(SamplerKind::Sobol)));
+/// assert_eq!(split_recorded_key("analytic; sampler=sobol; layout=per-vertex"), ("analytic", Some(SamplerKind::SobolSequential)));
 /// ```
 pub fn recorded_key(settings: &IntegratorSettings, sampler: SamplerKind) -> String {
+    let key = settings.key();
     match sampler {
-        SamplerKind::Independent => settings.key(),
-        SamplerKind::SobolSequential => format!("{}; sampler=sobol", settings.key()),
-        SamplerKind::Sobol => format!("{}; sampler=sobol{LAYOUT_SUFFIX}", settings.key()),
+        SamplerKind::Independent => key,
+        SamplerKind::SobolSequential => format!("{key}; sampler=sobol"),
+        SamplerKind::Sobol if has_camera_ray_layout(&key) => format!("{key}; sampler=sobol{CAMERA_RAY_SUFFIX}"),
+        SamplerKind::Sobol => format!("{key}; sampler=sobol{LAYOUT_SUFFIX}"),
     }
 }
 
 /// What [`recorded_key`] appends to a laid-out Sobol sampler's name.
 const LAYOUT_SUFFIX: &str = "; layout=per-vertex";
 
+/// What [`recorded_key`] appends for the integrators with the camera-ray layout.
+const CAMERA_RAY_SUFFIX: &str = "; layout=camera-ray";
+
+/// Whether the integrator of settings key `key` has the camera-ray
+/// dimension layout (`single`, `emission`, `analytic`).
+fn has_camera_ray_layout(key: &str) -> bool {
+    key == "analytic" || key.starts_with("single(") || key.starts_with("emission(")
+}
+
 /// The integrator key and sampler of a [`recorded_key`] (`None`: a sampler
 /// name this build does not know).
 pub fn split_recorded_key(recorded: &str) -> (&str, Option<SamplerKind>) {
-    if let Some(rest) = recorded.strip_suffix(LAYOUT_SUFFIX) {
-        return match rest.rsplit_once("; sampler=") {
-            Some((key, "sobol")) => (key, Some(SamplerKind::Sobol)),
-            Some((key, _)) => (key, None),
-            None => (rest, None),
-        };
+    for (suffix, camera_ray) in [(CAMERA_RAY_SUFFIX, true), (LAYOUT_SUFFIX, false)] {
+        if let Some(rest) = recorded.strip_suffix(suffix) {
+            return match rest.rsplit_once("; sampler=") {
+                Some((key, "sobol")) if camera_ray == has_camera_ray_layout(key) => (key, Some(SamplerKind::Sobol)),
+                // Made before these integrators had a layout: draw order.
+                Some((key, "sobol")) if !camera_ray => (key, Some(SamplerKind::SobolSequential)),
+                Some((key, _)) => (key, None),
+                None => (rest, None),
+            };
+        }
     }
     match recorded.rsplit_once("; sampler=") {
         Some((key, "sobol")) => (key, Some(SamplerKind::SobolSequential)),

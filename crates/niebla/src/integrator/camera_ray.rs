@@ -11,6 +11,7 @@ use crate::sampling::PixelSampler;
 use crate::tracking::TransmittanceMethod;
 use crate::world::{Hit, PathRay, Scene, MAX_BOUNDARY_CROSSINGS};
 
+use super::camera_layout;
 use super::direct::volume_light_surface_radiance;
 use super::{direct_surface_radiance, VolumeLights};
 
@@ -32,6 +33,13 @@ pub struct SegmentRadiance {
 /// differs: the radiance of a medium segment and of an opaque (non-specular,
 /// non-emitting) surface.
 pub(crate) trait CameraRayVisitor {
+    /// Whether the walk uses the camera-ray dimension layout
+    /// (`super::camera_layout`): it then records its step in the sampler
+    /// before each medium segment, and the decisions of the segment, the
+    /// surface and the direct lighting take their slots. Walks without it
+    /// draw in order, as before the layout existed.
+    const LAID_OUT: bool = false;
+
     /// Integrate one medium segment `[0, t_end)` of `ray` (`t_end` infinite
     /// when the ray escapes).
     fn segment(
@@ -71,7 +79,10 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
     let mut beta = Rgb::ONE;
     let mut path = PathRay::new(ray, medium, 0.0);
     let mut specular_bounces = 0u32;
-    for _ in 0..MAX_BOUNDARY_CROSSINGS {
+    for step in 0..MAX_BOUNDARY_CROSSINGS {
+        if V::LAID_OUT {
+            sampler.set_layout_block(Some(step));
+        }
         let hit = path.intersect(scene);
         let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
 
@@ -118,9 +129,11 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
             if specular_bounces > MAX_SPECULAR_BOUNCES {
                 break;
             }
+            camera_layout::enter(sampler, camera_layout::LOBE);
             let u_lobe = sampler.next_1d();
             let ns = hit.surface.shading_normal(-path.ray.d);
             let bsdf = scene.surface_bsdf(&hit);
+            camera_layout::enter(sampler, camera_layout::SPECULAR_DIRECTION);
             let Some(bs) = bsdf.sample(ns, -path.ray.d, u_lobe, sampler.next_2d()) else {
                 break;
             };
@@ -142,7 +155,7 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
 /// The walk of the emission and single-scattering style integrators:
 /// `segment(medium, id, ray, t_end, sampler)` integrates one medium segment
 /// and opaque surfaces are lit directly (one sample per light, shadow rays by
-/// `method`).
+/// `method`). Draws in order (no dimension layout).
 pub(crate) fn trace_camera_ray(
     scene: &Scene,
     ray: Ray,
@@ -151,12 +164,26 @@ pub(crate) fn trace_camera_ray(
     sampler: &mut PixelSampler,
     segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
 ) -> Rgb {
-    trace_camera_ray_with(scene, ray, medium, method, None, sampler, segment)
+    trace_camera_ray_with::<false>(scene, ray, medium, method, None, sampler, segment)
+}
+
+/// [`trace_camera_ray`] with the camera-ray dimension layout
+/// (`super::camera_layout`) for Sobol samplers.
+pub(crate) fn trace_laid_out_camera_ray(
+    scene: &Scene,
+    ray: Ray,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+    segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
+) -> Rgb {
+    trace_camera_ray_with::<true>(scene, ray, medium, method, None, sampler, segment)
 }
 
 /// [`trace_camera_ray`] whose opaque surfaces are also lit by one point
-/// drawn from `volume_lights` (the emission inside media), when given.
-pub(crate) fn trace_camera_ray_with(
+/// drawn from `volume_lights` (the emission inside media), when given, with
+/// the camera-ray dimension layout when `LAID_OUT`.
+pub(crate) fn trace_camera_ray_with<const LAID_OUT: bool>(
     scene: &Scene,
     ray: Ray,
     medium: Option<MediumId>,
@@ -165,14 +192,16 @@ pub(crate) fn trace_camera_ray_with(
     sampler: &mut PixelSampler,
     segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
 ) -> Rgb {
-    struct DirectLighting<'a, F> {
+    struct DirectLighting<'a, F, const LAID_OUT: bool> {
         segment: F,
         method: TransmittanceMethod,
         volume_lights: Option<&'a VolumeLights>,
     }
-    impl<F: FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance> CameraRayVisitor
-        for DirectLighting<'_, F>
+    impl<F: FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance, const LAID_OUT: bool>
+        CameraRayVisitor for DirectLighting<'_, F, LAID_OUT>
     {
+        const LAID_OUT: bool = LAID_OUT;
+
         #[inline]
         fn segment(
             &mut self,
@@ -197,12 +226,14 @@ pub(crate) fn trace_camera_ray_with(
             let bsdf = &scene.surface_bsdf(hit);
             let mut l = direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, self.method, sampler);
             if let Some(lights) = self.volume_lights {
+                camera_layout::enter(sampler, camera_layout::SURFACE_VOLUME_LIGHT);
                 l += volume_light_surface_radiance(scene, lights, &hit.surface, wo, bsdf, medium, self.method, sampler);
             }
             l
         }
     }
-    walk_camera_ray(scene, ray, medium, sampler, &mut DirectLighting { segment, method, volume_lights })
+    let mut visitor = DirectLighting::<_, LAID_OUT> { segment, method, volume_lights };
+    walk_camera_ray(scene, ray, medium, sampler, &mut visitor)
 }
 
 #[cfg(test)]

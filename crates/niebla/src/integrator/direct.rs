@@ -11,7 +11,7 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{segment_transmittance, TransmittanceMethod};
 use crate::world::{offset_origin, walk_shadow_ray, Scene};
 
-use super::VolumeLights;
+use super::{camera_layout, VolumeLights};
 use std::ops::ControlFlow;
 
 /// Radiance scattered toward `wo` at the surface point of `surface`, from
@@ -33,6 +33,9 @@ pub fn direct_surface_radiance(
     let ng = frame.ng;
     let mut l = Rgb::ZERO;
     for (index, light) in scene.lights.iter().enumerate() {
+        // Every light takes the surface's light slot (a no-op outside a
+        // laid-out camera-ray walk): their estimates are added.
+        camera_layout::enter(sampler, camera_layout::SURFACE_LIGHT_POINT);
         let u = sampler.next_2d();
         let Some(ls) = light.sample_li(p, Some(ng), u, sampler.time()) else {
             continue;

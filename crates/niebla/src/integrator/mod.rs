@@ -5,6 +5,7 @@
 //! call.
 
 mod analytic;
+mod camera_layout;
 mod camera_ray;
 mod common_settings;
 mod direct;
@@ -23,7 +24,7 @@ pub mod zhou;
 pub use analytic::airlight::{airlight_integral, airlight_table, AirlightTable};
 pub use analytic::AnalyticIntegrator;
 pub use camera_ray::SegmentRadiance;
-pub(crate) use camera_ray::{trace_camera_ray, walk_camera_ray, CameraRayVisitor};
+pub(crate) use camera_ray::{trace_camera_ray, trace_laid_out_camera_ray, walk_camera_ray, CameraRayVisitor};
 pub use common_settings::DEFAULT_TRANSMITTANCE_STEPS;
 pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scattered_radiance};
 pub use emission_absorption::EmissionIntegrator;

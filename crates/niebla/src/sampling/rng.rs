@@ -117,6 +117,9 @@ pub struct PixelSampler {
     slot_key: u64,
     /// Whether [`PixelSampler::use_slots`] acts (Sobol with layout).
     laid_out: bool,
+    /// Block of the integrator's fixed layout the next decisions belong to
+    /// ([`PixelSampler::set_layout_block`]; `u32::MAX`: none).
+    layout_block: u32,
     /// Sample index and pixel hash, for choices stratified across samples.
     stratum: u64,
     mode: Mode,
@@ -138,7 +141,17 @@ impl PixelSampler {
     /// A sampler at dimension 0, without a slot.
     #[inline]
     fn with(key: u64, stratum: u64, mode: Mode, laid_out: bool) -> PixelSampler {
-        PixelSampler { key, dimension: 0, slot_end: u64::MAX, slot_key: 0, laid_out, stratum, mode, time: 0.0 }
+        PixelSampler {
+            key,
+            dimension: 0,
+            slot_end: u64::MAX,
+            slot_key: 0,
+            laid_out,
+            layout_block: u32::MAX,
+            stratum,
+            mode,
+            time: 0.0,
+        }
     }
 
     /// Start sample `sample_index` of pixel `(x, y)` for a render seeded with
@@ -307,6 +320,30 @@ impl PixelSampler {
             self.slot_end = if repeat == 0 { start + len } else { start };
             self.slot_key = hash_u64(0x510B_5EED ^ start ^ ((repeat as u64) << 40));
         }
+    }
+
+    /// Record which block of its fixed dimension layout an integrator's next
+    /// decisions belong to (the camera-ray walk of `single`, `emission` and
+    /// `analytic` sets the index of its step along the ray, so that shared
+    /// lighting code can find its slots without being told), or `None` when
+    /// the estimate has no layout. Only bookkeeping: the numbers change only
+    /// when a slot is then entered ([`PixelSampler::use_slots`]).
+    #[inline]
+    pub fn set_layout_block(&mut self, block: Option<u32>) {
+        self.layout_block = block.unwrap_or(u32::MAX);
+    }
+
+    /// The block set by [`PixelSampler::set_layout_block`], if any.
+    #[inline]
+    pub fn layout_block(&self) -> Option<u32> {
+        (self.layout_block != u32::MAX).then_some(self.layout_block)
+    }
+
+    /// Whether [`PixelSampler::use_slots`] changes this sampler's numbers
+    /// (a [`SamplerKind::Sobol`] camera sample).
+    #[inline]
+    pub fn is_laid_out(&self) -> bool {
+        self.laid_out
     }
 
     /// Draw again from `dimension` on (an earlier [`PixelSampler::dimension`]),

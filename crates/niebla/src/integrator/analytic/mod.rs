@@ -44,7 +44,8 @@ use crate::world::Scene;
 use super::emission_absorption::emission_segment;
 use super::equiangular::{cone_hull, equiangular_geometry};
 use super::{
-    light_in_scattered_radiance, trace_camera_ray, Integrator, SegmentRadiance, SingleIntegrator, SingleSampling,
+    camera_layout, light_in_scattered_radiance, trace_laid_out_camera_ray, Integrator, SegmentRadiance,
+    SingleIntegrator, SingleSampling,
 };
 use airlight::{airlight_integral, airlight_table, AirlightTable};
 
@@ -75,9 +76,14 @@ impl Default for AnalyticIntegrator {
 impl Integrator for AnalyticIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(scene, ray, medium, TransmittanceMethod::Analytic, sampler, |m, id, ray, t_end, sampler| {
-            self.segment_in(scene, m, id, ray, t_end, diagonal, sampler)
-        })
+        trace_laid_out_camera_ray(
+            scene,
+            ray,
+            medium,
+            TransmittanceMethod::Analytic,
+            sampler,
+            |m, id, ray, t_end, sampler| self.segment_in(scene, m, id, ray, t_end, diagonal, sampler),
+        )
     }
 }
 
@@ -297,6 +303,7 @@ fn distance_sampled_other_lights(
         return Rgb::ZERO;
     }
     let sigma = h.sigma_t().average();
+    camera_layout::enter(sampler, camera_layout::DISTANCE);
     let u = sampler.next_1d();
     let (t, pdf) = if sigma > 0.0 {
         let mass = if t_end.is_finite() { -(-sigma * t_end).exp_m1() } else { 1.0 };
@@ -315,6 +322,7 @@ fn distance_sampled_other_lights(
     let mut li = Rgb::ZERO;
     for (index, light) in scene.lights.iter().enumerate() {
         if light.point_position().is_none() {
+            camera_layout::enter(sampler, camera_layout::LIGHT_POINT);
             li += light_in_scattered_radiance(
                 scene,
                 index,

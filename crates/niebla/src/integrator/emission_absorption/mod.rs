@@ -11,7 +11,9 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{medium_range, segment_transmittance, MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
-use super::{default_march_step, negligible_distance, trace_camera_ray, Integrator, SegmentRadiance};
+use super::{
+    camera_layout, default_march_step, negligible_distance, trace_laid_out_camera_ray, Integrator, SegmentRadiance,
+};
 
 /// Emission and absorption only. With `TransmittanceMethod::Analytic` a
 /// homogeneous segment is integrated in closed form,
@@ -28,7 +30,7 @@ pub struct EmissionIntegrator {
 impl Integrator for EmissionIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
-        trace_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, _, ray, t_end, sampler| {
+        trace_laid_out_camera_ray(scene, ray, medium, self.transmittance, sampler, |m, _, ray, t_end, sampler| {
             emission_segment(m, ray, t_end, self.step, self.transmittance, diagonal, sampler)
         })
     }
@@ -66,7 +68,9 @@ pub(crate) fn emission_segment(
         }));
         return SegmentRadiance { radiance, transmittance };
     }
+    // Slots of the camera-ray layout (no-ops outside a laid-out walk).
     if !m.is_emissive() {
+        camera_layout::enter(sampler, camera_layout::TRANSMITTANCE);
         return SegmentRadiance {
             radiance: Rgb::ZERO,
             transmittance: segment_transmittance(m, ray, 0.0, t_end, method, sampler),
@@ -76,6 +80,7 @@ pub(crate) fn emission_segment(
         return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
     };
     let step = step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
+    camera_layout::enter(sampler, camera_layout::EMISSION_JITTER);
     let mut s = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, _, _| mp.l_ve);
     if !t_end.is_finite() && m.as_homogeneous().is_some() {
         s.transmittance = segment_transmittance(m, ray, 0.0, t_end, method, sampler);
@@ -126,6 +131,8 @@ pub(crate) fn march_segment(
         let p = ray.at(t);
         let mp = m.at_time(p, sampler.time());
         sigma_t = mp.sigma_t();
+        // Step `i`'s tracking numbers (a no-op outside a laid-out walk).
+        camera_layout::enter_march_step(sampler, i, camera_layout::STEP_TRANSMITTANCE);
         tr *= step_transmittance(m, ray, t_prev, t, sigma_t, method, sampler);
         if tr.max_channel() <= 0.0 {
             return SegmentRadiance { radiance: l, transmittance: Rgb::ZERO };
@@ -134,6 +141,7 @@ pub(crate) fn march_segment(
         l += tr * s * dt;
         t_prev = t;
     }
+    camera_layout::enter_march_step(sampler, n, camera_layout::STEP_TRANSMITTANCE);
     tr *= step_transmittance(m, ray, t_prev, t_b, sigma_t, method, sampler);
     SegmentRadiance { radiance: l, transmittance: tr }
 }

@@ -16,6 +16,7 @@ use crate::sampling::{balance_heuristic, PixelSampler};
 use crate::tracking::{majorant_profile, segment_transmittance, MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
+use super::camera_layout::{self, Slot};
 use super::camera_ray::trace_camera_ray_with;
 use super::direct::volume_light_in_scattered_radiance;
 use super::emission_absorption::{emission_segment, march_segment, marched_range};
@@ -34,6 +35,14 @@ pub enum SingleSampling {
     /// Equiangular and distance samples for point and spot lights, combined by
     /// the balance heuristic; other lights use the distance sample.
     Mis,
+}
+
+/// Which slots of the camera-ray layout a point drawn in the emissive media
+/// takes: the segment's, or those of a ray-march step.
+#[derive(Clone, Copy, Debug)]
+enum VolumeSlot {
+    Block(Slot),
+    Step(u32),
 }
 
 /// The single-scattering integrator.
@@ -56,9 +65,15 @@ impl Integrator for SingleIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
         let diagonal = scene.diagonal();
         let lights = self.volume_lights.as_deref();
-        trace_camera_ray_with(scene, ray, medium, self.transmittance, lights, sampler, |m, id, ray, t_end, sampler| {
-            self.segment_in(scene, m, id, ray, t_end, diagonal, sampler)
-        })
+        trace_camera_ray_with::<true>(
+            scene,
+            ray,
+            medium,
+            self.transmittance,
+            lights,
+            sampler,
+            |m, id, ray, t_end, sampler| self.segment_in(scene, m, id, ray, t_end, diagonal, sampler),
+        )
     }
 }
 
@@ -88,18 +103,27 @@ impl SingleIntegrator {
         p: crate::math::Vec3,
         wo: crate::math::Vec3,
         sampler: &mut PixelSampler,
+        slot: VolumeSlot,
     ) -> Rgb {
         match &self.volume_lights {
-            Some(lights) => volume_light_in_scattered_radiance(
-                scene,
-                lights,
-                p,
-                wo,
-                m.phase(),
-                Some(id),
-                self.transmittance,
-                sampler,
-            ),
+            Some(lights) => {
+                match slot {
+                    VolumeSlot::Block(slot) => camera_layout::enter(sampler, slot),
+                    VolumeSlot::Step(i) => {
+                        camera_layout::enter_march_step(sampler, i, camera_layout::STEP_VOLUME_LIGHT)
+                    }
+                }
+                volume_light_in_scattered_radiance(
+                    scene,
+                    lights,
+                    p,
+                    wo,
+                    m.phase(),
+                    Some(id),
+                    self.transmittance,
+                    sampler,
+                )
+            }
             None => Rgb::ZERO,
         }
     }
@@ -161,15 +185,21 @@ impl SingleIntegrator {
         let step = self.step.unwrap_or_else(|| default_march_step(m.max_sigma_t(), diagonal));
         let wo = -ray.d;
         let method = self.transmittance;
+        camera_layout::enter(sampler, camera_layout::SCATTER_JITTER);
+        // March step `i` takes its own light slots (a no-op outside a
+        // laid-out walk); all lights of a step share them.
+        let mut i = 0u32;
         let scattered = march_segment(m, ray, t_a, t_b, step, method, sampler, |mp, p, sampler| {
             let mut source = Rgb::ZERO;
             if !mp.sigma_s.is_black() {
                 for index in 0..scene.lights.len() {
+                    camera_layout::enter_march_step(sampler, i, camera_layout::STEP_LIGHT_POINT);
                     source += light_in_scattered_radiance(scene, index, p, wo, m.phase(), Some(id), method, sampler);
                 }
-                source += self.volume_in_scattered(scene, m, id, p, wo, sampler);
+                source += self.volume_in_scattered(scene, m, id, p, wo, sampler, VolumeSlot::Step(i));
                 source *= mp.sigma_s;
             }
+            i += 1;
             source
         });
         SegmentRadiance { radiance: emitted.radiance + scattered.radiance, transmittance: emitted.transmittance }
@@ -200,6 +230,7 @@ impl SingleIntegrator {
         // one is computable exactly, so MIS can weigh it against equiangular.
         let profile = majorant_profile(m, ray, 0.0, t_end, m.sigma_t_per_density().average());
         let can_distance_sample = !profile.is_empty();
+        camera_layout::enter(sampler, camera_layout::DISTANCE);
         let u_distance = sampler.next_1d();
         if let Some(t) = profile.sample(u_distance) {
             let pdf = profile.pdf(t);
@@ -218,6 +249,7 @@ impl SingleIntegrator {
                             _ => 1.0,
                         };
                         if weight > 0.0 {
+                            camera_layout::enter(sampler, camera_layout::LIGHT_POINT);
                             li += light_in_scattered_radiance(
                                 scene,
                                 index,
@@ -231,7 +263,15 @@ impl SingleIntegrator {
                         }
                     }
                     // Emissive media have no equiangular strategy: weight 1.
-                    li += self.volume_in_scattered(scene, m, id, p, wo, sampler);
+                    li += self.volume_in_scattered(
+                        scene,
+                        m,
+                        id,
+                        p,
+                        wo,
+                        sampler,
+                        VolumeSlot::Block(camera_layout::VOLUME_LIGHT),
+                    );
                     seg.radiance += tr * mp.sigma_s * li / pdf;
                 }
             }
@@ -242,6 +282,7 @@ impl SingleIntegrator {
             if light.point_position().is_none() {
                 continue;
             }
+            camera_layout::enter(sampler, camera_layout::EQUIANGULAR);
             let u = sampler.next_1d();
             let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
                 continue;
@@ -258,6 +299,7 @@ impl SingleIntegrator {
                 continue;
             }
             let tr = segment_transmittance(m, ray, 0.0, t, self.transmittance, sampler);
+            camera_layout::enter(sampler, camera_layout::EQUIANGULAR_LIGHT_POINT);
             let li = light_in_scattered_radiance(scene, index, p, wo, m.phase(), Some(id), self.transmittance, sampler);
             seg.radiance += tr * mp.sigma_s * li * (weight / pdf);
         }
