@@ -194,6 +194,19 @@ impl Shape {
         }
     }
 
+    /// True when a ray that crossed the shape's surface at a point with
+    /// outward normal `n`, going on along `d`, cannot meet the surface
+    /// again: a convex closed shape left outward (`d . n > 0`), or a flat
+    /// one. Meshes answer `false`.
+    #[inline]
+    pub fn is_left_for_good(&self, n: Vec3, d: Vec3) -> bool {
+        match self {
+            Shape::Sphere(_) | Shape::Box(_) => d.dot(n) > 0.0,
+            Shape::Rectangle(_) | Shape::Disk(_) => true,
+            Shape::Mesh(_) => false,
+        }
+    }
+
     /// True when `p` lies strictly inside a closed shape (false for open shapes).
     pub fn contains(&self, p: Vec3) -> bool {
         match self {

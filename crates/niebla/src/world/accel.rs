@@ -100,6 +100,15 @@ impl ObjectTree {
         })
     }
 
+    /// The tree's only object, when it holds exactly one.
+    #[inline]
+    pub fn single(&self) -> Option<u32> {
+        match self.objects[..] {
+            [object] => Some(object),
+            _ => None,
+        }
+    }
+
     /// Whether the tree holds no object.
     pub fn is_empty(&self) -> bool {
         self.objects.is_empty()
