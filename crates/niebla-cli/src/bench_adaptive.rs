@@ -88,7 +88,7 @@ pub enum Clock {
 /// CPU seconds (user + system, all threads, exited ones included) the
 /// process has spent: fields 14 and 15 of /proc/self/stat, in ticks of
 /// 1/100 s (Linux's USER_HZ).
-fn process_cpu_seconds() -> Result<f64, CliError> {
+pub(crate) fn process_cpu_seconds() -> Result<f64, CliError> {
     let fail = |why: &str| CliError::invalid_option("--clock", format!("cpu: cannot read /proc/self/stat ({why})"));
     let stat = std::fs::read_to_string("/proc/self/stat").map_err(|e| fail(&e.to_string()))?;
     // The command name (field 2) is in parentheses and may hold spaces.

@@ -7,6 +7,7 @@ mod bench_adaptive;
 mod bench_emission;
 mod bench_geometry;
 mod bench_interactive;
+mod bench_paths;
 mod bench_photons;
 mod bench_sampler;
 mod bench_trackers;
@@ -92,6 +93,9 @@ enum BenchCommand {
     /// adaptive sampling at each threshold, next to the most any sample
     /// allocation could gain.
     Adaptive(bench_adaptive::AdaptiveBenchArgs),
+    /// Samples per second (wall and CPU) of the scene's integrator over
+    /// repeated renders, with the image's mean and a hash of its pixels.
+    Paths(bench_paths::PathsBenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -112,6 +116,7 @@ fn main() -> ExitCode {
         Command::Bench(BenchCommand::Emission(args)) => bench_emission::run(&args),
         Command::Bench(BenchCommand::Sampler(args)) => bench_sampler::run(&args),
         Command::Bench(BenchCommand::Adaptive(args)) => bench_adaptive::run(&args),
+        Command::Bench(BenchCommand::Paths(args)) => bench_paths::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

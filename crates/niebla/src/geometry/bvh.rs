@@ -29,6 +29,32 @@ const MEDIAN_DEPTH: usize = 48;
 /// Deepest traversal stack: a 4-wide node pushes at most three entries more
 /// than it pops, and the tree is at most `MEDIAN_DEPTH + 32` levels deep.
 const STACK_DEPTH: usize = 3 * (MEDIAN_DEPTH + 32) + 16;
+/// Stack of the traversals of trees of up to 5 levels (scenes of a few
+/// dozen objects, small meshes).
+const SMALL_STACK: usize = 16;
+/// Stack of the traversals of trees of up to 21 levels.
+const MEDIUM_STACK: usize = 64;
+
+/// Number of levels of inner nodes of a flattened tree (0 without nodes):
+/// the traversal stack holds at most `3 * levels + 1` entries, as a node
+/// pushes at most three more than it pops.
+fn inner_levels(nodes: &[BvhNode]) -> usize {
+    let mut deepest = 0;
+    let mut todo = Vec::new();
+    if !nodes.is_empty() {
+        todo.push((0u32, 1usize));
+    }
+    while let Some((i, level)) = todo.pop() {
+        deepest = deepest.max(level);
+        let node = &nodes[i as usize];
+        for &child in &node.child[..node.count as usize] {
+            if child & LEAF == 0 {
+                todo.push((child, level + 1));
+            }
+        }
+    }
+    deepest
+}
 
 /// One node of the 4-wide tree (112 bytes): the boxes of up to four
 /// children, coordinate by coordinate, and what each child is.
@@ -71,6 +97,11 @@ pub struct Bvh {
     root_box: AxisAlignedBox,
     /// Primitive indices in leaf order.
     pub order: Vec<u32>,
+    /// Most entries a traversal stack of this tree can hold (`3 * levels +
+    /// 1`): the traversals use the smallest fixed stack that fits, so that
+    /// shallow trees (a scene of a few objects) do not clear a stack sized
+    /// for the deepest tree on every ray.
+    stack_need: usize,
 }
 
 /// A primitive during the build: its box, the box's centroid and its index.
@@ -390,7 +421,14 @@ impl Bvh {
         flatten(&root, &mut nodes);
         drop(root);
         nodes.shrink_to_fit();
-        Bvh { nodes, root_box: AxisAlignedBox { min: lo, max: hi }, order: prims.iter().map(|p| p.index).collect() }
+        let stack_need = 3 * inner_levels(&nodes) + 1;
+        debug_assert!(stack_need <= STACK_DEPTH);
+        Bvh {
+            nodes,
+            root_box: AxisAlignedBox { min: lo, max: hi },
+            order: prims.iter().map(|p| p.index).collect(),
+            stack_need,
+        }
     }
 
     /// Bytes held by the nodes and the primitive order.
@@ -415,18 +453,33 @@ impl Bvh {
     /// `t_closest` (and remembers what it needs), or `None`. Returns the
     /// parameter of the nearest hit reported.
     #[inline]
-    pub fn closest<F>(&self, ray: &Ray, t_min: f32, t_max: f32, mut hit: F) -> Option<f32>
+    pub fn closest<F>(&self, ray: &Ray, t_min: f32, t_max: f32, hit: F) -> Option<f32>
     where
         F: FnMut(u32, f32) -> Option<f32>,
     {
         if self.nodes.is_empty() || !enters_box(ray, &self.root_box, t_min, t_max) {
             return None;
         }
+        if self.stack_need <= SMALL_STACK {
+            self.closest_with::<SMALL_STACK, F>(ray, t_min, t_max, hit)
+        } else if self.stack_need <= MEDIUM_STACK {
+            self.closest_with::<MEDIUM_STACK, F>(ray, t_min, t_max, hit)
+        } else {
+            self.closest_with::<STACK_DEPTH, F>(ray, t_min, t_max, hit)
+        }
+    }
+
+    /// [`Self::closest`] with a stack of `N >= self.stack_need` entries.
+    #[inline]
+    fn closest_with<const N: usize, F>(&self, ray: &Ray, t_min: f32, t_max: f32, mut hit: F) -> Option<f32>
+    where
+        F: FnMut(u32, f32) -> Option<f32>,
+    {
         let r = BoxRay::new(ray);
         let mut closest = t_max;
         let mut found = false;
         // Entries: a child word (inner node or leaf) and its entry parameter.
-        let mut stack = [(0u32, 0f32); STACK_DEPTH];
+        let mut stack = [(0u32, 0f32); N];
         let mut sp = 1usize;
         stack[0] = (0, t_min);
         while sp > 0 {
@@ -468,15 +521,30 @@ impl Bvh {
     /// Any hit: `true` as soon as `hit(primitive, t_max)` reports a hit for a
     /// primitive of a leaf the ray may reach within `(t_min, t_max)`.
     #[inline]
-    pub fn any<F>(&self, ray: &Ray, t_min: f32, t_max: f32, mut hit: F) -> bool
+    pub fn any<F>(&self, ray: &Ray, t_min: f32, t_max: f32, hit: F) -> bool
     where
         F: FnMut(u32, f32) -> bool,
     {
         if self.nodes.is_empty() || !enters_box(ray, &self.root_box, t_min, t_max) {
             return false;
         }
+        if self.stack_need <= SMALL_STACK {
+            self.any_with::<SMALL_STACK, F>(ray, t_min, t_max, hit)
+        } else if self.stack_need <= MEDIUM_STACK {
+            self.any_with::<MEDIUM_STACK, F>(ray, t_min, t_max, hit)
+        } else {
+            self.any_with::<STACK_DEPTH, F>(ray, t_min, t_max, hit)
+        }
+    }
+
+    /// [`Self::any`] with a stack of `N >= self.stack_need` entries.
+    #[inline]
+    fn any_with<const N: usize, F>(&self, ray: &Ray, t_min: f32, t_max: f32, mut hit: F) -> bool
+    where
+        F: FnMut(u32, f32) -> bool,
+    {
         let r = BoxRay::new(ray);
-        let mut stack = [0u32; STACK_DEPTH];
+        let mut stack = [0u32; N];
         let mut sp = 1usize;
         stack[0] = 0;
         while sp > 0 {
@@ -506,7 +574,12 @@ impl Bvh {
 
 impl Default for Bvh {
     fn default() -> Bvh {
-        Bvh { nodes: Vec::new(), root_box: AxisAlignedBox { min: Vec3::ZERO, max: Vec3::ZERO }, order: Vec::new() }
+        Bvh {
+            nodes: Vec::new(),
+            root_box: AxisAlignedBox { min: Vec3::ZERO, max: Vec3::ZERO },
+            order: Vec::new(),
+            stack_need: 0,
+        }
     }
 }
 
@@ -565,10 +638,32 @@ mod tests {
 
     #[test]
     fn closest_and_any_agree_with_a_loop_over_all_boxes() {
-        let boxes = random_boxes(3000, 9);
+        check_against_loop(3000, 9, 2000);
+    }
+
+    /// Trees of every stack size class (a lone box, a few, hundreds,
+    /// thousands) traverse correctly with the stack their depth needs; a
+    /// stack too small would panic on an index.
+    #[test]
+    fn each_stack_size_class_traverses_correctly() {
+        let mut classes = Vec::new();
+        for (n, rays) in [(1, 300), (2, 300), (5, 300), (40, 500), (600, 1000), (20_000, 300)] {
+            let bvh = Bvh::build(&random_boxes(n, 5));
+            assert_eq!(bvh.stack_need, 3 * inner_levels(&bvh.nodes) + 1);
+            assert!(bvh.stack_need <= STACK_DEPTH);
+            classes.push(if bvh.stack_need <= SMALL_STACK { 0 } else { 1 });
+            check_against_loop(n, 5, rays);
+        }
+        // A lone box: one root node.
+        assert_eq!(Bvh::build(&random_boxes(1, 5)).stack_need, 4);
+        assert!(classes.contains(&0) && classes.contains(&1), "{classes:?}");
+    }
+
+    fn check_against_loop(n: usize, seed: u64, rays: usize) {
+        let boxes = random_boxes(n, seed);
         let bvh = Bvh::build(&boxes);
         let mut s = PixelSampler::from_key(11);
-        for _ in 0..2000 {
+        for _ in 0..rays {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 14.0 - Vec3::splat(2.0);
             let d = (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - Vec3::splat(0.5)).normalize();
             let ray = Ray::new(o, d);
@@ -577,7 +672,7 @@ mod tests {
                 let t = a.max(0.0);
                 (a <= b && t < t_max && b > 0.0).then_some(t)
             };
-            let brute = (0..3000u32).filter_map(|p| test(p, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+            let brute = (0..n as u32).filter_map(|p| test(p, f32::INFINITY)).fold(f32::INFINITY, f32::min);
             let got = bvh.closest(&ray, 0.0, f32::INFINITY, test).unwrap_or(f32::INFINITY);
             assert_eq!(got, brute);
             assert_eq!(bvh.any(&ray, 0.0, f32::INFINITY, |p, t| test(p, t).is_some()), brute.is_finite());

@@ -206,6 +206,20 @@ impl Shape {
         }
     }
 
+    /// True when a ray that crossed the shape's surface at a point with
+    /// outward normal `n`, going on along `d`, cannot meet the surface
+    /// again: a convex closed shape left outward (`d . n > 0`), or a flat
+    /// one. Meshes answer `false`.
+    #[inline]
+    pub fn is_left_for_good(&self, n: Vec3, d: Vec3) -> bool {
+        match self {
+            Shape::Sphere(_) | Shape::Box(_) => d.dot(n) > 0.0,
+            Shape::Rectangle(_) | Shape::Disk(_) => true,
+            // A mesh may be re-entered; a moving shape never bounds a medium.
+            Shape::Mesh(_) | Shape::Moving(_) => false,
+        }
+    }
+
     /// True when `p` lies strictly inside a closed shape (false for open
     /// shapes); a moving shape in its pose at time 0.
     pub fn contains(&self, p: Vec3) -> bool {

@@ -141,6 +141,7 @@ where
     }
     let mut remaining = distance;
     let mut t_min = 0.0;
+    let only_boundary = scene.trees().boundaries.single();
     for _ in 0..MAX_BOUNDARY_CROSSINGS {
         let hit = scene.intersect_boundaries(&ray, t_min, remaining);
         let t_end = hit.map_or(remaining, |h| h.surface.t);
@@ -164,6 +165,12 @@ where
         t_min = surface_epsilon(hit.surface.p);
         if remaining <= t_min {
             return true;
+        }
+        // The scene's only crossed surface, left for good (out of a convex
+        // medium boundary, e.g. a slab's box): nothing more to cross, the
+        // last piece runs to the end in the medium outside.
+        if only_boundary == Some(hit.object) && scene.object(&hit).shape.is_left_for_good(hit.surface.n, wi) {
+            return visit(ShadowSegment { medium, ray: &ray, t_end: remaining, pane: None }).is_continue();
         }
     }
     false
@@ -234,6 +241,43 @@ mod tests {
         let mut s = PixelSampler::from_key(1);
         let tr = scene.transmittance(Vec3::ZERO, start, Vec3::X, 2.5, TransmittanceMethod::Analytic, &mut s);
         assert!((tr[0] - (-0.75f32).exp()).abs() < 1e-5, "{tr:?}");
+    }
+
+    /// A scene whose only crossed surface is one box: the walk stops
+    /// querying once the ray has left the box (it cannot meet it again), and
+    /// its pieces are those of the general walk: inside, then outside to the end.
+    #[test]
+    fn shadow_walk_out_of_a_lone_box_ends_after_leaving_it() {
+        let json = r#"{
+          "version": 1,
+          "camera": {"type": "perspective", "position": [0, 0, 10], "target": [0, 0, 0], "fov_y": 40,
+                     "width": 4, "height": 4},
+          "media": {"slab": {"type": "homogeneous", "sigma_a": 0.5, "sigma_s": 0.0}},
+          "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "interior": "slab", "bsdf": {"type": "null"}}]
+        }"#;
+        let desc = parse_scene_str(json, "<test>").unwrap();
+        let scene = build_scene(&desc, "<test>", std::path::Path::new(".")).unwrap().scene;
+        assert!(scene.trees().boundaries.single().is_some());
+        let inside = scene.medium_at(Vec3::ZERO);
+        assert!(inside.is_some());
+        for (from, medium, distance, expected) in [
+            // From inside, to infinity: [0, 1] inside, [1, inf) outside.
+            (Vec3::ZERO, inside, f32::INFINITY, vec![(inside, 0.0, 1.0), (None, 1.0, f32::INFINITY)]),
+            // From outside, through the box: [-3, -1] outside, [-1, 1] inside, [1, 4] outside.
+            (Vec3::new(-3.0, 0.0, 0.0), None, 7.0, vec![(None, -3.0, 2.0), (inside, -1.0, 2.0), (None, 1.0, 3.0)]),
+        ] {
+            let mut pieces = Vec::new();
+            assert!(walk_shadow_ray(&scene, from, 0.0, medium, Vec3::X, distance, None, |s| {
+                pieces.push((s.medium, s.ray.o.x, s.t_end));
+                ControlFlow::Continue(())
+            }));
+            assert_eq!(pieces.len(), expected.len(), "{pieces:?}");
+            for (got, want) in pieces.iter().zip(&expected) {
+                assert_eq!(got.0, want.0, "{pieces:?}");
+                assert!((got.1 - want.1).abs() < 1e-5, "{pieces:?}");
+                assert!(got.2 == want.2 || (got.2 - want.2).abs() < 1e-5, "{pieces:?}");
+            }
+        }
     }
 
     #[test]

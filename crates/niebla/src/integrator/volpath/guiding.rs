@@ -44,8 +44,10 @@ pub(super) fn sample_phase(
     };
     let (u_choice, u_light, u_dir, u_r) = guided_numbers(block, sampler);
     let wi = if u_choice < g.fraction { g.guide.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
-    let pdf = g.mix(x, wi, phase.pdf(wo, wi));
-    (pdf > 0.0).then(|| crate::phase::PhaseSample { wi, value: phase.eval(wo, wi), pdf })
+    // A phase function's pdf is its value: one evaluation serves both.
+    let value = phase.eval(wo, wi);
+    let pdf = g.mix(x, wi, value);
+    (pdf > 0.0).then_some(crate::phase::PhaseSample { wi, value, pdf })
 }
 
 /// BSDF sampling at surface point `p` with outward geometric normal `n`,

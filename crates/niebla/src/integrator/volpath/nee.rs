@@ -40,8 +40,10 @@ impl Scatter<'_> {
     pub(super) fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         match *self {
             Scatter::Phase(phase) => {
+                // Phase functions are sampled exactly: the pdf is the value.
                 let p = phase.eval(wo, wi);
-                (Rgb::splat(p), phase.pdf(wo, wi))
+                debug_assert_eq!(p.to_bits(), phase.pdf(wo, wi).to_bits());
+                (Rgb::splat(p), p)
             }
             Scatter::Surface(bsdf, ns, n, ng) => {
                 let (cos, cos_g) = (wi.dot(n), wi.dot(ng));
