@@ -5,36 +5,11 @@ use super::sobol::owen_scrambled_sobol_pair;
 /// 64-bit finalizer of SplitMix64 (Steele, Lea, Flood 2014): a bijective
 /// avalanche hash, used to derive independent streams from counters.
 #[inline]
-pub const fn hash_u64(mut z: u64) -> u64 {
+pub fn hash_u64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-/// How many dimensions [`DIMENSION_HASHES`] covers.
-const HASHED_DIMENSIONS: usize = 512;
-
-/// `hash_u64(d)` for the low dimensions `d`, which every draw of an
-/// independent sampler (and every draw beyond a Sobol slot) hashes.
-static DIMENSION_HASHES: [u64; HASHED_DIMENSIONS] = {
-    let mut t = [0u64; HASHED_DIMENSIONS];
-    let mut d = 0;
-    while d < HASHED_DIMENSIONS {
-        t[d] = hash_u64(d as u64);
-        d += 1;
-    }
-    t
-};
-
-/// `hash_u64(dimension)`, from [`DIMENSION_HASHES`] where it has it.
-#[inline(always)]
-fn dimension_hash(dimension: u64) -> u64 {
-    if dimension < HASHED_DIMENSIONS as u64 {
-        DIMENSION_HASHES[dimension as usize]
-    } else {
-        hash_u64(dimension)
-    }
 }
 
 /// Which numbers [`PixelSampler::for_pixel`] gives a pixel's camera samples.
@@ -85,11 +60,9 @@ enum Mode {
     /// Owen-scrambled Sobol point `index` (the low 32 bits of the sample
     /// index; the high bits are part of the key), given bit-reversed, and
     /// the last pair of dimensions computed (`pair`, `u64::MAX` for none),
-    /// whose second value a 1D draw of the odd dimension takes;
-    /// `sample_hash` keys the sample's numbers beyond a slot.
+    /// whose second value a 1D draw of the odd dimension takes.
     Sobol {
         index_reversed: u32,
-        sample_hash: u64,
         pair: u64,
         values: [u32; 2],
     },
@@ -140,8 +113,7 @@ pub struct PixelSampler {
     /// independent numbers keyed by `slot_key` (`u64::MAX`: no slot, the
     /// dimensions in draw order).
     slot_end: u64,
-    /// Key of the current slot's independent numbers (in Sobol mode with
-    /// the sample's `sample_hash` XORed in).
+    /// Key of the current slot's independent numbers.
     slot_key: u64,
     /// Whether [`PixelSampler::use_slots`] acts (Sobol with layout).
     laid_out: bool,
@@ -197,10 +169,8 @@ impl PixelSampler {
                 let pixel_hash = hash_u64(hash_u64(seed) ^ pixel);
                 let key = hash_u64(pixel_hash ^ hash_u64(0x5EED_50B0 ^ (sample_index >> 32)));
                 let stratum = sample_index.wrapping_add(pixel_hash % 1_000_003);
-                let index_reversed = (sample_index as u32).reverse_bits();
                 let mode = Mode::Sobol {
-                    index_reversed,
-                    sample_hash: hash_u64(((index_reversed as u64) << 32) | 0x5A4D),
+                    index_reversed: (sample_index as u32).reverse_bits(),
                     pair: u64::MAX,
                     values: [0; 2],
                 };
@@ -228,13 +198,14 @@ impl PixelSampler {
     fn next_u32(&mut self) -> u32 {
         let beyond_slot = self.dimension >= self.slot_end;
         let bits = match &mut self.mode {
-            Mode::Independent => (hash_u64(self.key ^ dimension_hash(self.dimension)) >> 32) as u32,
-            // The key is the pixel's: the sample index (its hash is in the
-            // slot key) makes the numbers independent between samples.
-            Mode::Sobol { .. } if beyond_slot => {
-                (hash_u64(self.key ^ hash_u64(self.slot_key ^ dimension_hash(self.dimension))) >> 32) as u32
+            Mode::Independent => (hash_u64(self.key ^ hash_u64(self.dimension)) >> 32) as u32,
+            // The key is the pixel's: the sample index makes the numbers
+            // independent between samples.
+            Mode::Sobol { index_reversed, .. } if beyond_slot => {
+                let sample = hash_u64(((*index_reversed as u64) << 32) | 0x5A4D);
+                (hash_u64(self.key ^ hash_u64(self.slot_key ^ sample ^ hash_u64(self.dimension))) >> 32) as u32
             }
-            Mode::Sobol { index_reversed, pair, values, .. } => {
+            Mode::Sobol { index_reversed, pair, values } => {
                 if *pair != self.dimension >> 1 {
                     *pair = self.dimension >> 1;
                     *values = owen_scrambled_sobol_pair(self.key, *index_reversed, *pair);
@@ -259,7 +230,7 @@ impl PixelSampler {
     pub fn next_f64(&mut self) -> f64 {
         let bits = match self.mode {
             Mode::Independent => {
-                let bits = hash_u64(self.key ^ dimension_hash(self.dimension)) >> 11;
+                let bits = hash_u64(self.key ^ hash_u64(self.dimension)) >> 11;
                 self.dimension += 1;
                 bits
             }
@@ -347,12 +318,7 @@ impl PixelSampler {
         if self.laid_out {
             self.dimension = start;
             self.slot_end = if repeat == 0 { start + len } else { start };
-            // Only Sobol samplers are laid out.
-            let sample_hash = match self.mode {
-                Mode::Sobol { sample_hash, .. } => sample_hash,
-                Mode::Independent => 0,
-            };
-            self.slot_key = hash_u64(0x510B_5EED ^ start ^ ((repeat as u64) << 40)) ^ sample_hash;
+            self.slot_key = hash_u64(0x510B_5EED ^ start ^ ((repeat as u64) << 40));
         }
     }
 
