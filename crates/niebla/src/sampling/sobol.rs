@@ -90,32 +90,12 @@ pub fn sobol_2d(index: u32) -> [u32; 2] {
     [index.reverse_bits(), y]
 }
 
-/// Sobol dimension 1 bit-reversed, together with the index itself, by
-/// bytes of the bit-reversed index `r`: the high half of
-/// `REVERSED_TABLE[j][b]` is the XOR of `reverse_bits(v_i)` over the bits
-/// set in byte value `b` at byte `j` of `r` (bit `k` of that byte is bit
-/// `31 - 8 j - k` of the index), the low half is byte `j` of `r` holding
-/// `b`, bit-reversed (so the XOR over the four bytes is `reverse_bits(r)`).
-/// The value scramble works on bit-reversed values, so one set of four
-/// lookups gives both components' inputs without a bit reversal.
-static SOBOL_1_REVERSED_TABLE: [[u64; 256]; 4] = reversed_byte_tables();
-
-/// [`SOBOL_1_REVERSED_TABLE`]: the bit-reversed byte tables of Sobol
-/// dimension 1 (high halves) beside the bit-reversed bytes (low halves).
-const fn reversed_byte_tables() -> [[u64; 256]; 4] {
-    let y = byte_tables(true);
-    let mut t = [[0u64; 256]; 4];
-    let mut j = 0;
-    while j < 4 {
-        let mut b = 0;
-        while b < 256 {
-            t[j][b] = ((y[j][b] as u64) << 32) | ((b as u32) << (8 * j)).reverse_bits() as u64;
-            b += 1;
-        }
-        j += 1;
-    }
-    t
-}
+/// Sobol dimension 1 bit-reversed, by bytes of the bit-reversed index:
+/// `REVERSED_TABLE[j][b]` is the XOR of `reverse_bits(v_i)` over the bits set
+/// in byte value `b` at byte `j` of `reverse_bits(index)` (bit `k` of that
+/// byte is bit `31 - 8 j - k` of the index). The value scramble works on the
+/// bit-reversed value, so this saves two bit reversals per pair.
+static SOBOL_1_REVERSED_TABLE: [[u32; 256]; 4] = byte_tables(true);
 
 /// The byte tables of Sobol dimension 1: entry `[j][b]` XORs the direction
 /// numbers of the bits set in byte value `b` at byte `j` of the index
@@ -173,18 +153,16 @@ pub fn owen_scrambled_sobol_pair(key: u64, index_reversed: u32, pair: u64) -> [u
     // The shuffled index, bit-reversed: its van der Corput value.
     let x0 = laine_karras_permutation(index_reversed, h as u32);
     let b = x0.to_le_bytes();
-    // High half: Sobol dimension 1 of the shuffled index, bit-reversed; low
-    // half: the shuffled index (`x0` bit-reversed).
-    let t = SOBOL_1_REVERSED_TABLE[0][b[0] as usize]
+    // Sobol dimension 1 of the shuffled index, bit-reversed.
+    let y_reversed = SOBOL_1_REVERSED_TABLE[0][b[0] as usize]
         ^ SOBOL_1_REVERSED_TABLE[1][b[1] as usize]
         ^ SOBOL_1_REVERSED_TABLE[2][b[2] as usize]
         ^ SOBOL_1_REVERSED_TABLE[3][b[3] as usize];
     let seeds = hash_u64(h);
-    let x = laine_karras_permutation(t as u32, seeds as u32);
-    let y = laine_karras_permutation((t >> 32) as u32, (seeds >> 32) as u32);
-    // Both scrambled values bit-reversed back by one 64-bit reversal.
-    let both = (((x as u64) << 32) | y as u64).reverse_bits();
-    [both as u32, (both >> 32) as u32]
+    [
+        laine_karras_permutation(x0.reverse_bits(), seeds as u32).reverse_bits(),
+        laine_karras_permutation(y_reversed, (seeds >> 32) as u32).reverse_bits(),
+    ]
 }
 
 /// Dimension `dimension` of Owen-scrambled Sobol point `index` of the
