@@ -228,7 +228,7 @@ fn replay(mut a: PixelSampler, mut b: reference::Sampler, script: u64, ops: u32,
                 // first few hundred dimensions, short lengths, a few repeats.
                 let start = (r >> 8) % 300;
                 let len = 1 + (r >> 20) % 6;
-                let repeat = if (r >> 32) % 4 == 0 { ((r >> 36) % 3) as u32 } else { 0 };
+                let repeat = if (r >> 32).is_multiple_of(4) { ((r >> 36) % 3) as u32 } else { 0 };
                 a.use_slots(start, len, repeat);
                 b.use_slots(start, len, repeat);
             }
