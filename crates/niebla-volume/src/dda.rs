@@ -45,6 +45,9 @@ impl MajorantGrid {
     /// });
     /// assert_eq!(cells, [([0, 0, 0], 1.0, 2.0, 1.0), ([1, 0, 0], 2.0, 3.0, 3.0)]);
     /// ```
+    // Kept out of line (the callback is inlined into it): inlined into a
+    // caller, the walk's size changes how the caller's other paths compile.
+    #[inline(never)]
     pub fn walk_cells<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, f: F) -> ControlFlow<()>
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
@@ -75,6 +78,9 @@ impl MajorantGrid {
     /// });
     /// assert_eq!(cells, [([10, 0, 0], 11.0, 12.0, 2.0)]);
     /// ```
+    // Kept out of line (the callback is inlined into it): inlined into a
+    // caller, the walk's size changes how the caller's other paths compile.
+    #[inline(never)]
     pub fn walk_nonzero<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, f: F) -> ControlFlow<()>
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
