@@ -14,6 +14,7 @@
 
 use std::ops::ControlFlow;
 
+use crate::majorant::ZERO_BLOCK;
 use crate::MajorantGrid;
 
 /// A piece `[t0, t1]` of a ray in which the density is at most
@@ -44,7 +45,60 @@ impl MajorantGrid {
     /// });
     /// assert_eq!(cells, [([0, 0, 0], 1.0, 2.0, 1.0), ([1, 0, 0], 2.0, 3.0, 3.0)]);
     /// ```
-    pub fn walk_cells<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, mut f: F) -> ControlFlow<()>
+    // Kept out of line (the callback is inlined into it): inlined into a
+    // caller, the walk's size changes how the caller's other paths compile.
+    #[inline(never)]
+    pub fn walk_cells<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, f: F) -> ControlFlow<()>
+    where
+        F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
+    {
+        self.walk_impl::<false, F>(o, d, t_min, t_max, f)
+    }
+
+    /// Like [`MajorantGrid::walk_cells`], but cells whose value is exactly
+    /// zero are not reported: the calls are those of `walk_cells` without
+    /// the zero cells, with the same cells and bit-identical segments (a
+    /// reported segment starts where the previous reported one ended only
+    /// if no zero cell lies between them). Blocks of 4^3 cells that are
+    /// all zero are crossed in one step (Amanatides and Woo's DDA run on
+    /// the block grid, with the cell-level state at the block's exit
+    /// recovered exactly), so empty space costs a step per block instead
+    /// of per cell.
+    ///
+    /// ```
+    /// use std::ops::ControlFlow;
+    /// use niebla_volume::MajorantGrid;
+    /// let mut v = vec![0.0; 12];
+    /// v[10] = 2.0;
+    /// let m = MajorantGrid::new([12, 1, 1], [0.0; 3], [12.0, 1.0, 1.0], v).unwrap();
+    /// let mut cells = Vec::new();
+    /// let _ = m.walk_nonzero([-1.0, 0.5, 0.5], [1.0, 0.0, 0.0], 0.0, 100.0, |c, s| {
+    ///     cells.push((c, s.t0, s.t1, s.max_density));
+    ///     ControlFlow::Continue(())
+    /// });
+    /// assert_eq!(cells, [([10, 0, 0], 11.0, 12.0, 2.0)]);
+    /// ```
+    // Kept out of line (the callback is inlined into it): inlined into a
+    // caller, the walk's size changes how the caller's other paths compile.
+    #[inline(never)]
+    pub fn walk_nonzero<F>(&self, o: [f32; 3], d: [f32; 3], t_min: f32, t_max: f32, f: F) -> ControlFlow<()>
+    where
+        F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
+    {
+        self.walk_impl::<true, F>(o, d, t_min, t_max, f)
+    }
+
+    /// The DDA of [`MajorantGrid::walk_cells`]; with `SKIP_ZEROS`, that of
+    /// [`MajorantGrid::walk_nonzero`].
+    #[inline(always)]
+    fn walk_impl<const SKIP_ZEROS: bool, F>(
+        &self,
+        o: [f32; 3],
+        d: [f32; 3],
+        t_min: f32,
+        t_max: f32,
+        mut f: F,
+    ) -> ControlFlow<()>
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
     {
@@ -76,25 +130,24 @@ impl MajorantGrid {
         // Cell widths and reciprocal directions, so that stepping needs no division.
         let width: [f32; 3] = std::array::from_fn(|a| (self.bounds_max[a] - self.bounds_min[a]) / self.res[a] as f32);
         let inv_d: [f32; 3] = std::array::from_fn(|a| if d[a] != 0.0 { 1.0 / d[a] } else { 0.0 });
-        let crossing = |a: usize, c: usize| -> f32 {
-            let plane = |k: usize| {
-                if k >= self.res[a] {
-                    self.bounds_max[a]
-                } else {
-                    self.bounds_min[a] + k as f32 * width[a]
-                }
-            };
-            if d[a] > 0.0 {
-                (plane(c + 1) - o[a]) * inv_d[a]
-            } else if d[a] < 0.0 {
-                (plane(c) - o[a]) * inv_d[a]
-            } else {
-                f32::INFINITY
-            }
+        // The ray parameter where it crosses boundary plane `k` of axis `a`
+        // (the plane formula of `plane`'s callers in the DDA: `bounds_min + k
+        // width`, the last plane exactly `bounds_max`).
+        let crossing_plane = |a: usize, k: usize| -> f32 {
+            let plane = if k >= self.res[a] { self.bounds_max[a] } else { self.bounds_min[a] + k as f32 * width[a] };
+            (plane - o[a]) * inv_d[a]
         };
         // Starting cell and the t of the next boundary plane along each axis.
         let mut cell = [0usize; 3];
         let mut next = [f32::INFINITY; 3];
+        // Per axis: the next plane's index, the cell step (+1 or -1 as a
+        // wrapping usize), the steps left before the ray leaves the grid,
+        // and the step of the linear cell index.
+        let mut plane_k = [0usize; 3];
+        let mut step = [0usize; 3];
+        let mut left = [0usize; 3];
+        let stride = [1, self.res[0], self.res[0] * self.res[1]];
+        let mut index_step = [0usize; 3];
         for a in 0..3 {
             let p = o[a] + d[a] * t0;
             let extent = self.bounds_max[a] - self.bounds_min[a];
@@ -107,40 +160,131 @@ impl MajorantGrid {
             } else if d[a] < 0.0 && cell[a] > 0 && self.plane(a, cell[a]) >= p {
                 cell[a] -= 1;
             }
-            next[a] = crossing(a, cell[a]);
+            if d[a] > 0.0 {
+                plane_k[a] = cell[a] + 1;
+                step[a] = 1;
+                left[a] = self.res[a] - 1 - cell[a];
+                index_step[a] = stride[a];
+                next[a] = crossing_plane(a, plane_k[a]);
+            } else if d[a] < 0.0 {
+                plane_k[a] = cell[a];
+                step[a] = usize::MAX;
+                left[a] = cell[a];
+                index_step[a] = stride[a].wrapping_neg();
+                next[a] = crossing_plane(a, plane_k[a]);
+            }
         }
 
+        // The walk keeps each axis' next crossing in its own variable and
+        // the cell's linear index up to date, so that a step is a compare,
+        // an integer add and one plane crossing (no array indexed by the
+        // axis, no index recomputation).
+        let [mut next_x, mut next_y, mut next_z] = next;
+        let mut index = self.cell_index(cell);
+        let values = &self.values[..];
         let mut t = t0;
         loop {
-            let axis = if next[0] <= next[1] && next[0] <= next[2] {
-                0
-            } else if next[1] <= next[2] {
-                1
+            if SKIP_ZEROS && values[index] == 0.0 && self.zero_blocks[self.zero_block_index(cell)] {
+                // The cell's block is all zero: go to the cell where the ray
+                // leaves it. The cell walk takes plane crossings in
+                // increasing t, ties in axis order, and every crossing
+                // inside the block is between zero cells, so only the state
+                // after the block's first exit crossing matters.
+                let exit_plane: [usize; 3] = std::array::from_fn(|a| {
+                    let first = cell[a] / ZERO_BLOCK * ZERO_BLOCK;
+                    if d[a] > 0.0 {
+                        (first + ZERO_BLOCK).min(self.res[a])
+                    } else {
+                        first
+                    }
+                });
+                let exit_t: [f32; 3] =
+                    std::array::from_fn(|a| if d[a] != 0.0 { crossing_plane(a, exit_plane[a]) } else { f32::INFINITY });
+                let axis = if exit_t[0] <= exit_t[1] && exit_t[0] <= exit_t[2] {
+                    0
+                } else if exit_t[1] <= exit_t[2] {
+                    1
+                } else {
+                    2
+                };
+                let t_exit = exit_t[axis];
+                // The walk ends at t1 before leaving the block.
+                if t_exit >= t1 {
+                    return ControlFlow::Continue(());
+                }
+                // The cell walk keeps the first of equal crossings as the
+                // next segment's start; equal values with different bits
+                // are +0 and -0, so an exit at t = 0 takes the cell steps.
+                if t_exit != 0.0 {
+                    next = [next_x, next_y, next_z];
+                    // Crossings of the other axes that come first: before
+                    // t_exit, or at it for an axis earlier in the tie order.
+                    for b in 0..3 {
+                        if b == axis || d[b] == 0.0 {
+                            continue;
+                        }
+                        while left[b] > 0 && (next[b] < t_exit || (next[b] == t_exit && b < axis)) {
+                            left[b] -= 1;
+                            cell[b] = cell[b].wrapping_add(step[b]);
+                            plane_k[b] = plane_k[b].wrapping_add(step[b]);
+                            next[b] = crossing_plane(b, plane_k[b]);
+                        }
+                    }
+                    // The exit crossing itself, into the next block (or out
+                    // of the grid).
+                    if d[axis] > 0.0 {
+                        if exit_plane[axis] == self.res[axis] {
+                            return ControlFlow::Continue(());
+                        }
+                        cell[axis] = exit_plane[axis];
+                        left[axis] = self.res[axis] - 1 - cell[axis];
+                    } else {
+                        if exit_plane[axis] == 0 {
+                            return ControlFlow::Continue(());
+                        }
+                        cell[axis] = exit_plane[axis] - 1;
+                        left[axis] = cell[axis];
+                    }
+                    plane_k[axis] = exit_plane[axis].wrapping_add(step[axis]);
+                    next[axis] = crossing_plane(axis, plane_k[axis]);
+                    [next_x, next_y, next_z] = next;
+                    index = self.cell_index(cell);
+                    if t_exit > t {
+                        t = t_exit;
+                    }
+                    continue;
+                }
+            }
+            // The axis whose plane comes first (ties: x, then y, then z).
+            let (axis, t_next) = if next_x <= next_y && next_x <= next_z {
+                (0, next_x)
+            } else if next_y <= next_z {
+                (1, next_y)
             } else {
-                2
+                (2, next_z)
             };
-            let t_end = next[axis].min(t1);
+            let t_end = t_next.min(t1);
             if t_end > t {
-                let max_density = self.values[(cell[2] * self.res[1] + cell[1]) * self.res[0] + cell[0]];
-                f(cell, Segment { t0: t, t1: t_end, max_density })?;
+                let max_density = values[index];
+                if !(SKIP_ZEROS && max_density == 0.0) {
+                    f(cell, Segment { t0: t, t1: t_end, max_density })?;
+                }
                 t = t_end;
             }
-            if next[axis] >= t1 {
+            if t_next >= t1 || left[axis] == 0 {
                 return ControlFlow::Continue(());
             }
             // Step into the neighbour across the plane.
-            if d[axis] > 0.0 {
-                cell[axis] += 1;
-                if cell[axis] == self.res[axis] {
-                    return ControlFlow::Continue(());
-                }
-            } else {
-                if cell[axis] == 0 {
-                    return ControlFlow::Continue(());
-                }
-                cell[axis] -= 1;
+            left[axis] -= 1;
+            cell[axis] = cell[axis].wrapping_add(step[axis]);
+            plane_k[axis] = plane_k[axis].wrapping_add(step[axis]);
+            index = index.wrapping_add(index_step[axis]);
+            let crossed = crossing_plane(axis, plane_k[axis]);
+            match axis {
+                0 => next_x = crossed,
+                1 => next_y = crossed,
+                _ => next_z = crossed,
             }
-            next[axis] = crossing(axis, cell[axis]);
         }
     }
 

@@ -34,7 +34,16 @@ pub struct DensityBoundGrid {
     pub(crate) bounds_min: [f32; 3],
     pub(crate) bounds_max: [f32; 3],
     pub(crate) values: Vec<f32>,
+    /// Per block of [`ZERO_BLOCK`]^3 cells (`[z][y][x]`, x fastest, the
+    /// last block per axis possibly partial): whether every cell's value is
+    /// exactly zero. Derived from `values` by [`DensityBoundGrid::with_zero_blocks`];
+    /// [`MajorantGrid::walk_nonzero`] jumps over such blocks.
+    pub(crate) zero_blocks: Vec<bool>,
 }
+
+/// Cells per axis of the blocks in which a majorant grid records runs of
+/// zero cells (see [`MajorantGrid::walk_nonzero`]).
+pub(crate) const ZERO_BLOCK: usize = 4;
 
 /// A [`DensityBoundGrid`] of per-cell maxima: the name used where the grid
 /// is a majorant (the local bound `sigma_maj` of the trackers).
@@ -56,7 +65,7 @@ impl DensityBoundGrid {
     ) -> Result<Self, VolumeError> {
         // Same shape rules as a dense grid.
         DenseGrid::new(res, values.clone(), bounds_min, bounds_max)?;
-        Ok(Self { res, bounds_min, bounds_max, values })
+        Ok(Self::from_parts(res, bounds_min, bounds_max, values))
     }
 
     /// The majorants of a dense grid over its local-space box, with `res`
@@ -74,7 +83,7 @@ impl DensityBoundGrid {
         let (bounds_min, bounds_max) = grid.bounds();
         // Clamped below at zero (NaN voxels are ignored by `max`).
         let values = reduce_dense(grid, res, f32::NEG_INFINITY, f32::max).into_iter().map(|v| v.max(0.0)).collect();
-        MajorantGrid { res, bounds_min, bounds_max, values }
+        MajorantGrid::from_parts(res, bounds_min, bounds_max, values)
     }
 
     /// The majorants of a sparse grid in its index space (see the module
@@ -109,7 +118,39 @@ impl DensityBoundGrid {
                 m.values[i] = m.values[i].max(tile.value);
             });
         }
-        m
+        m.with_zero_blocks()
+    }
+
+    /// A grid from its parts, with its zero-block flags.
+    pub(crate) fn from_parts(res: [usize; 3], bounds_min: [f32; 3], bounds_max: [f32; 3], values: Vec<f32>) -> Self {
+        DensityBoundGrid { res, bounds_min, bounds_max, values, zero_blocks: Vec::new() }.with_zero_blocks()
+    }
+
+    /// `self` with `zero_blocks` recomputed from `values` (call after
+    /// changing `values`).
+    pub(crate) fn with_zero_blocks(mut self) -> Self {
+        let blocks = self.res.map(|r| r.div_ceil(ZERO_BLOCK));
+        let mut zero = vec![true; blocks[0] * blocks[1] * blocks[2]];
+        for z in 0..self.res[2] {
+            for y in 0..self.res[1] {
+                for x in 0..self.res[0] {
+                    if self.values[self.cell_index([x, y, z])] != 0.0 {
+                        let b = [x, y, z].map(|c| c / ZERO_BLOCK);
+                        zero[(b[2] * blocks[1] + b[1]) * blocks[0] + b[0]] = false;
+                    }
+                }
+            }
+        }
+        self.zero_blocks = zero;
+        self
+    }
+
+    /// Index in `zero_blocks` of the block holding cell `c` (in range).
+    #[inline(always)]
+    pub(crate) fn zero_block_index(&self, c: [usize; 3]) -> usize {
+        let bx = self.res[0].div_ceil(ZERO_BLOCK);
+        let by = self.res[1].div_ceil(ZERO_BLOCK);
+        ((c[2] / ZERO_BLOCK) * by + c[1] / ZERO_BLOCK) * bx + c[0] / ZERO_BLOCK
     }
 
     /// Linear index of cell `c` (in range).
@@ -228,7 +269,7 @@ impl DensityBoundGrid {
                 }
             }
         }
-        DensityBoundGrid { res, bounds_min, bounds_max, values }
+        DensityBoundGrid::from_parts(res, bounds_min, bounds_max, values)
     }
 
     /// Coordinate of the cell boundary plane `k` along axis `a` (the same
@@ -335,18 +376,18 @@ impl SparseLayout {
 
     /// The one-cell grid of a grid that stores nothing.
     pub(crate) fn empty_grid(value: f32) -> MajorantGrid {
-        MajorantGrid { res: [1; 3], bounds_min: [-1.0; 3], bounds_max: [1.0; 3], values: vec![value] }
+        MajorantGrid::from_parts([1; 3], [-1.0; 3], [1.0; 3], vec![value])
     }
 
     /// A grid with this layout and every cell `value`.
     pub(crate) fn filled(&self, value: f32) -> MajorantGrid {
         let (origin, size, res) = (self.origin, self.size, self.res);
-        MajorantGrid {
+        MajorantGrid::from_parts(
             res,
-            bounds_min: std::array::from_fn(|a| origin[a] as f32),
-            bounds_max: std::array::from_fn(|a| (origin[a] + res[a] as i64 * size) as f32),
-            values: vec![value; res[0] * res[1] * res[2]],
-        }
+            std::array::from_fn(|a| origin[a] as f32),
+            std::array::from_fn(|a| (origin[a] + res[a] as i64 * size) as f32),
+            vec![value; res[0] * res[1] * res[2]],
+        )
     }
 
     /// Inclusive voxel range `(first, last)` along axis `a` read by

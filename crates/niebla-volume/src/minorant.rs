@@ -47,7 +47,7 @@ impl DensityBoundGrid {
     pub fn minorant_from_dense(grid: &DenseGrid, res: [usize; 3]) -> DensityBoundGrid {
         let res = res.map(|r| r.max(1));
         let (bounds_min, bounds_max) = grid.bounds();
-        DensityBoundGrid { res, bounds_min, bounds_max, values: reduce_dense(grid, res, f32::INFINITY, f32::min) }
+        DensityBoundGrid::from_parts(res, bounds_min, bounds_max, reduce_dense(grid, res, f32::INFINITY, f32::min))
     }
 
     /// The minorants of a sparse grid in its index space: the same cells as
@@ -116,7 +116,7 @@ impl DensityBoundGrid {
                 *value = value.min(background);
             }
         }
-        m
+        m.with_zero_blocks()
     }
 }
 
