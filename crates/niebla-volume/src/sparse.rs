@@ -132,7 +132,76 @@ impl Hasher for CoordHasher {
     }
 }
 
-pub(crate) type RootMap = HashMap<[i32; 3], u32, BuildHasherDefault<CoordHasher>>;
+/// Up to this many root entries, [`RootMap::get`] scans a list of them
+/// instead of hashing the key.
+const SMALL_ROOT: usize = 8;
+
+/// The root table: a hash map from `ijk >> 12` to an entry, whose entries
+/// are also kept in a short list while there are at most [`SMALL_ROOT`] of
+/// them (most grids span one to eight 4096^3 regions): comparing a few keys
+/// costs less than hashing one, and the root is read on every voxel fetch
+/// that no accessor caches.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RootMap {
+    map: HashMap<[i32; 3], u32, BuildHasherDefault<CoordHasher>>,
+    /// Every entry of `map` while it holds at most [`SMALL_ROOT`], else empty.
+    small: Vec<([i32; 3], u32)>,
+}
+
+impl RootMap {
+    /// The entry of `key`, if any.
+    #[inline]
+    pub(crate) fn get(&self, key: &[i32; 3]) -> Option<&u32> {
+        if self.map.len() <= SMALL_ROOT {
+            return self.small.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+        }
+        self.map.get(key)
+    }
+
+    /// Sets the entry of `key`, returning the one it replaces.
+    pub(crate) fn insert(&mut self, key: [i32; 3], value: u32) -> Option<u32> {
+        let old = self.map.insert(key, value);
+        if self.map.len() <= SMALL_ROOT {
+            match self.small.iter_mut().find(|(k, _)| *k == key) {
+                Some(e) => e.1 = value,
+                None => self.small.push((key, value)),
+            }
+        } else if !self.small.is_empty() {
+            self.small = Vec::new();
+        }
+        old
+    }
+
+    /// Whether `key` has an entry.
+    pub(crate) fn contains_key(&self, key: &[i32; 3]) -> bool {
+        self.get(key).is_some()
+    }
+
+    /// The keys, in no particular order.
+    pub(crate) fn keys(&self) -> impl Iterator<Item = &[i32; 3]> {
+        self.map.keys()
+    }
+
+    /// Heap bytes allocated (the map's buckets with their control bytes, and
+    /// the list).
+    pub(crate) fn memory_bytes(&self) -> usize {
+        let entry = std::mem::size_of::<([i32; 3], u32)>();
+        self.map.capacity() * (entry + 1) + self.small.capacity() * entry
+    }
+
+    /// Frees unused capacity.
+    pub(crate) fn shrink_to_fit(&mut self) {
+        self.map.shrink_to_fit();
+        self.small.shrink_to_fit();
+    }
+}
+
+impl std::ops::Index<&[i32; 3]> for RootMap {
+    type Output = u32;
+    fn index(&self, key: &[i32; 3]) -> &u32 {
+        self.get(key).expect("no root entry for the key")
+    }
+}
 
 /// Where a voxel's value is stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -391,7 +460,7 @@ impl SparseGrid {
     pub fn memory_bytes(&self) -> u64 {
         use std::mem::size_of;
         // hashbrown: one (key, value) slot plus one control byte per bucket.
-        let root = self.root.capacity() * (size_of::<([i32; 3], u32)>() + 1);
+        let root = self.root.memory_bytes();
         let tables = (self.uppers.capacity() + self.lowers.capacity()) * size_of::<u32>();
         let origins = (self.upper_origins.capacity() + self.lower_origins.capacity()) * size_of::<[i32; 3]>();
         let data = self.leaves.capacity() * size_of::<Leaf>() + self.tiles.capacity() * size_of::<Tile>();
@@ -516,5 +585,60 @@ impl Bounds {
     }
     fn get(&self) -> Option<([i32; 3], [i32; 3])> {
         (self.lo[0] <= self.hi[0]).then_some((self.lo, self.hi))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The root table answers like a plain hash map below, at and above the
+    /// size where it stops keeping the list of entries, replacements included.
+    #[test]
+    fn root_map_answers_like_a_hash_map_at_every_size() {
+        let mut root = RootMap::default();
+        let mut reference: HashMap<[i32; 3], u32> = HashMap::new();
+        let key = |i: i32| [i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1];
+        for i in 0..27 {
+            assert_eq!(root.insert(key(i), i as u32), reference.insert(key(i), i as u32));
+            // Replace an earlier entry now and then.
+            if i % 4 == 0 {
+                assert_eq!(root.insert(key(i / 2), 100 + i as u32), reference.insert(key(i / 2), 100 + i as u32));
+            }
+            for j in -2..30 {
+                assert_eq!(root.get(&key(j)), reference.get(&key(j)), "{i} entries, key {:?}", key(j));
+                assert_eq!(root.contains_key(&key(j)), reference.contains_key(&key(j)));
+            }
+            assert_eq!(root.small.is_empty(), reference.len() > SMALL_ROOT || reference.is_empty());
+        }
+        let mut keys: Vec<_> = root.keys().copied().collect();
+        keys.sort_unstable();
+        let mut want: Vec<_> = reference.keys().copied().collect();
+        want.sort_unstable();
+        assert_eq!(keys, want);
+        assert_eq!(root[&key(5)], reference[&key(5)]);
+    }
+
+    /// The coordinate hasher reads a `[i32; 3]` in 8-byte steps: keys that
+    /// differ in any coordinate (or only in the tail's zero bytes) hash apart.
+    #[test]
+    fn coordinate_hash_separates_keys() {
+        use std::hash::{BuildHasher, Hash};
+        let h = |k: &[i32; 3]| {
+            let mut s = BuildHasherDefault::<CoordHasher>::default().build_hasher();
+            k.hash(&mut s);
+            s.finish()
+        };
+        let keys = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, 0, -1], [1 << 19, 0, 0]];
+        for (a, ka) in keys.iter().enumerate() {
+            for kb in &keys[a + 1..] {
+                assert_ne!(h(ka), h(kb), "{ka:?} {kb:?}");
+            }
+        }
+        let mut a = CoordHasher::default();
+        a.write(&[1, 0, 0, 0]);
+        let mut b = CoordHasher::default();
+        b.write(&[1, 0, 0, 0, 0]);
+        assert_ne!(a.finish(), b.finish());
     }
 }
