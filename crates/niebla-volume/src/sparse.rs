@@ -678,12 +678,8 @@ mod tests {
     /// differ in any coordinate (or only in the tail's zero bytes) hash apart.
     #[test]
     fn coordinate_hash_separates_keys() {
-        use std::hash::{BuildHasher, Hash};
-        let h = |k: &[i32; 3]| {
-            let mut s = BuildHasherDefault::<CoordHasher>::default().build_hasher();
-            k.hash(&mut s);
-            s.finish()
-        };
+        use std::hash::BuildHasher;
+        let h = |k: &[i32; 3]| BuildHasherDefault::<CoordHasher>::default().hash_one(k);
         let keys = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, 0, -1], [1 << 19, 0, 0]];
         for (a, ka) in keys.iter().enumerate() {
             for kb in &keys[a + 1..] {
