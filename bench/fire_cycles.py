@@ -10,6 +10,13 @@ the other, in the same run.
 
     python3 bench/fire_cycles.py                 # 64x64, ~15 min on 2 cores
     python3 bench/fire_cycles.py --size 48 --cycles-ref-spp 256   # shorter
+    python3 bench/fire_cycles.py --niebla-only --threads 1        # niebla alone, CPU seconds
+
+With `--niebla-only` Cycles is not run, and niebla's times are CPU seconds
+(user + system, from the operating system's accounting of the child
+process) net of a fixed cost per render call (scene loading, the VDB, the
+light distribution; the median CPU time of three 1-spp renders), so that
+other processes on a shared machine do not inflate them.
 
 Errors are measured against niebla's reference (volume light sampling on,
 `--ref-spp`), its own noise (from two independent halves) subtracted; the
@@ -24,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -93,6 +101,26 @@ def region_noise(a, b, mask):
     return compare._rel_mse_den((a - b)[mask], (0.5 * (a + b))[mask]) / 4.0
 
 
+class CpuNiebla(Niebla):
+    """A niebla runner that also records each render call's CPU seconds."""
+
+    def render(self, spp: int, seed: int, tag: str):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        out = super().render(spp, seed, tag)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        self.last_cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+        return out
+
+    def fixed_cpu(self) -> float:
+        """Median CPU seconds of three 1-spp renders: the per-call cost that
+        does not grow with the sample count (the 1 spp itself included)."""
+        times = []
+        for k in range(3):
+            self.render(1, 90000 + k, f"fixed_{k}")
+            times.append(self.last_cpu)
+        return float(np.median(times))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--size", type=int, default=64, help="image width and height (default 64)")
@@ -103,7 +131,11 @@ def main():
     ap.add_argument("--niebla-max-spp", type=int, default=1024, help="largest niebla sweep render")
     ap.add_argument("--target", type=float, default=1e-2)
     ap.add_argument("--out", default=os.path.join(HERE, "out", "fire_cycles"))
+    ap.add_argument("--niebla-only", action="store_true",
+                    help="skip Cycles; niebla's times in CPU seconds net of the per-call fixed cost")
+    ap.add_argument("--threads", type=int, default=THREADS, help=f"niebla's threads (default {THREADS})")
     args = ap.parse_args()
+    compare.THREADS = args.threads
     os.makedirs(args.out, exist_ok=True)
 
     vdb = os.path.join(args.out, "fireball.vdb")
@@ -119,14 +151,18 @@ def main():
         with open(paths[vls], "w") as f:
             json.dump(desc, f, indent=1)
     m = masks(desc)
-    version = subprocess.run([CYCLES_PY, "-c", "import bpy; print(bpy.app.version_string)"], capture_output=True,
-                             text=True).stdout.strip().splitlines()[-1]
-    print(f"{args.size}x{args.size}, {THREADS} threads, Cycles {version}, load average {os.getloadavg()[0]:.2f}; "
-          f"pixels: floor {m['floor'].sum()}, smoke {m['smoke'].sum()}, fire {m['fire'].sum()}", flush=True)
+    if args.niebla_only:
+        version = "not run"
+    else:
+        version = subprocess.run([CYCLES_PY, "-c", "import bpy; print(bpy.app.version_string)"],
+                                 capture_output=True, text=True).stdout.strip().splitlines()[-1]
+    print(f"{args.size}x{args.size}, {args.threads} threads, Cycles {version}, load average "
+          f"{os.getloadavg()[0]:.2f}; pixels: floor {m['floor'].sum()}, smoke {m['smoke'].sum()}, "
+          f"fire {m['fire'].sum()}", flush=True)
 
-    nvls = Niebla(args.niebla, paths[True], args.out)
+    nvls = CpuNiebla(args.niebla, paths[True], args.out)
     nvls.name = "niebla"
-    nfree = Niebla(args.niebla, paths[False], args.out)
+    nfree = CpuNiebla(args.niebla, paths[False], args.out)
     nfree.name = "niebla-free"
     half = args.ref_spp // 2
     ra, ta, _ = nvls.render(half, 1000, "ref_a")
@@ -136,16 +172,25 @@ def main():
     print(f"niebla reference: {2 * half} spp in {ta + tb:.1f} s; its relative MSE (noise) "
           + ", ".join(f"{k} {v:.1e}" for k, v in noise.items()), flush=True)
 
-    cyc = Cycles(paths[True], args.out, args.out)
-    if cyc.unsupported:
-        sys.exit(f"Cycles: {cyc.unsupported}")
-    print(f"Cycles fixed cost per render call: {cyc.fixed_s:.2f} s (subtracted)", flush=True)
+    if args.niebla_only:
+        cyc = None
+        fixed = {r.name: r.fixed_cpu() for r in (nvls, nfree)}
+        print("niebla fixed CPU cost per render call (subtracted): "
+              + ", ".join(f"{k} {v:.2f} s" for k, v in fixed.items()), flush=True)
+    else:
+        cyc = Cycles(paths[True], args.out, args.out)
+        if cyc.unsupported:
+            sys.exit(f"Cycles: {cyc.unsupported}")
+        print(f"Cycles fixed cost per render call: {cyc.fixed_s:.2f} s (subtracted)", flush=True)
 
     def sweep(r, max_spp, seed):
         rows, spp = [], 1
         while spp <= max_spp:
             img, t, net = r.render(spp, seed + spp, f"{r.name}_{spp}")
-            sec = net if r is cyc else t
+            if args.niebla_only:
+                sec = max(r.last_cpu - fixed[r.name], 1e-3)
+            else:
+                sec = net if r is cyc else t
             e = {k: max(region_rel_mse(img, ref, v) - noise[k], 1e-12) for k, v in m.items()}
             rows.append((spp, sec, e, img))
             print(f"  {r.name:12s} {spp:5d} spp {sec:8.2f} s  rel MSE "
@@ -156,10 +201,23 @@ def main():
         return rows
 
     results = {}
-    for r, max_spp, seed in ((nvls, args.niebla_max_spp, 10), (nfree, args.niebla_max_spp, 20),
-                             (cyc, args.cycles_max_spp, 30)):
+    runs = [(nvls, args.niebla_max_spp, 10), (nfree, args.niebla_max_spp, 20)]
+    if cyc is not None:
+        runs.append((cyc, args.cycles_max_spp, 30))
+    for r, max_spp, seed in runs:
         rows = sweep(r, max_spp, seed)
         results[r.name] = {k: time_to_reach([(s, e[k]) for _, s, e, _ in rows], args.target) for k in m}
+
+    if cyc is None:
+        print(f"\nCPU seconds to relative MSE {args.target:g} ({args.threads} threads; extrap = extrapolated as "
+              f"1/time past the last render, first = reached at 1 spp):")
+        print("| region | niebla (volume light sampling) | niebla (free flight only) | free / VLS |")
+        print("|---|---|---|---|")
+        for k in ("floor", "smoke", "fire"):
+            tv, hv = results["niebla"][k]
+            tf, hf = results["niebla-free"][k]
+            print(f"| {k} | {tv:.3g} ({hv}) | {tf:.3g} ({hf}) | {tf / tv:.1f}x |")
+        return
 
     # Agreement: Cycles' reference against niebla's.
     ca, _, _ = cyc.render(args.cycles_ref_spp // 2, 7000, "ref_a")

@@ -92,7 +92,10 @@
 //! - Sparse grids keep OpenVDB's 5-4-3 node tables (flat `u32` arrays under
 //!   a hash map of root entries) rather than a single leaf hash map, so
 //!   that root and internal-node tiles are kept exactly, constant regions
-//!   cost one entry, and a voxel fetch is one hash plus two array reads.
+//!   cost one entry, and a voxel fetch is one root look-up plus two array
+//!   reads. The root look-up scans a list while the root has at most 8
+//!   entries (most grids), which costs less than hashing the key; a
+//!   trilinear lookup whose corners straddle 8^3 blocks finds each block once.
 //! - Sparse majorant grids use cubic cells of `8 * 2^k` voxels aligned to
 //!   the VDB leaves (one cell per leaf when the cell budget allows), over
 //!   the box where the field can differ from the background; a uniform

@@ -10,8 +10,8 @@
 //!   8^3 voxels, or a *leaf* of 8^3 stored values.
 //!
 //! Node tables are flat `u32` arrays (one allocation for all upper nodes,
-//! one for all lower nodes), so a voxel fetch is one hash and two array
-//! reads. Empty regions cost nothing below the root, and a large constant
+//! one for all lower nodes), so a voxel fetch is one root look-up (a scan
+//! of at most 8 entries, else a hash) and two array reads. Empty regions cost nothing below the root, and a large constant
 //! region costs one tile.
 //!
 //! Index space: voxel `(i, j, k)` has its value at the point `(i, j, k)`;
@@ -106,9 +106,19 @@ impl Hasher for CoordHasher {
     fn finish(&self) -> u64 {
         self.0
     }
+    /// Eight bytes per step: a `[i32; 3]` key (hashed as its 12 bytes after
+    /// the length) costs three multiplications, not thirteen.
     fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.write_u64(u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
+            let mut tail = [0u8; 8];
+            tail[..rest.len()].copy_from_slice(rest);
+            // The length marks the tail, so that trailing zero bytes still count.
+            self.write_u64(u64::from_le_bytes(tail) ^ ((rest.len() as u64) << 56));
         }
     }
     fn write_i32(&mut self, v: i32) {
@@ -122,7 +132,76 @@ impl Hasher for CoordHasher {
     }
 }
 
-pub(crate) type RootMap = HashMap<[i32; 3], u32, BuildHasherDefault<CoordHasher>>;
+/// Up to this many root entries, [`RootMap::get`] scans a list of them
+/// instead of hashing the key.
+const SMALL_ROOT: usize = 8;
+
+/// The root table: a hash map from `ijk >> 12` to an entry, whose entries
+/// are also kept in a short list while there are at most [`SMALL_ROOT`] of
+/// them (most grids span one to eight 4096^3 regions): comparing a few keys
+/// costs less than hashing one, and the root is read on every voxel fetch
+/// that no accessor caches.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RootMap {
+    map: HashMap<[i32; 3], u32, BuildHasherDefault<CoordHasher>>,
+    /// Every entry of `map` while it holds at most [`SMALL_ROOT`], else empty.
+    small: Vec<([i32; 3], u32)>,
+}
+
+impl RootMap {
+    /// The entry of `key`, if any.
+    #[inline]
+    pub(crate) fn get(&self, key: &[i32; 3]) -> Option<&u32> {
+        if self.map.len() <= SMALL_ROOT {
+            return self.small.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+        }
+        self.map.get(key)
+    }
+
+    /// Sets the entry of `key`, returning the one it replaces.
+    pub(crate) fn insert(&mut self, key: [i32; 3], value: u32) -> Option<u32> {
+        let old = self.map.insert(key, value);
+        if self.map.len() <= SMALL_ROOT {
+            match self.small.iter_mut().find(|(k, _)| *k == key) {
+                Some(e) => e.1 = value,
+                None => self.small.push((key, value)),
+            }
+        } else if !self.small.is_empty() {
+            self.small = Vec::new();
+        }
+        old
+    }
+
+    /// Whether `key` has an entry.
+    pub(crate) fn contains_key(&self, key: &[i32; 3]) -> bool {
+        self.get(key).is_some()
+    }
+
+    /// The keys, in no particular order.
+    pub(crate) fn keys(&self) -> impl Iterator<Item = &[i32; 3]> {
+        self.map.keys()
+    }
+
+    /// Heap bytes allocated (the map's buckets with their control bytes, and
+    /// the list).
+    pub(crate) fn memory_bytes(&self) -> usize {
+        let entry = std::mem::size_of::<([i32; 3], u32)>();
+        self.map.capacity() * (entry + 1) + self.small.capacity() * entry
+    }
+
+    /// Frees unused capacity.
+    pub(crate) fn shrink_to_fit(&mut self) {
+        self.map.shrink_to_fit();
+        self.small.shrink_to_fit();
+    }
+}
+
+impl std::ops::Index<&[i32; 3]> for RootMap {
+    type Output = u32;
+    fn index(&self, key: &[i32; 3]) -> &u32 {
+        self.get(key).expect("no root entry for the key")
+    }
+}
 
 /// Where a voxel's value is stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -362,9 +441,20 @@ impl SparseGrid {
                 }
             }
         }
+        // The corners straddle blocks along the axes where `ijk` is on a
+        // block's last voxel: find each block they touch once (every voxel
+        // of an 8^3 block has the same slot), not once per corner.
+        let straddle = [(ijk[0] & 7 == 7) as usize, (ijk[1] & 7 == 7) as usize, (ijk[2] & 7 == 7) as usize];
+        let mut slots: [Option<Slot>; 8] = [None; 8];
         std::array::from_fn(|c| {
-            let d = [(c >> 2) as i32 & 1, (c >> 1) as i32 & 1, c as i32 & 1];
-            self.value([ijk[0] + d[0], ijk[1] + d[1], ijk[2] + d[2]])
+            let d = [(c >> 2) & 1, (c >> 1) & 1, c & 1];
+            let v = [ijk[0] + d[0] as i32, ijk[1] + d[1] as i32, ijk[2] + d[2] as i32];
+            let block = ((d[0] & straddle[0]) << 2) | ((d[1] & straddle[1]) << 1) | (d[2] & straddle[2]);
+            match *slots[block].get_or_insert_with(|| self.slot(v)) {
+                Slot::Background => self.background,
+                Slot::Tile(t) => self.tiles[t as usize].value,
+                Slot::Leaf(l) => self.leaves[l as usize].values[Leaf::offset(v)],
+            }
         })
     }
 
@@ -381,7 +471,7 @@ impl SparseGrid {
     pub fn memory_bytes(&self) -> u64 {
         use std::mem::size_of;
         // hashbrown: one (key, value) slot plus one control byte per bucket.
-        let root = self.root.capacity() * (size_of::<([i32; 3], u32)>() + 1);
+        let root = self.root.memory_bytes();
         let tables = (self.uppers.capacity() + self.lowers.capacity()) * size_of::<u32>();
         let origins = (self.upper_origins.capacity() + self.lower_origins.capacity()) * size_of::<[i32; 3]>();
         let data = self.leaves.capacity() * size_of::<Leaf>() + self.tiles.capacity() * size_of::<Tile>();
@@ -506,5 +596,100 @@ impl Bounds {
     }
     fn get(&self) -> Option<([i32; 3], [i32; 3])> {
         (self.lo[0] <= self.hi[0]).then_some((self.lo, self.hi))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The root table answers like a plain hash map below, at and above the
+    /// size where it stops keeping the list of entries, replacements included.
+    #[test]
+    fn root_map_answers_like_a_hash_map_at_every_size() {
+        let mut root = RootMap::default();
+        let mut reference: HashMap<[i32; 3], u32> = HashMap::new();
+        let key = |i: i32| [i % 3 - 1, (i / 3) % 3 - 1, i / 9 - 1];
+        for i in 0..27 {
+            assert_eq!(root.insert(key(i), i as u32), reference.insert(key(i), i as u32));
+            // Replace an earlier entry now and then.
+            if i % 4 == 0 {
+                assert_eq!(root.insert(key(i / 2), 100 + i as u32), reference.insert(key(i / 2), 100 + i as u32));
+            }
+            for j in -2..30 {
+                assert_eq!(root.get(&key(j)), reference.get(&key(j)), "{i} entries, key {:?}", key(j));
+                assert_eq!(root.contains_key(&key(j)), reference.contains_key(&key(j)));
+            }
+            assert_eq!(root.small.is_empty(), reference.len() > SMALL_ROOT || reference.is_empty());
+        }
+        let mut keys: Vec<_> = root.keys().copied().collect();
+        keys.sort_unstable();
+        let mut want: Vec<_> = reference.keys().copied().collect();
+        want.sort_unstable();
+        assert_eq!(keys, want);
+        assert_eq!(root[&key(5)], reference[&key(5)]);
+    }
+
+    /// Trilinear lookups whose corners straddle leaves, tiles and empty
+    /// space (the path that finds each block once) return the trilinear
+    /// blend of [`SparseGrid::value`] at the 8 corners, bit for bit.
+    #[test]
+    fn lookups_across_blocks_equal_the_blend_of_voxel_values() {
+        use crate::{Affine, SparseGridBuilder};
+        let mut b = SparseGridBuilder::new(0.25, Affine::IDENTITY);
+        let mut state = 0x2545_f491_u32;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state
+        };
+        for i in -12..12 {
+            for j in -12..12 {
+                for k in -12..12 {
+                    if next() % 3 != 0 {
+                        b.set_voxel([i, j, k], (next() % 1000) as f32 / 100.0, true);
+                    }
+                }
+            }
+        }
+        // A constant tile of one 128^3 lower node, next to the leaves.
+        b.fill_tile(1, [128, 0, 0], 3.5, true);
+        let g = b.build();
+        let mut straddling = 0;
+        for n in 0..20000 {
+            let r = |x: u32| (x % 4000) as f32 / 100.0 - 20.0;
+            let mut p = [r(next()), r(next()), r(next())];
+            if n % 4 == 0 {
+                p[0] += 135.0;
+            }
+            let ijk = p.map(|v| v.floor() as i32);
+            let f = [p[0] - p[0].floor(), p[1] - p[1].floor(), p[2] - p[2].floor()];
+            straddling += ijk.iter().any(|v| v & 7 == 7) as u32;
+            let v: [f32; 8] = std::array::from_fn(|c| {
+                g.value([ijk[0] + ((c >> 2) & 1) as i32, ijk[1] + ((c >> 1) & 1) as i32, ijk[2] + (c & 1) as i32])
+            });
+            assert_eq!(g.lookup_index(p).to_bits(), trilinear(v, f).to_bits(), "at {p:?}");
+        }
+        assert!(straddling > 5000, "{straddling}");
+    }
+
+    /// The coordinate hasher reads a `[i32; 3]` in 8-byte steps: keys that
+    /// differ in any coordinate (or only in the tail's zero bytes) hash apart.
+    #[test]
+    fn coordinate_hash_separates_keys() {
+        use std::hash::BuildHasher;
+        let h = |k: &[i32; 3]| BuildHasherDefault::<CoordHasher>::default().hash_one(k);
+        let keys = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, 0, -1], [1 << 19, 0, 0]];
+        for (a, ka) in keys.iter().enumerate() {
+            for kb in &keys[a + 1..] {
+                assert_ne!(h(ka), h(kb), "{ka:?} {kb:?}");
+            }
+        }
+        let mut a = CoordHasher::default();
+        a.write(&[1, 0, 0, 0]);
+        let mut b = CoordHasher::default();
+        b.write(&[1, 0, 0, 0, 0]);
+        assert_ne!(a.finish(), b.finish());
     }
 }

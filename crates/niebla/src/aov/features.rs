@@ -7,7 +7,7 @@ use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::MediumId;
 use crate::sampling::PixelSampler;
-use crate::tracking::{sample_t_maj, segment_transmittance, TransmittanceMethod};
+use crate::tracking::{sample_t_maj_without_emission, segment_transmittance, TransmittanceMethod};
 use crate::world::{PathRay, Scene, MAX_BOUNDARY_CROSSINGS};
 
 /// The features of one camera sample.
@@ -76,7 +76,7 @@ pub fn camera_features(scene: &Scene, ray: Ray, medium: Option<MediumId>, sample
                 transmittance *= segment_transmittance(m, &r, 0.0, t_end, TransmittanceMethod::Analytic, sampler);
             }
             if first.is_none() {
-                sample_t_maj(m, &r, t_end, hero, sampler, |c, sampler| {
+                sample_t_maj_without_emission(m, &r, t_end, hero, sampler, |c, sampler| {
                     let sigma_t = c.point.sigma_t();
                     if sampler.next_1d() * c.sigma_maj[hero] < sigma_t[hero] {
                         let albedo = c.point.sigma_s.safe_div(sigma_t);

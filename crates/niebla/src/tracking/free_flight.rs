@@ -65,6 +65,39 @@ where
     }
 }
 
+/// [`sample_t_maj`] for estimators that never read emission (ratio and
+/// delta tracking along shadow rays): the same collisions, random numbers
+/// and coefficients `sigma_a`, `sigma_s`, but each collision's
+/// `point.l_ve` is zero in grid media, whose emission fields (flame and
+/// temperature grids, blackbody) are not looked up.
+pub fn sample_t_maj_without_emission<F>(
+    medium: &Medium,
+    ray: &Ray,
+    t_max: f32,
+    hero: usize,
+    sampler: &mut PixelSampler,
+    callback: F,
+) -> Rgb
+where
+    F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
+{
+    match medium {
+        Medium::Homogeneous(_) => sample_t_maj(medium, ray, t_max, hero, sampler, callback),
+        Medium::Grid(g) => {
+            let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
+                return Rgb::ONE;
+            };
+            let time = sampler.time();
+            let at = move |p: Vec3, density: f32| {
+                let (sigma_a, sigma_s) = g.absorption_scattering(p, density, time);
+                MediumPoint { sigma_a, sigma_s, l_ve: Rgb::ZERO }
+            };
+            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
+            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
+        }
+    }
+}
+
 /// [`walk`] as a [`GridRayVisitor`]: its arguments but the density view.
 struct Flight<'a, P, F> {
     sigma_t: Rgb,

@@ -16,7 +16,7 @@ mod trackers;
 pub use along_ray::{DensityAlongRay, DensitySegment, GridAlongRay, GridLookup, UnitDensity};
 pub use collision::{pass_through_weight, CollisionEvent, NullWeights};
 pub use distance::MajorantProfile;
-pub use free_flight::{sample_t_maj, MajorantCollision};
+pub use free_flight::{sample_t_maj, sample_t_maj_without_emission, MajorantCollision};
 pub use grid_dispatch::{with_grid_along_ray, GridRayVisitor};
 pub use ray_march::{ray_march_optical_depth, MarchStep};
 pub use trackers::{delta_tracking, ratio_tracking, residual_ratio_tracking, residual_ratio_tracking_with};

@@ -12,7 +12,7 @@ use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::tracking::{pass_through_weight, sample_t_maj};
+use crate::tracking::{pass_through_weight, sample_t_maj_without_emission};
 use crate::world::{surface_epsilon, walk_shadow_ray, Scene};
 
 use super::channels::Channels;
@@ -287,7 +287,8 @@ pub(super) fn shadow_transmittance(
                 t_ray *= tr;
                 r_u *= tr;
             } else {
-                let t_maj = sample_t_maj(m, s.ray, s.t_end, hero, sampler, |c, sampler| {
+                // Ratio tracking reads no emission: skip its lookups.
+                let t_maj = sample_t_maj_without_emission(m, s.ray, s.t_end, hero, sampler, |c, sampler| {
                     let w = c.ratio_tracking_weights(hero);
                     t_ray *= w.throughput;
                     r_l *= w.majorant;
