@@ -16,6 +16,13 @@ pub fn default_march_step(max_sigma_t: f32, scene_diagonal: f32) -> MarchStep {
     MarchStep::Length(mfp_step.min(diag / 64.0).max(diag / 4096.0))
 }
 
+/// How many times longer the view-ray march step of the interactive
+/// integrators (`hegeman`, `zhou`) is in a live viewer's drag frames
+/// ([`crate::render::PreparedIntegrator::set_drag_march`]) than in their
+/// settings: the march is the largest cost of a drag frame, and it scales
+/// with the number of steps. Finished frames march the settings' step.
+pub const DRAG_STEP_FACTOR: f32 = 2.0;
+
 /// Jittered steps along the part of a camera-ray segment `[0, t_end]` inside a
 /// grid medium's bounds: `n` equal steps (about `step` long, 1 to 4096) with
 /// one offset `u` in [0, 1) shared by all, sample `k` at `a + (k + u) dt`.

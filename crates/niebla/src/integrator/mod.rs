@@ -31,6 +31,7 @@ pub use emission_absorption::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use march::default_march_step;
 pub(crate) use march::{negligible_distance, JitteredSteps};
+pub use march::DRAG_STEP_FACTOR;
 pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use registry::{IntegratorSettings, PreparedIntegrator};
 pub use single::{SingleIntegrator, SingleSampling};

@@ -237,6 +237,10 @@ pub struct HegemanIntegrator {
     /// Whether only point, spot and area lights are modelled
     /// ([`HegemanIntegrator::local_lights_only`]).
     local_only: bool,
+    /// Multiplies every grid model's view-ray march step: 1 (the
+    /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
+    /// frames ([`HegemanIntegrator::set_drag_march`]).
+    march_scale: f32,
     /// Seconds spent in the precomputation.
     pub precompute_seconds: f64,
 }
@@ -312,8 +316,22 @@ impl HegemanIntegrator {
             analytic: AnalyticIntegrator::new(),
             irradiance: BlurredPhaseTable::irradiance(),
             local_only,
+            march_scale: 1.0,
             precompute_seconds: start.elapsed().as_secs_f64(),
         }
+    }
+
+    /// March camera rays with a step [`super::DRAG_STEP_FACTOR`] times the
+    /// settings' (`coarse`: a live viewer's drag frame; about that many
+    /// times fewer density lookups, an approximate image) or with the
+    /// settings' step (renders then equal a new precomputation's).
+    pub fn set_drag_march(&mut self, coarse: bool) {
+        self.march_scale = if coarse { super::DRAG_STEP_FACTOR } else { 1.0 };
+    }
+
+    /// Whether camera rays march the coarser drag step ([`Self::set_drag_march`]).
+    pub fn is_drag_march(&self) -> bool {
+        self.march_scale != 1.0
     }
 
     /// Bring the model up to date after the lights of `scene` were edited
@@ -523,7 +541,7 @@ impl HegemanIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step * self.march_scale, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
         let dt = steps.dt;

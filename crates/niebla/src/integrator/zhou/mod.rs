@@ -239,6 +239,10 @@ pub struct ZhouIntegrator {
     analytic: AnalyticIntegrator,
     /// The light model of point and spot lights ([`LocalLights::Hegeman`]).
     local: Option<HegemanIntegrator>,
+    /// Multiplies every grid model's view-ray march step: 1 (the
+    /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
+    /// frames ([`ZhouIntegrator::set_drag_march`]).
+    march_scale: f32,
     /// Seconds spent fitting RBFs (0 when every fit came from the cache).
     pub fit_seconds: f64,
     /// Seconds spent on lighting, diffusion and the view pass.
@@ -303,9 +307,23 @@ impl ZhouIntegrator {
             models,
             analytic: AnalyticIntegrator::new(),
             local,
+            march_scale: 1.0,
             fit_seconds,
             lighting_seconds: lighting_seconds + local_seconds,
         })
+    }
+
+    /// March camera rays with a step [`super::DRAG_STEP_FACTOR`] times the
+    /// settings' (`coarse`: a live viewer's drag frame; about that many
+    /// times fewer density lookups, an approximate image) or with the
+    /// settings' step (renders then equal a new precomputation's).
+    pub fn set_drag_march(&mut self, coarse: bool) {
+        self.march_scale = if coarse { super::DRAG_STEP_FACTOR } else { 1.0 };
+    }
+
+    /// Whether camera rays march the coarser drag step ([`Self::set_drag_march`]).
+    pub fn is_drag_march(&self) -> bool {
+        self.march_scale != 1.0
     }
 
     /// Recompute the per-view source for a camera at `eye` (cheap: no fit,
@@ -498,7 +516,7 @@ impl ZhouIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step * self.march_scale, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
         let dt = steps.dt;
