@@ -323,7 +323,9 @@ fn a_drag_frame_marches_a_coarser_step_that_follows_the_edit_and_a_full_update_r
             relative_difference(&coarse, &exact),
             relative_difference(&before, &exact),
         );
-        eprintln!("{name}: drag frame {off:.4} from the exact image (march alone {march:.4}); the edit's change {edit:.4}");
+        eprintln!(
+            "{name}: drag frame {off:.4} from the exact image (march alone {march:.4}); the edit's change {edit:.4}"
+        );
         assert!(off < 0.1 * edit, "{name}: drag frame off by {off}, the edit changed the image by {edit}");
         // The drag's end: the finished frame (here with a camera move) is
         // bit-equal to a fresh build's.

@@ -54,6 +54,7 @@ pub mod calibration;
 pub mod line_integrals;
 pub(crate) mod settings;
 
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -549,28 +550,33 @@ impl HegemanIntegrator {
         let wo = -ray.d;
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..steps.n {
-            let x = ray.at(steps.t(k));
-            let d = g.density_at(x);
-            if d <= 0.0 {
-                continue;
+        // Steps of zero density add nothing: only those near occupied
+        // majorant cells are visited (the same bits as visiting all).
+        let _ = steps.occupied(g, ray, |range| {
+            for k in range {
+                let x = ray.at(steps.t(k));
+                let d = g.density_at(x);
+                if d <= 0.0 {
+                    continue;
+                }
+                let st = sigma_t * d;
+                let opacity = Rgb::ONE - (st * dt).exp_neg();
+                let mut source = match g.albedo {
+                    None => self.in_scattered(model, &g.phase, x, wo) * sigma_s * d,
+                    // The model's factors use the field's largest albedo; the march
+                    // scatters with the albedo at `x`.
+                    Some(_) => self.in_scattered(model, &g.phase, x, wo) * g.absorption_scattering(x, d, 0.0).1,
+                };
+                source += g.l_ve(x, d);
+                l += tr * source.safe_div(st) * opacity;
+                tr *= Rgb::ONE - opacity;
+                if tr.max_channel() < 1e-4 {
+                    tr = Rgb::ZERO;
+                    return ControlFlow::Break(());
+                }
             }
-            let st = sigma_t * d;
-            let opacity = Rgb::ONE - (st * dt).exp_neg();
-            let mut source = match g.albedo {
-                None => self.in_scattered(model, &g.phase, x, wo) * sigma_s * d,
-                // The model's factors use the field's largest albedo; the march
-                // scatters with the albedo at `x`.
-                Some(_) => self.in_scattered(model, &g.phase, x, wo) * g.absorption_scattering(x, d, 0.0).1,
-            };
-            source += g.l_ve(x, d);
-            l += tr * source.safe_div(st) * opacity;
-            tr *= Rgb::ONE - opacity;
-            if tr.max_channel() < 1e-4 {
-                tr = Rgb::ZERO;
-                break;
-            }
-        }
+            ControlFlow::Continue(())
+        });
         SegmentRadiance { radiance: l, transmittance: tr }
     }
 }

@@ -64,6 +64,7 @@ pub mod rbf;
 pub(crate) mod settings;
 pub mod sh;
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -526,60 +527,71 @@ impl ZhouIntegrator {
         let nl = self.lights.len();
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..steps.n {
-            let x = ray.at(steps.t(k));
-            let (d_att, d_src) = match self.settings.compensation {
-                Compensation::Full => {
-                    let d = g.density_at(x);
-                    (d, d)
-                }
-                Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), g.density_at(x)),
-                Compensation::Off => {
-                    let d = lattice.interpolate(&model.smooth, x);
-                    (d, d)
-                }
-            };
-            if d_att <= 0.0 && d_src <= 0.0 {
-                continue;
-            }
-            let (base, weights) = lattice.corners(x);
-            let mut j = Rgb::ZERO;
-            for (&node, w) in base.iter().zip(weights) {
-                j += Rgb::new(model.view[3 * node], model.view[3 * node + 1], model.view[3 * node + 2]) * w;
-            }
-            for (index, light) in self.lights.iter().enumerate() {
-                let Some((wi, _, e)) = light.toward(x) else { continue };
-                if e.is_black() {
+        // With full compensation, steps of zero density add nothing: only
+        // those near occupied majorant cells are visited (the same bits as
+        // visiting all). The other modes attenuate or shine with `D~`,
+        // which is not zero there.
+        let mut march = |range: std::ops::Range<usize>| {
+            for k in range {
+                let x = ray.at(steps.t(k));
+                let (d_att, d_src) = match self.settings.compensation {
+                    Compensation::Full => {
+                        let d = g.density_at(x);
+                        (d, d)
+                    }
+                    Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), g.density_at(x)),
+                    Compensation::Off => {
+                        let d = lattice.interpolate(&model.smooth, x);
+                        (d, d)
+                    }
+                };
+                if d_att <= 0.0 && d_src <= 0.0 {
                     continue;
                 }
-                let mut t = Rgb::ZERO;
+                let (base, weights) = lattice.corners(x);
+                let mut j = Rgb::ZERO;
                 for (&node, w) in base.iter().zip(weights) {
-                    let o = 3 * (node * nl + index);
-                    t += Rgb::new(
-                        model.light_transmittance[o],
-                        model.light_transmittance[o + 1],
-                        model.light_transmittance[o + 2],
-                    ) * w;
+                    j += Rgb::new(model.view[3 * node], model.view[3 * node + 1], model.view[3 * node + 2]) * w;
                 }
-                j += model.albedo * e * t * g.phase.eval(wo, wi);
+                for (index, light) in self.lights.iter().enumerate() {
+                    let Some((wi, _, e)) = light.toward(x) else { continue };
+                    if e.is_black() {
+                        continue;
+                    }
+                    let mut t = Rgb::ZERO;
+                    for (&node, w) in base.iter().zip(weights) {
+                        let o = 3 * (node * nl + index);
+                        t += Rgb::new(
+                            model.light_transmittance[o],
+                            model.light_transmittance[o + 1],
+                            model.light_transmittance[o + 2],
+                        ) * w;
+                    }
+                    j += model.albedo * e * t * g.phase.eval(wo, wi);
+                }
+                if let Some(local) = &self.local {
+                    j += model.albedo * local.in_scattered_at(id, &g.phase, x, wo);
+                }
+                let st_att = sigma_t * d_att.max(0.0);
+                let source = sigma_t * j * d_src.max(0.0) + g.l_ve(x, d_src.max(0.0));
+                let att = (st_att * dt).exp_neg();
+                let mut weight = Rgb::ZERO;
+                for c in 0..3 {
+                    weight[c] = if st_att[c] * dt > 1e-6 { (1.0 - att[c]) / st_att[c] } else { dt };
+                }
+                l += tr * source * weight;
+                tr *= att;
+                if tr.max_channel() < 1e-4 {
+                    tr = Rgb::ZERO;
+                    return ControlFlow::Break(());
+                }
             }
-            if let Some(local) = &self.local {
-                j += model.albedo * local.in_scattered_at(id, &g.phase, x, wo);
-            }
-            let st_att = sigma_t * d_att.max(0.0);
-            let source = sigma_t * j * d_src.max(0.0) + g.l_ve(x, d_src.max(0.0));
-            let att = (st_att * dt).exp_neg();
-            let mut weight = Rgb::ZERO;
-            for c in 0..3 {
-                weight[c] = if st_att[c] * dt > 1e-6 { (1.0 - att[c]) / st_att[c] } else { dt };
-            }
-            l += tr * source * weight;
-            tr *= att;
-            if tr.max_channel() < 1e-4 {
-                tr = Rgb::ZERO;
-                break;
-            }
-        }
+            ControlFlow::Continue(())
+        };
+        let _ = match self.settings.compensation {
+            Compensation::Full => steps.occupied(g, ray, march),
+            Compensation::SourceOnly | Compensation::Off => march(0..steps.n),
+        };
         SegmentRadiance { radiance: l, transmittance: tr }
     }
 }
