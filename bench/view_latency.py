@@ -149,7 +149,7 @@ def breakdown_of(latencies):
 def format_breakdown(name, b):
     if b is None:
         return f"    {name}: no frames"
-    if isinstance(b, float):
+    if isinstance(b, (int, float)):
         return f"    {name}: {b:.0f}"
     if name == "drag CPU":
         return "    drag CPU per shown frame (ms): " + ", ".join(f"{k} {v:.1f}" for k, v in b.items())

@@ -143,8 +143,10 @@ fn prepare(
     let old = cache.take().and_then(|c| c.prepared);
     let (prepared, kept) = match (old, edit) {
         (Some((old_settings, mut prepared)), Some(edit)) if old_settings == settings => {
-            // A drag frame may take `zhou`'s coarser preview lighting; the
-            // next non-interactive job lights on the full lattice again.
+            // A drag frame may take `zhou`'s coarser preview lighting and
+            // `zhou`'s and `hegeman`'s coarser march step; the next
+            // non-interactive job lights on the full lattice and marches
+            // the exact step again.
             let done = match interactive {
                 true => prepared.update_preview_cancellable(&built.scene, &settings, &edit, Some(cancel)),
                 false => prepared.update_cancellable(&built.scene, &settings, &edit, Some(cancel)),
@@ -164,6 +166,12 @@ fn prepare(
                 return Ok((how, "skipped"));
             }
             match PreparedIntegrator::new_cancellable(&built.scene, &settings, cancel) {
+                // A drag frame marches the coarser drag step (hegeman, zhou);
+                // the next non-interactive job's update restores the exact one.
+                Some(mut prepared) if interactive => {
+                    prepared.set_drag_march(true);
+                    (prepared, "new (preview)")
+                }
                 Some(prepared) => (prepared, "new"),
                 None => {
                     *cache = Some(SlotCache { desc, built, prepared: None });

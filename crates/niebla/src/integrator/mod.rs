@@ -30,6 +30,7 @@ pub use direct::{direct_surface_radiance, in_scattered_radiance, light_in_scatte
 pub use emission_absorption::EmissionIntegrator;
 pub use hegeman::{HegemanIntegrator, HegemanSettings};
 pub use march::default_march_step;
+pub use march::DRAG_STEP_FACTOR;
 pub(crate) use march::{negligible_distance, JitteredSteps};
 pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use registry::{IntegratorSettings, PreparedIntegrator};

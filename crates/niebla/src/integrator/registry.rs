@@ -438,10 +438,13 @@ impl PreparedIntegrator {
 
     /// [`Self::update_cancellable`] for an interactive (drag) frame: `zhou`
     /// lights the edited media on its coarser preview lattice
-    /// ([`ZhouIntegrator::update_media_preview`]), so the image approximates
-    /// that of a new precomputation; the next [`Self::update_cancellable`]
-    /// (any edit, a camera move included) lights them on the full lattice
-    /// again. The other integrators update as in [`Self::update`].
+    /// ([`ZhouIntegrator::update_media_preview`]), and `zhou` and `hegeman`
+    /// march camera rays with the coarser drag step
+    /// ([`Self::set_drag_march`]), so the image approximates that of a new
+    /// precomputation; the next [`Self::update_cancellable`] (any edit, a
+    /// camera move included) lights on the full lattice and marches the
+    /// settings' step again. The other integrators update as in
+    /// [`Self::update`].
     pub fn update_preview_cancellable(
         &mut self,
         scene: &Scene,
@@ -452,11 +455,28 @@ impl PreparedIntegrator {
         self.update_with(scene, settings, edit, true, cancel)
     }
 
-    /// True when a preview update ([`Self::update_preview_cancellable`])
-    /// left an approximate precomputation (renders then differ from those of
-    /// `PreparedIntegrator::new`).
+    /// True when a preview update ([`Self::update_preview_cancellable`]) or
+    /// [`Self::set_drag_march`] left an approximate precomputation or march
+    /// (renders then differ from those of `PreparedIntegrator::new`).
     pub fn is_preview(&self) -> bool {
-        matches!(self, PreparedIntegrator::Zhou(z) if z.is_preview())
+        match self {
+            PreparedIntegrator::Zhou(z) => z.is_preview() || z.is_drag_march(),
+            PreparedIntegrator::Hegeman(h) => h.is_drag_march(),
+            _ => false,
+        }
+    }
+
+    /// For a live viewer's drag frames (`coarse`): `zhou` and `hegeman`
+    /// march camera rays with a step [`crate::integrator::DRAG_STEP_FACTOR`]
+    /// times their settings' (an approximate image, about that many times
+    /// fewer density lookups per ray); `false` restores the settings' step.
+    /// The other integrators do not change.
+    pub fn set_drag_march(&mut self, coarse: bool) {
+        match self {
+            PreparedIntegrator::Zhou(z) => z.set_drag_march(coarse),
+            PreparedIntegrator::Hegeman(h) => h.set_drag_march(coarse),
+            _ => {}
+        }
     }
 
     fn update_with(
@@ -467,20 +487,23 @@ impl PreparedIntegrator {
         preview: bool,
         cancel: Option<&AtomicBool>,
     ) -> bool {
-        match self {
+        let done = match self {
             PreparedIntegrator::Zhou(z) => {
                 if edit.any_light() {
-                    return match preview {
+                    match preview {
                         true => z.update_lights_preview(scene, &edit.media, cancel),
                         false => z.update_lights(scene, &edit.media, cancel),
-                    };
+                    }
                 } else if edit.any_medium() || (!preview && z.is_preview()) {
-                    return match preview {
+                    match preview {
                         true => z.update_media_preview(scene, &edit.media, cancel),
                         false => z.update_media(scene, &edit.media, cancel),
-                    };
-                } else if edit.camera {
-                    z.set_view(scene.camera.position);
+                    }
+                } else {
+                    if edit.camera {
+                        z.set_view(scene.camera.position);
+                    }
+                    true
                 }
             }
             PreparedIntegrator::Hegeman(h) => {
@@ -490,10 +513,15 @@ impl PreparedIntegrator {
                 if edit.any_light() {
                     h.update_lights(scene);
                 }
+                true
             }
-            _ => *self = PreparedIntegrator::new(scene, settings),
-        }
-        true
+            _ => {
+                *self = PreparedIntegrator::new(scene, settings);
+                true
+            }
+        };
+        self.set_drag_march(preview);
+        done
     }
 
     /// An error when `scene` has a moving medium (a velocity grid seen

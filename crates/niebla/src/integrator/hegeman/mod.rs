@@ -54,6 +54,7 @@ pub mod calibration;
 pub mod line_integrals;
 pub(crate) mod settings;
 
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -237,6 +238,10 @@ pub struct HegemanIntegrator {
     /// Whether only point, spot and area lights are modelled
     /// ([`HegemanIntegrator::local_lights_only`]).
     local_only: bool,
+    /// Multiplies every grid model's view-ray march step: 1 (the
+    /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
+    /// frames ([`HegemanIntegrator::set_drag_march`]).
+    march_scale: f32,
     /// Seconds spent in the precomputation.
     pub precompute_seconds: f64,
 }
@@ -312,8 +317,22 @@ impl HegemanIntegrator {
             analytic: AnalyticIntegrator::new(),
             irradiance: BlurredPhaseTable::irradiance(),
             local_only,
+            march_scale: 1.0,
             precompute_seconds: start.elapsed().as_secs_f64(),
         }
+    }
+
+    /// March camera rays with a step [`super::DRAG_STEP_FACTOR`] times the
+    /// settings' (`coarse`: a live viewer's drag frame; about that many
+    /// times fewer density lookups, an approximate image) or with the
+    /// settings' step (renders then equal a new precomputation's).
+    pub fn set_drag_march(&mut self, coarse: bool) {
+        self.march_scale = if coarse { super::DRAG_STEP_FACTOR } else { 1.0 };
+    }
+
+    /// Whether camera rays march the coarser drag step ([`Self::set_drag_march`]).
+    pub fn is_drag_march(&self) -> bool {
+        self.march_scale != 1.0
     }
 
     /// Bring the model up to date after the lights of `scene` were edited
@@ -523,7 +542,7 @@ impl HegemanIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step * self.march_scale, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
         let dt = steps.dt;
@@ -531,28 +550,33 @@ impl HegemanIntegrator {
         let wo = -ray.d;
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..steps.n {
-            let x = ray.at(steps.t(k));
-            let d = g.density_at(x);
-            if d <= 0.0 {
-                continue;
+        // Steps of zero density add nothing: only those near occupied
+        // majorant cells are visited (the same bits as visiting all).
+        let _ = steps.occupied(g, ray, |range| {
+            for k in range {
+                let x = ray.at(steps.t(k));
+                let d = g.density_at(x);
+                if d <= 0.0 {
+                    continue;
+                }
+                let st = sigma_t * d;
+                let opacity = Rgb::ONE - (st * dt).exp_neg();
+                let mut source = match g.albedo {
+                    None => self.in_scattered(model, &g.phase, x, wo) * sigma_s * d,
+                    // The model's factors use the field's largest albedo; the march
+                    // scatters with the albedo at `x`.
+                    Some(_) => self.in_scattered(model, &g.phase, x, wo) * g.absorption_scattering(x, d, 0.0).1,
+                };
+                source += g.l_ve(x, d);
+                l += tr * source.safe_div(st) * opacity;
+                tr *= Rgb::ONE - opacity;
+                if tr.max_channel() < 1e-4 {
+                    tr = Rgb::ZERO;
+                    return ControlFlow::Break(());
+                }
             }
-            let st = sigma_t * d;
-            let opacity = Rgb::ONE - (st * dt).exp_neg();
-            let mut source = match g.albedo {
-                None => self.in_scattered(model, &g.phase, x, wo) * sigma_s * d,
-                // The model's factors use the field's largest albedo; the march
-                // scatters with the albedo at `x`.
-                Some(_) => self.in_scattered(model, &g.phase, x, wo) * g.absorption_scattering(x, d, 0.0).1,
-            };
-            source += g.l_ve(x, d);
-            l += tr * source.safe_div(st) * opacity;
-            tr *= Rgb::ONE - opacity;
-            if tr.max_channel() < 1e-4 {
-                tr = Rgb::ZERO;
-                break;
-            }
-        }
+            ControlFlow::Continue(())
+        });
         SegmentRadiance { radiance: l, transmittance: tr }
     }
 }

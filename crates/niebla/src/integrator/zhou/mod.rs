@@ -64,6 +64,7 @@ pub mod rbf;
 pub(crate) mod settings;
 pub mod sh;
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -239,6 +240,10 @@ pub struct ZhouIntegrator {
     analytic: AnalyticIntegrator,
     /// The light model of point and spot lights ([`LocalLights::Hegeman`]).
     local: Option<HegemanIntegrator>,
+    /// Multiplies every grid model's view-ray march step: 1 (the
+    /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
+    /// frames ([`ZhouIntegrator::set_drag_march`]).
+    march_scale: f32,
     /// Seconds spent fitting RBFs (0 when every fit came from the cache).
     pub fit_seconds: f64,
     /// Seconds spent on lighting, diffusion and the view pass.
@@ -303,9 +308,23 @@ impl ZhouIntegrator {
             models,
             analytic: AnalyticIntegrator::new(),
             local,
+            march_scale: 1.0,
             fit_seconds,
             lighting_seconds: lighting_seconds + local_seconds,
         })
+    }
+
+    /// March camera rays with a step [`super::DRAG_STEP_FACTOR`] times the
+    /// settings' (`coarse`: a live viewer's drag frame; about that many
+    /// times fewer density lookups, an approximate image) or with the
+    /// settings' step (renders then equal a new precomputation's).
+    pub fn set_drag_march(&mut self, coarse: bool) {
+        self.march_scale = if coarse { super::DRAG_STEP_FACTOR } else { 1.0 };
+    }
+
+    /// Whether camera rays march the coarser drag step ([`Self::set_drag_march`]).
+    pub fn is_drag_march(&self) -> bool {
+        self.march_scale != 1.0
     }
 
     /// Recompute the per-view source for a camera at `eye` (cheap: no fit,
@@ -498,7 +517,7 @@ impl ZhouIntegrator {
         t_end: f32,
         sampler: &mut PixelSampler,
     ) -> SegmentRadiance {
-        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step, sampler) else {
+        let Some(steps) = JitteredSteps::new(g, ray, t_end, model.step * self.march_scale, sampler) else {
             return SegmentRadiance { radiance: Rgb::ZERO, transmittance: Rgb::ONE };
         };
         let dt = steps.dt;
@@ -508,60 +527,71 @@ impl ZhouIntegrator {
         let nl = self.lights.len();
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
-        for k in 0..steps.n {
-            let x = ray.at(steps.t(k));
-            let (d_att, d_src) = match self.settings.compensation {
-                Compensation::Full => {
-                    let d = g.density_at(x);
-                    (d, d)
-                }
-                Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), g.density_at(x)),
-                Compensation::Off => {
-                    let d = lattice.interpolate(&model.smooth, x);
-                    (d, d)
-                }
-            };
-            if d_att <= 0.0 && d_src <= 0.0 {
-                continue;
-            }
-            let (base, weights) = lattice.corners(x);
-            let mut j = Rgb::ZERO;
-            for (&node, w) in base.iter().zip(weights) {
-                j += Rgb::new(model.view[3 * node], model.view[3 * node + 1], model.view[3 * node + 2]) * w;
-            }
-            for (index, light) in self.lights.iter().enumerate() {
-                let Some((wi, _, e)) = light.toward(x) else { continue };
-                if e.is_black() {
+        // With full compensation, steps of zero density add nothing: only
+        // those near occupied majorant cells are visited (the same bits as
+        // visiting all). The other modes attenuate or shine with `D~`,
+        // which is not zero there.
+        let mut march = |range: std::ops::Range<usize>| {
+            for k in range {
+                let x = ray.at(steps.t(k));
+                let (d_att, d_src) = match self.settings.compensation {
+                    Compensation::Full => {
+                        let d = g.density_at(x);
+                        (d, d)
+                    }
+                    Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), g.density_at(x)),
+                    Compensation::Off => {
+                        let d = lattice.interpolate(&model.smooth, x);
+                        (d, d)
+                    }
+                };
+                if d_att <= 0.0 && d_src <= 0.0 {
                     continue;
                 }
-                let mut t = Rgb::ZERO;
+                let (base, weights) = lattice.corners(x);
+                let mut j = Rgb::ZERO;
                 for (&node, w) in base.iter().zip(weights) {
-                    let o = 3 * (node * nl + index);
-                    t += Rgb::new(
-                        model.light_transmittance[o],
-                        model.light_transmittance[o + 1],
-                        model.light_transmittance[o + 2],
-                    ) * w;
+                    j += Rgb::new(model.view[3 * node], model.view[3 * node + 1], model.view[3 * node + 2]) * w;
                 }
-                j += model.albedo * e * t * g.phase.eval(wo, wi);
+                for (index, light) in self.lights.iter().enumerate() {
+                    let Some((wi, _, e)) = light.toward(x) else { continue };
+                    if e.is_black() {
+                        continue;
+                    }
+                    let mut t = Rgb::ZERO;
+                    for (&node, w) in base.iter().zip(weights) {
+                        let o = 3 * (node * nl + index);
+                        t += Rgb::new(
+                            model.light_transmittance[o],
+                            model.light_transmittance[o + 1],
+                            model.light_transmittance[o + 2],
+                        ) * w;
+                    }
+                    j += model.albedo * e * t * g.phase.eval(wo, wi);
+                }
+                if let Some(local) = &self.local {
+                    j += model.albedo * local.in_scattered_at(id, &g.phase, x, wo);
+                }
+                let st_att = sigma_t * d_att.max(0.0);
+                let source = sigma_t * j * d_src.max(0.0) + g.l_ve(x, d_src.max(0.0));
+                let att = (st_att * dt).exp_neg();
+                let mut weight = Rgb::ZERO;
+                for c in 0..3 {
+                    weight[c] = if st_att[c] * dt > 1e-6 { (1.0 - att[c]) / st_att[c] } else { dt };
+                }
+                l += tr * source * weight;
+                tr *= att;
+                if tr.max_channel() < 1e-4 {
+                    tr = Rgb::ZERO;
+                    return ControlFlow::Break(());
+                }
             }
-            if let Some(local) = &self.local {
-                j += model.albedo * local.in_scattered_at(id, &g.phase, x, wo);
-            }
-            let st_att = sigma_t * d_att.max(0.0);
-            let source = sigma_t * j * d_src.max(0.0) + g.l_ve(x, d_src.max(0.0));
-            let att = (st_att * dt).exp_neg();
-            let mut weight = Rgb::ZERO;
-            for c in 0..3 {
-                weight[c] = if st_att[c] * dt > 1e-6 { (1.0 - att[c]) / st_att[c] } else { dt };
-            }
-            l += tr * source * weight;
-            tr *= att;
-            if tr.max_channel() < 1e-4 {
-                tr = Rgb::ZERO;
-                break;
-            }
-        }
+            ControlFlow::Continue(())
+        };
+        let _ = match self.settings.compensation {
+            Compensation::Full => steps.occupied(g, ray, march),
+            Compensation::SourceOnly | Compensation::Off => march(0..steps.n),
+        };
         SegmentRadiance { radiance: l, transmittance: tr }
     }
 }
