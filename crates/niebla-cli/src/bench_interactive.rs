@@ -45,11 +45,15 @@ pub struct InteractiveBenchArgs {
     pub threads: ThreadsFlag,
 }
 
+/// `scene` at `width` pixels wide and `height` high, or with the height
+/// keeping the camera's aspect ([`crate::render_cmd::resized_camera`], the
+/// convention `niebla render --width` shares for the cached references).
 fn resized(scene: &Scene, width: u32, height: Option<u32>) -> Scene {
     let mut s = scene.clone();
-    let aspect = scene.camera.height as f64 / scene.camera.width as f64;
-    s.camera.width = width;
-    s.camera.height = height.unwrap_or(((width as f64 * aspect).round() as u32).max(1));
+    s.camera = crate::render_cmd::resized_camera(&scene.camera, width);
+    if let Some(height) = height {
+        s.camera.height = height;
+    }
     s
 }
 
