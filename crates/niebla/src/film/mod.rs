@@ -22,8 +22,8 @@ pub use checkpoint::{
 };
 pub use exr_read::{read_exr, ExrImage, ExrReadError};
 pub(crate) use output::write_srgb8_png;
-pub use split_reference::SplitReference;
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
+pub use split_reference::SplitReference;
 pub use sums::{mean_of_sum, quantize_sample, SampleSums, FRACTION_BITS, SAMPLE_LIMIT};
 
 use crate::color::Rgb;
