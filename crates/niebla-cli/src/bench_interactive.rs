@@ -210,7 +210,7 @@ fn scene_reference(
             }
             let reference = SplitReference::halves(a.image.clone(), a.spp, b.image.clone(), b.spp);
             let line = format!(
-                "reference {} + {}: {w}x{h} at {} spp; its noise (subtracted in \"corrected\") {:.5} +- {:.5}",
+                "reference {} + {}: {w}x{h} at {} spp; its noise (subtracted in \"corrected\") {:.3e} +- {:.1e}",
                 describe(a),
                 describe(b),
                 a.spp + b.spp,
