@@ -448,7 +448,7 @@ pub fn render_loaded(
 /// `niebla bench interactive`'s error images and of `render --width`.
 pub fn resized_camera(camera: &niebla::camera::PerspectiveCamera, width: u32) -> niebla::camera::PerspectiveCamera {
     let aspect = camera.height as f64 / camera.width as f64;
-    let mut c = camera.clone();
+    let mut c = *camera;
     c.width = width;
     c.height = ((width as f64 * aspect).round() as u32).max(1);
     c

@@ -177,11 +177,11 @@ mod tests {
         let mut diffs = Vec::new();
         let mut true_sum = 0.0;
         for (i, t) in truth.iter().enumerate() {
-            for c in 0..3 {
+            for (c, &tc) in t.iter().enumerate() {
                 let (xv, r) = (x.pixels[i][c] as f64, reference.mean().pixels[i][c] as f64);
                 let d = a.pixels[i][c] as f64 - b.pixels[i][c] as f64;
                 let estimate = ((xv - r).powi(2) - w * d * d) / (r * r + eps);
-                let exact = (xv - t[c]).powi(2) / (t[c] * t[c] + eps);
+                let exact = (xv - tc).powi(2) / (tc * tc + eps);
                 true_sum += exact;
                 diffs.push(estimate - exact);
             }
