@@ -31,6 +31,13 @@ pub struct RenderArgs {
     /// <scene>.png in the current folder.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
+    /// Image width in pixels (overrides the camera's `width`; the height
+    /// keeps the camera's aspect, rounded to the nearest pixel, at least 1),
+    /// as `niebla bench interactive --error-width` sizes its error images.
+    /// The EXR header records the scene file's hash, not the size: --resume
+    /// and `niebla merge` check the size themselves.
+    #[arg(long, value_name = "PIXELS")]
+    pub width: Option<u32>,
     /// Samples per pixel (overrides the scene's `render.spp`).
     #[arg(long, conflicts_with = "time")]
     pub spp: Option<u32>,
@@ -271,6 +278,12 @@ pub fn render_loaded(
 ) -> Result<Option<String>, CliError> {
     let max_memory = args.max_memory.limit();
     let crate::load::LoadedScene { mut built, hash, .. } = loaded;
+    if let Some(width) = args.width {
+        if !(1..=16384).contains(&width) {
+            return Err(CliError::invalid_option("--width", "must be between 1 and 16384"));
+        }
+        built.scene.camera = resized_camera(&built.scene.camera, width);
+    }
     let integrator =
         override_integrator(&built.integrator_spec, args.integrator.as_deref(), args.sampling, args.max_depth)?;
     let denoiser = crate::aov_flags::denoiser(args.denoise)?;
@@ -428,6 +441,17 @@ pub fn render_loaded(
         (pixels * spp_done) as f64 / seconds / 1e6,
         names.join(", ")
     )))
+}
+
+/// `camera` at `width` pixels wide, its height keeping the aspect ratio
+/// (rounded to the nearest pixel, at least 1): the size convention of
+/// `niebla bench interactive`'s error images and of `render --width`.
+pub fn resized_camera(camera: &niebla::camera::PerspectiveCamera, width: u32) -> niebla::camera::PerspectiveCamera {
+    let aspect = camera.height as f64 / camera.width as f64;
+    let mut c = *camera;
+    c.width = width;
+    c.height = ((width as f64 * aspect).round() as u32).max(1);
+    c
 }
 
 /// Least time between two checkpoints written during a render.

@@ -6,11 +6,14 @@
 //! so far, seed, scene hash, integrator), so that a killed progressive
 //! render can be continued exactly (`checkpoint.rs`). Renders accumulate
 //! exact fixed-point sums per pixel (`sums.rs`), so that sample ranges
-//! rendered apart add up to the image of one render, bit for bit.
+//! rendered apart add up to the image of one render, bit for bit. A
+//! reference of two independent renders measures errors with its own noise
+//! removed (`split_reference.rs`).
 
 mod checkpoint;
 mod exr_read;
 mod output;
+mod split_reference;
 mod sums;
 
 pub(crate) use checkpoint::write_checkpoint_with;
@@ -20,6 +23,7 @@ pub use checkpoint::{
 pub use exr_read::{read_exr, ExrImage, ExrReadError};
 pub(crate) use output::write_srgb8_png;
 pub use output::{write_atomically, write_exr, write_exr_with_attributes, write_image, write_png, OutputError};
+pub use split_reference::SplitReference;
 pub use sums::{mean_of_sum, quantize_sample, SampleSums, FRACTION_BITS, SAMPLE_LIMIT};
 
 use crate::color::Rgb;
