@@ -384,6 +384,9 @@ pub(crate) fn run_scene(
     Ok(())
 }
 
+/// A method's name and its sweeps, one per seed.
+type Rows = [(String, Vec<Sweep>)];
+
 /// Seconds with three significant digits at most (milliseconds stay visible).
 fn seconds(t: f64) -> String {
     if t < 1.0 {
@@ -402,7 +405,7 @@ fn seconds(t: f64) -> String {
 /// the first, also the geometric mean of the per-seed ratios to the first
 /// variant (the variants share each seed's photons, so the ratio is paired)
 /// with its 2-SE range.
-fn equal_time(results: &[(String, Vec<Sweep>)]) {
+fn equal_time(results: &Rows) {
     let ranges: Vec<Option<(f64, f64)>> = results
         .iter()
         .map(|(_, s)| {
@@ -436,8 +439,7 @@ fn equal_time(results: &[(String, Vec<Sweep>)]) {
         }
         println!();
     }
-    let variants: Vec<(&(String, Vec<Sweep>), &Option<(f64, f64)>)> =
-        results.iter().zip(&ranges).filter(|((n, _), _)| n.starts_with("ppb ts=")).collect();
+    let variants: Vec<_> = results.iter().zip(&ranges).filter(|((n, _), _)| n.starts_with("ppb ts=")).collect();
     for (v, range) in variants.iter().skip(1) {
         let (first, first_range) = variants[0];
         print!("   {:<14}", format!("{}/{}", v.0.trim_start_matches("ppb "), first.0.trim_start_matches("ppb ")));
