@@ -53,9 +53,13 @@ const ATTR_NOISE: &str = "niebla.bench.noise";
 /// subtracted) and image mean / reference mean `ratio[k]`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Sweep {
+    /// Samples (passes) per pixel after each level.
     pub spp: Vec<u32>,
+    /// Cumulative process CPU seconds of the render calls.
     pub cpu: Vec<f64>,
+    /// Relative MSE against the reference, the reference's own subtracted.
     pub error: Vec<f64>,
+    /// Image mean / reference mean (average over channels).
     pub ratio: Vec<f64>,
 }
 
