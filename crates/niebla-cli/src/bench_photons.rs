@@ -68,6 +68,28 @@ pub struct PhotonBenchArgs {
     /// with its standard error (from the spread of the renders).
     #[arg(long, default_value_t = 0)]
     pub repeats: u32,
+    /// Instead of the tracing figures and the sweep: the CPU time of each
+    /// method to reach `--target` against a cached `volpath` reference,
+    /// averaged over `--seeds` progressive sweeps (see docs/photon-beams.md).
+    #[arg(long)]
+    pub time_to_error: bool,
+    /// `--time-to-error`: the cached reference EXR (rendered and written when
+    /// missing; default `<scene stem>_ref_<W>x<H>.exr` in the current folder).
+    #[arg(long)]
+    pub reference_exr: Option<PathBuf>,
+    /// `--time-to-error`: samples per pixel of a reference that has to be
+    /// rendered (two halves of half as many).
+    #[arg(long, default_value_t = 8192)]
+    pub reference_spp: u32,
+    /// `--time-to-error`: independent sweeps per method (seeds `--seed`,
+    /// `--seed + 1`, ...).
+    #[arg(long, default_value_t = 4)]
+    pub seeds: u32,
+    /// `--time-to-error`: one `ppb` row per value of `tube_sin` (comma
+    /// separated, each in [0, 1]); by default one row with the scene's or
+    /// the default settings.
+    #[arg(long, value_delimiter = ',')]
+    pub tube_sin: Vec<f32>,
     /// Worker threads of the renders (the tracing figure always uses all cores).
     #[command(flatten)]
     pub threads: ThreadsFlag,
@@ -89,6 +111,10 @@ pub fn run(args: &PhotonBenchArgs) -> Result<(), CliError> {
         scene.camera.width = args.width.clamp(1, 16384);
         scene.camera.height = ((scene.camera.width as f64 * aspect).round() as u32).max(1);
         println!("== {} ({}x{} pixels)", path.display(), scene.camera.width, scene.camera.height);
+        if args.time_to_error {
+            crate::bench_photons_time::run_scene(&scene, path, &scene_integrator, args)?;
+            continue;
+        }
         tracing_and_queries(&scene, args.photons);
         convergence(&scene, &scene_integrator, args)?;
     }
@@ -165,7 +191,7 @@ fn reference(scene: &Scene, args: &PhotonBenchArgs) -> Result<(Image, f64), CliE
 /// `ppm` or `photon` settings: the scene file's own when it names that
 /// integrator (its radius, photon count, query), else the defaults with
 /// `--ppm-photons` / `--photons`; `query` overrides the volume query of `ppm`.
-fn photon_settings(
+pub(crate) fn photon_settings(
     scene_integrator: &IntegratorSettings,
     args: &PhotonBenchArgs,
     query: Option<VolumeQuery>,
@@ -185,7 +211,7 @@ fn photon_settings(
 
 /// `ppb` settings: the scene file's own when it names `ppb`, else the
 /// defaults with `--ppb-photons` photons per pass.
-fn ppb_settings(scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> IntegratorSettings {
+pub(crate) fn ppb_settings(scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> IntegratorSettings {
     match scene_integrator {
         IntegratorSettings::Ppb(ppb) => IntegratorSettings::Ppb(*ppb),
         _ => IntegratorSettings::Ppb(PpbSettings { photons: args.ppb_photons, ..PpbSettings::default() }),

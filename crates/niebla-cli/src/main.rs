@@ -9,6 +9,7 @@ mod bench_geometry;
 mod bench_interactive;
 mod bench_paths;
 mod bench_photons;
+mod bench_photons_time;
 mod bench_sampler;
 mod bench_trackers;
 mod compare;
