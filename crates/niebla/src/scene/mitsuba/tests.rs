@@ -399,7 +399,7 @@ fn import_with_png(body: &str) -> Result<MitsubaImport, crate::scene::SceneError
 fn textured_alpha_converts_for_rough_conductor_and_dielectric() {
     let s = import_with_png(
         r#"<texture type="bitmap" id="r"><string name="filename" value="a.png"/><boolean name="raw" value="true"/></texture>
-           <shape type="rectangle"><bsdf type="roughconductor"><string name="distribution" value="ggx"/>
+           <shape type="rectangle"><bsdf type="roughconductor"><string name="distribution" value="ggx"/><string name="material" value="Al"/>
            <ref name="alpha" id="r"/></bsdf></shape>
            <shape type="sphere"><bsdf type="roughdielectric"><float name="int_ior" value="1.5"/>
            <texture type="checkerboard" name="alpha"><float name="color0" value="0.05"/>
