@@ -76,9 +76,9 @@ fn alpha_number(field: &str, value: &Value) -> Result<f32, Located> {
 /// The isotropic roughness `alpha`: a number or a texture object.
 fn alpha_value(value: &Value) -> Result<AlphaDesc, Located> {
     match value {
-        Value::Object(o) => {
-            super::parse::parse_texture(o.clone()).map(AlphaDesc::Textured).map_err(|e| e.under("alpha"))
-        }
+        Value::Object(o) => super::parse::parse_texture(o.clone())
+            .map(|t| AlphaDesc::Textured(Box::new(t)))
+            .map_err(|e| e.under("alpha")),
         other => alpha_number("alpha", other).map(AlphaDesc::Isotropic),
     }
 }

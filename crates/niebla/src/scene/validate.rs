@@ -716,7 +716,7 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
         match &m.alpha {
             AlphaDesc::Isotropic(a) => check("alpha", *a),
             AlphaDesc::Textured(t) => {
-                validate_reflectance(&format!("{base}.alpha"), &ReflectanceDesc::Texture(t.clone()))
+                validate_reflectance(&format!("{base}.alpha"), &ReflectanceDesc::Texture((**t).clone()))
             }
             AlphaDesc::Anisotropic { u, v } => {
                 check("alpha_u", *u)?;

@@ -16,7 +16,7 @@ pub enum AlphaDesc {
     /// texture's value at the hit's uv (a gray texture's value, else the
     /// luminance of its color, as Mitsuba 3's `eval_1`). `roughconductor`
     /// and `roughdielectric` only.
-    Textured(TextureDesc),
+    Textured(Box<TextureDesc>),
     /// Roughness along the tangent (`u`) and the bitangent (`v`).
     Anisotropic {
         /// `alpha_u`.
