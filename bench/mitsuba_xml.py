@@ -28,6 +28,7 @@ TAGS = {
     "rfilter": {"box", "gaussian", "tent"},
     "sampler": {"independent", "stratified", "multijitter"},
     "integrator": {"volpath", "volpathmis", "path", "moment"},
+    "texture": {"bitmap", "checkerboard"},
 }
 VECTORS = {"direction"}
 

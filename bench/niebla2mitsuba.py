@@ -22,7 +22,9 @@ an error rather than a silent approximation:
   `disk` (both renderers use [-1,1]^2, or the unit disk, in local xy with
   normal +z) with niebla's
   `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
-  `null`, `diffuse` -> `diffuse`; `interior`/`exterior` media by reference;
+  `null`, `diffuse` -> `diffuse`, its reflectance a color or a `bitmap` or
+  `checkerboard` texture (see `texture`; not on a box, whose uvs differ from
+  Mitsuba's cube); `interior`/`exterior` media by reference;
 - lights: `point`, `spot` (look_at from position to target), `directional`,
   `constant`: the same parameters, since niebla follows Mitsuba's radiometry;
 - the camera's medium: niebla finds it (innermost closed shape with an
@@ -274,6 +276,72 @@ def _medium(mi, name, m, scene_dir):
     raise Unsupported(f"media.{name}: chromatic sigma_t with a grid density")
 
 
+def niebla_uv_map(t) -> np.ndarray:
+    """The 2x3 float32 uv map niebla builds from a texture's JSON: `scale`
+    after `to_uv` (rows `[[a, b, c], [d, e, f]]`), in niebla's float32 order
+    of operations (`UvMap::after`)."""
+    f32 = np.float32
+    su, sv = (f32(x) for x in t.get("scale", [1.0, 1.0] if t["type"] == "bitmap" else [2.0, 2.0]))
+    if t.get("to_uv") is None:
+        return np.array([[su, 0, 0], [0, sv, 0]], dtype=np.float32)
+    b = np.array(t["to_uv"], dtype=np.float32)
+    a = np.array([[su, 0, 0], [0, sv, 0]], dtype=np.float32)
+    out = np.zeros((2, 3), dtype=np.float32)
+    for r in range(2):
+        out[r, 0] = a[r, 0] * b[0, 0] + a[r, 1] * b[1, 0]
+        out[r, 1] = a[r, 0] * b[0, 1] + a[r, 1] * b[1, 1]
+        out[r, 2] = a[r, 0] * b[0, 2] + a[r, 1] * b[1, 2] + a[r, 2]
+    return out
+
+
+def _to_uv(mi, rows):
+    """A Mitsuba `to_uv` (4x4; the bitmap and checkerboard use rows and
+    columns 0, 1 and 3) from 2x3 float64 rows."""
+    m = np.eye(4)
+    m[0, [0, 1, 3]] = rows[0]
+    m[1, [0, 1, 3]] = rows[1]
+    return placement(mi, [("matrix", m)])
+
+
+def texture(mi, t, scene_dir, field):
+    """A niebla texture object (`bitmap` or `checkerboard`) as a Mitsuba
+    `<texture>` that niebla's importer reads back as the same float32 uv map.
+
+    niebla's uv map N is `scale` after `to_uv` (float32). The importer gives
+    a bitmap the map `v -> 1 - v` after Mitsuba's `to_uv` (Mitsuba's `v = 0`
+    is the image's top row, niebla's the bottom) and scale 1, so the bitmap's
+    Mitsuba `to_uv` is N followed by `v -> 1 - v`: rows `N0` and `-N1` with
+    `1 - N1[2]` (float64, from which the importer's `1 - (1 - c)` gives back
+    the float32 `c`). The importer gives a checkerboard scale 2 after
+    Mitsuba's `to_uv` (Mitsuba's cells are half a unit), so its `to_uv` is
+    N / 2 (exact in float32)."""
+    kind = t.get("type")
+    n = niebla_uv_map(t)
+    if kind == "bitmap":
+        path = os.path.join(scene_dir, t["file"])
+        c = float(n[1, 2])
+        flipped = 1.0 - c
+        if 1.0 - flipped != c:
+            raise Unsupported(f"{field}.to_uv: v offset {c!r} does not survive the v flip exactly")
+        rows = [[float(n[0, 0]), float(n[0, 1]), float(n[0, 2])], [-float(n[1, 0]), -float(n[1, 1]), flipped]]
+        out = {"type": "bitmap", "filename": path, "filter_type": t.get("filter", "bilinear"),
+               "wrap_mode": t.get("wrap", "repeat"), "raw": bool(t.get("raw", False))}
+        if rows != [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]:
+            # (Mitsuba's default, the identity, is left out: N is then the flip.)
+            out["to_uv"] = _to_uv(mi, rows)
+        return out
+    if kind == "checkerboard":
+        out = {"type": "checkerboard", "color0": {"type": "rgb", "value": _color(t.get("color0", 0.4))},
+               "color1": {"type": "rgb", "value": _color(t.get("color1", 0.2))}}
+        half = n / np.float32(2.0)
+        if not np.array_equal(half * np.float32(2.0), n):
+            raise Unsupported(f"{field}: uv map {n.tolist()} is not exactly twice a float32 map")
+        if not np.array_equal(n, np.array([[2, 0, 0], [0, 2, 0]], dtype=np.float32)):
+            out["to_uv"] = _to_uv(mi, [[float(x) for x in half[0]], [float(x) for x in half[1]]])
+        return out
+    raise Unsupported(f"{field}: texture type {kind!r}")
+
+
 def _inside(shape, p):
     t = shape["type"]
     if t == "box":
@@ -371,7 +439,14 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
         if b["type"] == "null":
             d["bsdf"] = {"type": "null"}
         elif b["type"] == "diffuse":
-            d["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": _color(b.get("reflectance", 0.5))}}
+            r = b.get("reflectance", 0.5)
+            if isinstance(r, dict):
+                if t == "box":
+                    # niebla's box uv (per face) is not Mitsuba's cube mesh's.
+                    raise Unsupported(f"shapes[{i}]: a textured box (Mitsuba's cube has other uvs)")
+                d["bsdf"] = {"type": "diffuse", "reflectance": texture(mi, r, scene_dir, f"shapes[{i}].bsdf.reflectance")}
+            else:
+                d["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": _color(r)}}
         else:
             raise Unsupported(f"shapes[{i}]: bsdf {b['type']!r}")
         if s.get("interior"):

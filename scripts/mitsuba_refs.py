@@ -9,7 +9,8 @@ image mean needs the smaller standard error to be checked against 0.5%.)
 uniform 16x8 sky, smoke.vol, a 16^3 smooth blob, and albedo_rgb.vol, a 3-channel
 10 x 8 x 6 albedo ramp for grid_albedo), all from fixed formulas; `--data` or
 `--textures` (re)writes the images of the `textured` scene (tex_srgb.png, a
-16 x 8 8-bit sRGB image, and tex_raw.png, a 4 x 4 8-bit image read raw),
+16 x 8 8-bit sRGB image, and tex_raw.png, a 4 x 4 8-bit image read raw) and
+of the `rough_textured` scene (alpha_gray.png, an 8 x 8 8-bit gray roughness map read raw),
 also from fixed formulas.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
@@ -36,7 +37,8 @@ SCENES = os.path.join(ROOT, "scenes", "mitsuba")
 OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
-         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured"]
+         "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
+         "rough_textured"]
 
 
 def write_data(mi):
@@ -83,6 +85,12 @@ def write_textures(mi):
     y, x = np.meshgrid(np.arange(4), np.arange(4), indexing="ij")
     raw = np.stack([230 - 40 * x - 10 * y, 60 + 50 * y, 200 - 45 * y + 5 * x], axis=-1).astype(np.uint8)
     mi.Bitmap(raw, pixel_format=mi.Bitmap.PixelFormat.RGB).write(os.path.join(SCENES, "data", "tex_raw.png"))
+    # 8 x 8 gray roughness (read raw, for `rough_textured`): alpha from 0.04 to about 0.6, rising left to
+    # right and bottom to top with a smooth bump, so that both uv axes matter.
+    y, x = np.meshgrid(np.arange(8), np.arange(8), indexing="ij")
+    alpha = 0.04 + 0.05 * x + 0.02 * (7 - y) + 0.12 * np.exp(-((x - 2) ** 2 + (y - 5) ** 2) / 3.0)
+    gray = np.round(255 * alpha).astype(np.uint8)[:, :, None]
+    mi.Bitmap(gray, pixel_format=mi.Bitmap.PixelFormat.Y).write(os.path.join(SCENES, "data", "alpha_gray.png"))
 
 
 def block_means(img: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ fn floor(reflectance: f32) -> SceneObject {
         bounds_medium: false,
         emitter: None,
         texture: None,
+        roughness: None,
     }
 }
 
@@ -61,6 +62,7 @@ fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
         bounds_medium: false,
         emitter: Some(0),
         texture: None,
+        roughness: None,
     };
     let camera = PerspectiveCamera::look_at(Vec3::new(3.0, 1.0, 0.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1).unwrap();
     let s = scene(camera, vec![emitter, floor(rho)], vec![], vec![Light::Area(light)], None);
@@ -149,6 +151,7 @@ fn uniform_environment_map_is_a_white_furnace_for_volpath() {
         bounds_medium: true,
         emitter: None,
         texture: None,
+        roughness: None,
     };
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![medium], vec![env], None);
     let stats =

@@ -94,6 +94,7 @@ fn emitting_slab_shows_closed_form_radiance() {
         bounds_medium: true,
         emitter: None,
         texture: None,
+        roughness: None,
     };
     let camera = PerspectiveCamera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 0.01, 4, 4).unwrap();
     let s = scene(camera, vec![slab], vec![medium], vec![], None);

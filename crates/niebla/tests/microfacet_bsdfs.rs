@@ -100,7 +100,101 @@ fn models() -> Vec<(&'static str, Bsdf)> {
     ]
     .into_iter()
     .map(|j| (j, bsdf_from_json(j)))
+    .chain(textured_alpha_models())
     .collect()
+}
+
+/// A unit sphere at the origin whose `bsdf` has a checkerboard `alpha`
+/// (0.3 on cells of even parity, 0.55 on odd ones, four cells over the
+/// unit uv square), and the model at its surface point of polar angle
+/// `theta` and azimuth `phi` (degrees), found by a ray toward it and
+/// `Scene::surface_bsdf`, with the
+/// roughness that point should have: the sphere's uv (`u` the azimuth over
+/// 360 degrees, `v` the polar angle over 180) computed here, not by the
+/// renderer, and the cell's color.
+fn textured_alpha_at(bsdf: &str, theta: f32, phi: f32) -> (Bsdf, f32) {
+    let text = format!(
+        r#"{{"version": 1,
+            "camera": {{"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 4, "height": 4}},
+            "shapes": [{{"type": "sphere", "center": [0, 0, 0], "radius": 1, "bsdf": {bsdf}}}]}}"#
+    );
+    let desc = parse_scene_str(&text, "t.json").unwrap_or_else(|e| panic!("{bsdf}: {e}"));
+    let scene = build_scene(&desc, "t.json", std::path::Path::new(".")).unwrap().scene;
+    let (t, p) = (theta.to_radians(), phi.to_radians());
+    let point = Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+    let ray = niebla::math::Ray::new(point * 3.0, -point);
+    let hit = scene.intersect(&ray, 0.0, f32::INFINITY).expect("the ray hits the sphere");
+    let (u, v) = (phi / 360.0, theta / 180.0);
+    let odd = ((2.0 * u).floor() as i64 + (2.0 * v).floor() as i64).rem_euclid(2) == 1;
+    (scene.surface_bsdf(&hit), if odd { 0.55 } else { 0.3 })
+}
+
+/// The textured-alpha models added to the chi-square, reciprocity and
+/// energy tests: each surface point's model must carry exactly the cell's
+/// roughness (so those tests run at the roughness the texture gives).
+fn textured_alpha_models() -> Vec<(&'static str, Bsdf)> {
+    let checker = r#"{"type": "checkerboard", "color0": 0.3, "color1": 0.55}"#;
+    let conductor =
+        format!(r#"{{"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": {checker}}}"#);
+    let dielectric =
+        format!(r#"{{"type": "roughdielectric", "distribution": "beckmann", "int_ior": 1.5, "alpha": {checker}}}"#);
+    let mut out = Vec::new();
+    for (name, json, theta, phi) in [
+        ("roughconductor ggx, checkerboard alpha, odd cell", &conductor, 60.0, 200.0),
+        ("roughconductor ggx, checkerboard alpha, even cell", &conductor, 60.0, 30.0),
+        ("roughdielectric beckmann, checkerboard alpha, even cell", &dielectric, 50.0, 100.0),
+        ("roughdielectric beckmann, checkerboard alpha, odd cell", &dielectric, 120.0, 30.0),
+    ] {
+        let (bsdf, alpha) = textured_alpha_at(json, theta, phi);
+        let m = match bsdf {
+            Bsdf::RoughConductor(b) => b.microfacet,
+            Bsdf::RoughDielectric(b) => b.microfacet,
+            other => panic!("{name}: {other:?}"),
+        };
+        assert_eq!((m.alpha_u, m.alpha_v), (alpha, alpha), "{name}: roughness at the hit");
+        out.push((name, bsdf));
+    }
+    out
+}
+
+/// A textured roughness gives, at a hit, the model the same surface with
+/// that constant roughness has: `f` and `pdf` equal to the last bit at 6 x
+/// 6 direction pairs, for each of the four textured points.
+#[test]
+fn textured_alpha_at_a_hit_is_the_constant_model() {
+    for (name, bsdf) in textured_alpha_models() {
+        let (alpha, constant) = match bsdf {
+            Bsdf::RoughConductor(b) => (
+                b.microfacet.alpha_u,
+                format!(
+                    r#"{{"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": {}}}"#,
+                    b.microfacet.alpha_u
+                ),
+            ),
+            Bsdf::RoughDielectric(b) => (
+                b.microfacet.alpha_u,
+                format!(
+                    r#"{{"type": "roughdielectric", "distribution": "beckmann", "int_ior": 1.5, "alpha": {}}}"#,
+                    b.microfacet.alpha_u
+                ),
+            ),
+            other => panic!("{other:?}"),
+        };
+        let reference = bsdf_from_json(&constant);
+        let dirs: Vec<Vec3> = [10.0f32, 40.0, 70.0, 100.0, 140.0, 170.0]
+            .iter()
+            .enumerate()
+            .map(|(i, t)| spherical(t.to_radians() as f64, 0.9 * i as f64))
+            .collect();
+        for wo in &dirs {
+            for wi in &dirs {
+                let (a, b) = (bsdf.eval(Vec3::Z, *wo, *wi), reference.eval(Vec3::Z, *wo, *wi));
+                assert_eq!(a.0.map(f32::to_bits), b.0.map(f32::to_bits), "{name} (alpha {alpha}): f");
+                let (a, b) = (bsdf.pdf(Vec3::Z, *wo, *wi), reference.pdf(Vec3::Z, *wo, *wi));
+                assert_eq!(a.to_bits(), b.to_bits(), "{name} (alpha {alpha}): pdf");
+            }
+        }
+    }
 }
 
 const ANGLES: [f32; 4] = [10.0, 50.0, 80.0, 135.0];
@@ -187,9 +281,10 @@ fn ln_gamma(x: f64) -> f64 {
 /// dielectric's transmission density has steep edges in theta, where 16
 /// points per 5 degree bin were 13% off), bins with
 /// fewer than 5 expected samples are pooled, and the statistic's p-value
-/// must exceed 0.01 divided by the number of tests (Bonferroni): 11
-/// models (both distributions, isotropic and anisotropic, alphas 0.15 to
-/// 0.7, indices 1.33 to 1.8), each at 10, 50, 80 and 135 degrees (the last
+/// must exceed 0.01 divided by the number of tests (Bonferroni): the
+/// models of [`models`] (both distributions, isotropic and anisotropic, alphas 0.15 to
+/// 0.7, indices 1.33 to 1.8, and four points of textured-alpha surfaces),
+/// each at 10, 50, 80 and 135 degrees (the last
 /// from behind or inside). `CHI2_SAMPLES` and `CHI2_SEED` override the
 /// sample count and seed; `CHI2_DEBUG` prints the worst bins.
 #[test]
@@ -305,9 +400,10 @@ fn samplers_follow_their_densities_chi_square() {
 /// section 5.2, with the `1 / etap^2` radiance factor). Tolerance 1e-3
 /// relative: the two orders compute the half vector from different f32
 /// sums (`wo + eta wi` against `wi + wo / eta`), and a steep `D` turns its
-/// rounding (~1e-7) into ~1e-4 of the value. Pairs reflecting inside a
-/// dielectric within 0.002 of the critical cosine are skipped (the
-/// Fresnel term's slope is infinite there).
+/// rounding (~1e-7) into ~1e-4 of the value. Pairs whose inside direction
+/// lies within 0.002 of the critical cosine to the (generalized) half
+/// vector, reflecting inside or refracting, are skipped (the Fresnel term's
+/// slope is infinite there).
 #[test]
 fn reciprocity() {
     let mut sampler = PixelSampler::for_pixel(SamplerKind::Independent, 2, 7, 1, 0);
@@ -321,10 +417,21 @@ fn reciprocity() {
             let a = niebla::sampling::sample_uniform_sphere(sampler.next_2d());
             let b = niebla::sampling::sample_uniform_sphere(sampler.next_2d());
             let index = |w: Vec3| if w.z < 0.0 { eta } else { 1.0 };
-            // Inside reflection within 0.002 of the critical angle: F's
-            // infinite slope there turns f32 rounding into large differences.
-            if eta != 1.0 && a.z < 0.0 && b.z < 0.0 {
-                let c = a.dot((a + b).normalize()).abs();
+            // The inside direction within 0.002 of the critical angle to the
+            // (generalized) half vector, in reflection inside or in
+            // refraction: F's infinite slope there turns f32 rounding into
+            // large differences (a refraction pair at 1e-4 of it differs by
+            // 1e-3 even in f64, from the unit vectors' last-bit lengths).
+            if eta != 1.0 && (a.z < 0.0 || b.z < 0.0) {
+                let m = if a.z * b.z > 0.0 {
+                    a + b
+                } else if a.z > 0.0 {
+                    a + b * eta
+                } else {
+                    b + a * eta
+                };
+                let inside = if a.z < 0.0 { a } else { b };
+                let c = inside.dot(m.normalize()).abs();
                 if (c - (1.0 - 1.0 / (eta * eta)).sqrt()).abs() < 2e-3 {
                     continue;
                 }
@@ -434,6 +541,7 @@ fn sphere_scene(bsdf: Bsdf, interior: Option<Medium>, env: f32) -> Scene {
         bounds_medium: interior.is_some(),
         emitter: None,
         texture: None,
+        roughness: None,
     };
     let env = Light::Constant(ConstantLight { radiance: Rgb::splat(env) });
     common::scene(common::camera_along_x(1, 1, 30.0), vec![object], interior.into_iter().collect(), vec![env], None)

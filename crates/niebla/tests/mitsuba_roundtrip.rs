@@ -342,6 +342,177 @@ const SCENE_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
 </scene>
 "#;
 
+/// A textured scene: `bitmap` textures (sRGB bilinear repeat with `scale`
+/// and `to_uv`; raw nearest mirror; clamp) on rectangles and a disk, and
+/// `checkerboard`s (with and without `scale`/`to_uv`) on spheres, in fog.
+const TEXTURED_JSON: &str = r#"{
+ "version": 1,
+ "camera": {"type": "perspective", "position": [0.2, 1.4, 4.2], "target": [0.0, 0.5, 0.0], "up": [0, 1, 0],
+            "fov_y": 40, "width": 16, "height": 12},
+ "media": {
+  "fog": {"type": "homogeneous", "sigma_a": 0.02, "sigma_s": 0.3, "phase": {"type": "hg", "g": 0.4}}
+ },
+ "shapes": [
+  {"type": "box", "min": [-2.0, -0.1, -2.0], "max": [2.0, 2.0, 1.5], "interior": "fog", "bsdf": {"type": "null"}},
+  {"type": "rectangle", "to_world": {"scale": 1.8, "rotate_x": -90, "translate": [0, 0, 0]},
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "file": "tex_srgb.png", "scale": [3, 2],
+            "to_uv": [[0.8, 0.3, 0.1], [-0.2, 0.9, 0.35]]}}},
+  {"type": "sphere", "center": [-0.6, 0.45, 0.2], "radius": 0.45,
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "checkerboard", "color0": [0.8, 0.2, 0.1], "color1": 0.6,
+            "scale": [6, 3], "to_uv": [[1.0, 0.1, 0.05], [0.0, 1.0, 0.2]]}}},
+  {"type": "sphere", "center": [0.7, 0.35, 0.4], "radius": 0.35,
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "checkerboard", "color0": 0.9, "color1": [0.1, 0.3, 0.7]}}},
+  {"type": "disk", "to_world": {"scale": 0.6, "rotate_y": 20, "translate": [0.2, 0.9, -1.2]},
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "file": "tex_raw.png", "raw": true,
+            "filter": "nearest", "wrap": "mirror", "scale": [2.5, 1.5]}}},
+  {"type": "rectangle", "to_world": {"scale": 0.5, "translate": [-1.2, 1.2, -1.0]},
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "bitmap", "file": "tex_srgb.png", "wrap": "clamp"}}}
+ ],
+ "lights": [
+  {"type": "spot", "position": [0.5, 3.0, 1.5], "target": [0.0, 0.0, 0.0], "intensity": [30, 28, 25],
+   "cutoff_angle": 35, "beam_width": 25},
+  {"type": "directional", "direction": [-0.3, -0.9, -0.2], "irradiance": 0.8},
+  {"type": "constant", "radiance": [0.05, 0.06, 0.08]}
+ ],
+ "render": {"spp": 4, "integrator": {"type": "volpath", "max_depth": 8}}
+}"#;
+
+/// The converter's output for `TEXTURED_JSON` (image paths made relative):
+/// each bitmap's `to_uv` is niebla's float32 uv map followed by `v -> 1 - v`,
+/// each checkerboard's half niebla's map (Mitsuba's cells are half a unit).
+const TEXTURED_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
+<scene version="3.0.0">
+  <medium type="homogeneous" id="medium_fog">
+    <phase type="hg">
+      <float name="g" value="0.4"/>
+    </phase>
+    <float name="albedo" value="0.9375000036379787"/>
+    <boolean name="has_spectral_extinction" value="false"/>
+    <float name="sigma_t" value="0.3200000114738941"/>
+  </medium>
+  <integrator type="volpath">
+    <integer name="max_depth" value="9"/>
+  </integrator>
+  <sensor type="perspective">
+    <float name="fov" value="40.0"/>
+    <string name="fov_axis" value="y"/>
+    <transform name="to_world">
+      <lookat origin="0.2, 1.4, 4.2" target="0.0, 0.5, 0.0" up="0.0, 1.0, 0.0"/>
+    </transform>
+    <film type="hdrfilm">
+      <integer name="width" value="16"/>
+      <integer name="height" value="12"/>
+      <rfilter type="box">
+      </rfilter>
+      <string name="pixel_format" value="rgb"/>
+    </film>
+    <sampler type="independent">
+      <integer name="sample_count" value="4"/>
+      <integer name="seed" value="0"/>
+    </sampler>
+  </sensor>
+  <shape type="cube">
+    <transform name="to_world">
+      <matrix value="2.0 0.0 0.0 0.0 0.0 1.05 0.0 0.95 0.0 0.0 1.75 -0.25 0.0 0.0 0.0 1.0"/>
+    </transform>
+    <bsdf type="null">
+    </bsdf>
+    <ref name="interior" id="medium_fog"/>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="1.8, 1.8, 1.8"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="-90.0"/>
+      <translate value="0.0, 0.0, 0.0"/>
+    </transform>
+    <bsdf type="diffuse">
+      <texture type="bitmap" name="reflectance">
+        <string name="filename" value="tex_srgb.png"/>
+        <string name="filter_type" value="bilinear"/>
+        <string name="wrap_mode" value="repeat"/>
+        <boolean name="raw" value="false"/>
+        <transform name="to_uv">
+          <matrix value="2.4000000953674316 0.9000000357627869 0.0 0.30000001192092896 0.4000000059604645 -1.7999999523162842 0.0 0.30000001192092896 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="-0.6, 0.45, 0.2"/>
+    <float name="radius" value="0.45"/>
+    <bsdf type="diffuse">
+      <texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.8, 0.2, 0.1"/>
+        <rgb name="color1" value="0.6, 0.6, 0.6"/>
+        <transform name="to_uv">
+          <matrix value="3.0 0.30000001192092896 0.0 0.15000000596046448 0.0 1.5 0.0 0.30000001192092896 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="0.7, 0.35, 0.4"/>
+    <float name="radius" value="0.35"/>
+    <bsdf type="diffuse">
+      <texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.9, 0.9, 0.9"/>
+        <rgb name="color1" value="0.1, 0.3, 0.7"/>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="disk">
+    <transform name="to_world">
+      <scale value="0.6, 0.6, 0.6"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="20.0"/>
+      <translate value="0.2, 0.9, -1.2"/>
+    </transform>
+    <bsdf type="diffuse">
+      <texture type="bitmap" name="reflectance">
+        <string name="filename" value="tex_raw.png"/>
+        <string name="filter_type" value="nearest"/>
+        <string name="wrap_mode" value="mirror"/>
+        <boolean name="raw" value="true"/>
+        <transform name="to_uv">
+          <matrix value="2.5 0.0 0.0 0.0 -0.0 -1.5 0.0 1.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="0.5, 0.5, 0.5"/>
+      <translate value="-1.2, 1.2, -1.0"/>
+    </transform>
+    <bsdf type="diffuse">
+      <texture type="bitmap" name="reflectance">
+        <string name="filename" value="tex_srgb.png"/>
+        <string name="filter_type" value="bilinear"/>
+        <string name="wrap_mode" value="clamp"/>
+        <boolean name="raw" value="false"/>
+        <transform name="to_uv">
+          <matrix value="1.0 0.0 0.0 0.0 -0.0 -1.0 0.0 1.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <emitter type="spot">
+    <transform name="to_world">
+      <lookat origin="0.5, 3.0, 1.5" target="0.0, 0.0, 0.0" up="0.0, 1.0, 0.0"/>
+    </transform>
+    <rgb name="intensity" value="30.0, 28.0, 25.0"/>
+    <float name="cutoff_angle" value="35.0"/>
+    <float name="beam_width" value="25.0"/>
+  </emitter>
+  <emitter type="directional">
+    <vector name="direction" value="-0.3, -0.9, -0.2"/>
+    <rgb name="irradiance" value="0.8, 0.8, 0.8"/>
+  </emitter>
+  <emitter type="constant">
+    <rgb name="radiance" value="0.05, 0.06, 0.08"/>
+  </emitter>
+</scene>
+"#;
+
 /// A 6^3 density grid over the smoke box, Mitsuba's `.vol` layout (x fastest).
 fn write_vol(path: &Path) {
     let n = 6u32;
@@ -363,37 +534,58 @@ fn write_vol(path: &Path) {
     std::fs::write(path, bytes).unwrap();
 }
 
-fn render_file(path: &Path, sampler: SamplerKind) -> Vec<[f32; 3]> {
+fn render_file(path: &Path, sampler: SamplerKind, size: (u32, u32)) -> Vec<[f32; 3]> {
     let source = read_scene_source(path, &[]).unwrap_or_else(|e| panic!("{e}"));
     let built = build_scene(&source.desc, &path.display().to_string(), path.parent().unwrap())
         .unwrap_or_else(|e| panic!("{e}"));
     let options = RenderOptions { spp: 4, seed: 7, first_sample: 0, threads: None, sampler };
     let image = render(&built.scene, &built.settings.integrator, &options, &|_, _| {}, None).unwrap();
     let (w, h) = (built.scene.camera.width, built.scene.camera.height);
-    assert_eq!((w, h), (16, 12));
+    assert_eq!((w, h), size);
     (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| image.get(x, y).0).collect()
 }
 
-fn temp_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("niebla_mitsuba_roundtrip_{}", std::process::id()));
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("niebla_mitsuba_roundtrip_{name}_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
 #[test]
 fn converted_xml_renders_bit_identically() {
-    let dir = temp_dir();
+    let dir = temp_dir("media");
     write_vol(&dir.join("g.vol"));
     std::fs::write(dir.join("scene.json"), SCENE_JSON).unwrap();
     std::fs::write(dir.join("scene.xml"), SCENE_XML).unwrap();
     for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
-        let a = render_file(&dir.join("scene.json"), sampler);
-        let b = render_file(&dir.join("scene.xml"), sampler);
+        let a = render_file(&dir.join("scene.json"), sampler, (16, 12));
+        let b = render_file(&dir.join("scene.xml"), sampler, (16, 12));
         let mean = a.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * a.len()) as f64;
         assert!(mean > 0.01, "{sampler:?}: the image is (nearly) black: mean {mean}");
         let differ = a.iter().zip(&b).filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits)).count();
         println!("{sampler:?}: image mean {mean:.6}, {differ} of {} pixels differ", a.len());
         assert_eq!(differ, 0, "{sampler:?}: {differ} pixels differ between the JSON and its XML");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn converted_textured_xml_renders_bit_identically() {
+    let dir = temp_dir("textured");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mitsuba/data");
+    for f in ["tex_srgb.png", "tex_raw.png"] {
+        std::fs::copy(data.join(f), dir.join(f)).unwrap();
+    }
+    std::fs::write(dir.join("scene.json"), TEXTURED_JSON).unwrap();
+    std::fs::write(dir.join("scene.xml"), TEXTURED_XML).unwrap();
+    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        let a = render_file(&dir.join("scene.json"), sampler, (16, 12));
+        let b = render_file(&dir.join("scene.xml"), sampler, (16, 12));
+        let mean = a.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * a.len()) as f64;
+        assert!(mean > 0.01, "{sampler:?}: the image is (nearly) black: mean {mean}");
+        let differ = a.iter().zip(&b).filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits)).count();
+        println!("textured {sampler:?}: image mean {mean:.6}, {differ} of {} pixels differ", a.len());
+        assert_eq!(differ, 0, "{sampler:?}: {differ} pixels differ between the textured JSON and its XML");
     }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -195,3 +195,12 @@ fn sigma_t_and_rgb_albedo_grids_match_mitsuba() {
 fn bitmap_and_checkerboard_textures_match_mitsuba() {
     check("textured");
 }
+
+/// Textured roughness: a GGX conductor floor with a raw gray bitmap `alpha`
+/// (bilinear, repeat, `to_uv`), a Beckmann conductor sphere with a nearest
+/// bitmap `alpha`, and a GGX rough glass sphere holding a medium whose
+/// `alpha` is a checkerboard (0.05 and 0.45).
+#[test]
+fn textured_roughness_matches_mitsuba() {
+    check("rough_textured");
+}

@@ -148,6 +148,58 @@ fn bad_textures_are_errors() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A textured roughness where niebla takes only a constant one is an error
+/// naming the field: roughplastic (its coating tables are precomputed per
+/// roughness), a rough surface inside a twosided, an anisotropic pair; a
+/// bad texture in `alpha` is checked like a color texture.
+#[test]
+fn unsupported_textured_roughness_is_an_error() {
+    let checker = r#"{"type": "checkerboard", "color0": 0.1, "color1": 0.4}"#;
+    let cases = [
+        (format!(r#"{{"type": "roughplastic", "alpha": {checker}}}"#), vec!["shapes[0].bsdf.alpha", "roughplastic"]),
+        (
+            format!(
+                r#"{{"type": "twosided", "bsdf": {{"type": "roughconductor", "material": "Au", "alpha": {checker}}}}}"#
+            ),
+            vec!["shapes[0].bsdf.bsdf.alpha", "twosided"],
+        ),
+        (
+            format!(r#"{{"type": "twosided", "bsdf": {{"type": "roughplastic", "alpha": {checker}}}}}"#),
+            vec!["shapes[0].bsdf.bsdf.alpha", "roughplastic"],
+        ),
+        (
+            format!(r#"{{"type": "roughconductor", "alpha_u": {checker}, "alpha_v": 0.2}}"#),
+            vec!["shapes[0].bsdf.alpha_u", "anisotropic"],
+        ),
+        (
+            r#"{"type": "roughdielectric", "alpha": {"type": "checkerboard", "scale": [0, 1]}}"#.to_string(),
+            vec!["shapes[0].bsdf.alpha.scale[0]"],
+        ),
+        (
+            r#"{"type": "roughdielectric", "alpha": {"type": "bitmap", "file": "missing.png"}}"#.to_string(),
+            vec!["shapes[0].bsdf.alpha.file", "missing.png"],
+        ),
+    ];
+    for (bsdf, expected) in cases {
+        let text = format!(
+            r#"{{"version": 1,
+              "camera": {{"type": "perspective", "position": [0, 4, 0], "target": [0, 0, 0], "up": [0, 0, -1],
+                         "width": 4, "height": 4}},
+              "shapes": [{{{RECTANGLE}, "bsdf": {bsdf}}}]}}"#
+        );
+        let message = match parse_scene_str(&text, "bad.json") {
+            Err(e) => e.to_string(),
+            Ok(desc) => match build_scene(&desc, "bad.json", Path::new(".")) {
+                Err(e) => e.to_string(),
+                Ok(_) => panic!("{bsdf}: accepted"),
+            },
+        };
+        for part in expected {
+            assert!(message.contains(part), "{bsdf}: {message:?} lacks {part:?}");
+        }
+    }
+}
+
 /// JPEG texels are decoded from sRGB: a uniform image encoded at quality
 /// 100 (a uniform color survives JPEG's DCT and quantization to within 2
 /// levels of 255) reflects `srgb_to_linear(c) L` within that tolerance.

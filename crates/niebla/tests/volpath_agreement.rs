@@ -32,6 +32,7 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
         bounds_medium: true,
         emitter: None,
         texture: None,
+        roughness: None,
     };
     scene(common::camera_along_x(8, 8, 30.0), vec![sphere], vec![medium], lights, None)
 }
@@ -196,6 +197,7 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
         bounds_medium: false,
         emitter: None,
         texture: None,
+        roughness: None,
     });
     let stats = |integrator: &VolPathIntegrator| {
         let (spp, batches) = (256, 12u64);

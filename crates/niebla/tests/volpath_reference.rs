@@ -29,6 +29,7 @@ fn boundary(shape: Shape, interior: u32) -> SceneObject {
         bounds_medium: true,
         emitter: None,
         texture: None,
+        roughness: None,
     }
 }
 
@@ -42,6 +43,7 @@ fn black_plane(y: f32) -> SceneObject {
         bounds_medium: false,
         emitter: None,
         texture: None,
+        roughness: None,
     }
 }
 

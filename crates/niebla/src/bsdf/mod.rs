@@ -424,6 +424,26 @@ impl Bsdf {
         }
     }
 
+    /// The model with its isotropic roughness set to `alpha` (raised to
+    /// [`MIN_ALPHA`](microfacet::MIN_ALPHA), as Mitsuba 3 does): a rough
+    /// conductor's or rough dielectric's distribution, kind unchanged. Other
+    /// models are returned unchanged (the scene builder gives a textured
+    /// roughness to no others).
+    #[inline]
+    pub fn with_alpha(self, alpha: f32) -> Bsdf {
+        match self {
+            Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor {
+                microfacet: Microfacet::new(b.microfacet.kind, alpha, alpha),
+                ..b
+            }),
+            Bsdf::RoughDielectric(b) => Bsdf::RoughDielectric(RoughDielectric {
+                microfacet: Microfacet::new(b.microfacet.kind, alpha, alpha),
+                ..b
+            }),
+            other => other,
+        }
+    }
+
     /// True for index-matched boundaries that rays cross.
     #[inline]
     pub fn is_null(&self) -> bool {

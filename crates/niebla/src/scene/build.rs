@@ -210,6 +210,7 @@ fn build_with_loaders(
             Some(m) => moving_shape(&s.geometry, m, shape, shutter, &path, source)?,
         };
         let mut texture = None;
+        let mut roughness = None;
         let bsdf = match &s.bsdf {
             BsdfDesc::Null => Bsdf::Null,
             BsdfDesc::Diffuse { reflectance: ReflectanceDesc::Color(c) } => Bsdf::Diffuse { reflectance: c.to_rgb() },
@@ -234,13 +235,14 @@ fn build_with_loaders(
                     budget: &mut budget,
                 };
                 let (bsdf, t) = super::build_surfaces::build_surface(other, &format!("{path}.bsdf"), &mut ctx)?;
-                texture = t;
+                texture = t.color;
+                roughness = t.roughness;
                 bsdf
             }
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
-        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None, texture });
+        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None, texture, roughness });
         explicit_exterior.push(s.exterior.is_some());
     }
     let ambient_medium = medium_id(&desc.ambient_medium);
@@ -318,6 +320,7 @@ fn build_with_loaders(
                     bounds_medium: false,
                     emitter: Some(i as u32),
                     texture: None,
+                    roughness: None,
                 });
                 explicit_exterior.push(false);
                 Light::Area(light)

@@ -23,27 +23,43 @@ pub(super) struct TextureContext<'a> {
     pub budget: &'a mut MemoryBudget,
 }
 
+/// The textures of a surface: at most one textured color, and a textured
+/// isotropic roughness (`roughconductor`, `roughdielectric`).
+#[derive(Default)]
+pub(super) struct SurfaceTextures {
+    /// The textured color (see [`Bsdf::with_texture`]).
+    pub color: Option<Arc<Texture>>,
+    /// The textured roughness (see [`Bsdf::with_alpha`]).
+    pub roughness: Option<Arc<Texture>>,
+}
+
 /// The surface model of `desc` (one of this module's types, found at JSON
-/// path `path`, e.g. `shapes[2].bsdf`) and its texture, if a color is
-/// textured. At most one parameter of a surface may be textured.
+/// path `path`, e.g. `shapes[2].bsdf`) and its textures. At most one color
+/// of a surface may be textured, and the roughness of a top-level
+/// `roughconductor` or `roughdielectric`.
 pub(super) fn build_surface(
     desc: &BsdfDesc,
     path: &str,
     ctx: &mut TextureContext,
-) -> Result<(Bsdf, Option<Arc<Texture>>), SceneError> {
+) -> Result<(Bsdf, SurfaceTextures), SceneError> {
     let mut texture = None;
+    let mut roughness = None;
     let bsdf = match desc {
         BsdfDesc::RoughConductor(d) => {
             let (b, t) = rough_conductor(d, path, ctx)?;
             texture = t;
+            roughness = roughness_texture(&d.microfacet, path, ctx)?;
             Bsdf::RoughConductor(b)
         }
-        BsdfDesc::RoughDielectric(d) => Bsdf::RoughDielectric(RoughDielectric {
-            microfacet: microfacet(&d.microfacet),
-            eta: d.int_ior / d.ext_ior,
-            specular_reflectance: d.specular_reflectance.to_rgb(),
-            specular_transmittance: d.specular_transmittance.to_rgb(),
-        }),
+        BsdfDesc::RoughDielectric(d) => {
+            roughness = roughness_texture(&d.microfacet, path, ctx)?;
+            Bsdf::RoughDielectric(RoughDielectric {
+                microfacet: microfacet(&d.microfacet),
+                eta: d.int_ior / d.ext_ior,
+                specular_reflectance: d.specular_reflectance.to_rgb(),
+                specular_transmittance: d.specular_transmittance.to_rgb(),
+            })
+        }
         BsdfDesc::ThinDielectric(d) => Bsdf::ThinDielectric(ThinDielectric {
             eta: d.int_ior / d.ext_ior,
             specular_reflectance: d.specular_reflectance.to_rgb(),
@@ -78,7 +94,35 @@ pub(super) fn build_surface(
             return Err(SceneError::new(ctx.source, path, format!("not a microfacet or layered surface: {other:?}")))
         }
     };
-    Ok((bsdf, texture))
+    Ok((bsdf, SurfaceTextures { color: texture, roughness }))
+}
+
+/// The texture of a textured `alpha` (at `path.alpha`); `None` for a
+/// constant roughness.
+fn roughness_texture(
+    d: &MicrofacetDesc,
+    path: &str,
+    ctx: &mut TextureContext,
+) -> Result<Option<Arc<Texture>>, SceneError> {
+    match &d.alpha {
+        AlphaDesc::Textured(t) => {
+            let field = format!("{path}.alpha");
+            Ok(Some(Arc::new(ctx.loader.texture(t, &field, ctx.source, ctx.base_dir, ctx.budget)?)))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// An error for a textured roughness where niebla takes a constant one.
+fn constant_roughness(d: &MicrofacetDesc, path: &str, source: &str, why: &str) -> Result<(), SceneError> {
+    match d.alpha {
+        AlphaDesc::Textured(_) => Err(SceneError::new(
+            source,
+            format!("{path}.alpha"),
+            format!("a textured roughness is not supported {why}; expected a number in (0, 1]"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// A nested model of `twosided` (which must reflect only).
@@ -101,6 +145,7 @@ fn reflector(
             (Reflector::Conductor { eta, k }, None)
         }
         BsdfDesc::RoughConductor(d) => {
+            constant_roughness(&d.microfacet, path, ctx.source, "inside a twosided")?;
             let (b, t) = rough_conductor(d, path, ctx)?;
             (Reflector::RoughConductor(b), t)
         }
@@ -109,6 +154,7 @@ fn reflector(
             (Reflector::Plastic(b), t)
         }
         BsdfDesc::RoughPlastic(d) => {
+            constant_roughness(&d.microfacet, path, ctx.source, "for roughplastic")?;
             let (b, t) = rough_plastic(d, path, ctx)?;
             (Reflector::RoughPlastic(b), t)
         }
@@ -122,10 +168,14 @@ fn reflector(
     })
 }
 
+/// The distribution of `d`. A textured roughness has no constant: every
+/// hit sets its own ([`Bsdf::with_alpha`]); the model keeps Mitsuba's
+/// default 0.1 until then.
 fn microfacet(d: &MicrofacetDesc) -> Microfacet {
     match d.alpha {
         AlphaDesc::Isotropic(a) => Microfacet::new(d.distribution, a, a),
         AlphaDesc::Anisotropic { u, v } => Microfacet::new(d.distribution, u, v),
+        AlphaDesc::Textured(_) => Microfacet::new(d.distribution, 0.1, 0.1),
     }
 }
 
@@ -178,6 +228,7 @@ fn rough_plastic(
     path: &str,
     ctx: &mut TextureContext,
 ) -> Result<(RoughPlastic, Option<Arc<Texture>>), SceneError> {
+    constant_roughness(&d.microfacet, path, ctx.source, "for roughplastic")?;
     let p = &d.plastic;
     let (diffuse, texture) = color_or_texture(&p.diffuse_reflectance, &format!("{path}.diffuse_reflectance"), ctx)?;
     let specular = p.specular_reflectance.to_rgb();

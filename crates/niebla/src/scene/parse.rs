@@ -757,7 +757,7 @@ struct RawCheckerboard {
     to_uv: Option<[[f32; 3]; 2]>,
 }
 
-fn parse_texture(mut object: Object) -> Result<TextureDesc, Located> {
+pub(super) fn parse_texture(mut object: Object) -> Result<TextureDesc, Located> {
     let tag = take_tag(&mut object, "texture", TextureDesc::TYPES, None)?;
     match tag.as_str() {
         "bitmap" => {

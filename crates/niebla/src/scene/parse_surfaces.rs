@@ -64,10 +64,22 @@ struct RawMicrofacet {
 fn alpha_number(field: &str, value: &Value) -> Result<f32, Located> {
     match value {
         Value::Number(n) => Ok(n.as_f64().unwrap_or(f64::NAN) as f32),
-        Value::Object(_) => {
-            Err(Located::new(field, "a textured roughness is not supported yet; expected a number in (0, 1]"))
-        }
+        Value::Object(_) => Err(Located::new(
+            field,
+            "a textured anisotropic roughness is not supported; expected a number in (0, 1] \
+             (an isotropic `alpha` may be a texture)",
+        )),
         other => Err(Located::new(field, format!("expected a number in (0, 1] or a texture, got {}", describe(other)))),
+    }
+}
+
+/// The isotropic roughness `alpha`: a number or a texture object.
+fn alpha_value(value: &Value) -> Result<AlphaDesc, Located> {
+    match value {
+        Value::Object(o) => super::parse::parse_texture(o.clone())
+            .map(|t| AlphaDesc::Textured(Box::new(t)))
+            .map_err(|e| e.under("alpha")),
+        other => alpha_number("alpha", other).map(AlphaDesc::Isotropic),
     }
 }
 
@@ -84,7 +96,7 @@ fn microfacet(raw: &RawMicrofacet) -> Result<MicrofacetDesc, Located> {
     };
     let alpha = match (&raw.alpha, &raw.alpha_u, &raw.alpha_v) {
         (None, None, None) => AlphaDesc::Isotropic(0.1),
-        (Some(a), None, None) => AlphaDesc::Isotropic(alpha_number("alpha", a)?),
+        (Some(a), None, None) => alpha_value(a)?,
         (None, Some(u), Some(v)) => {
             AlphaDesc::Anisotropic { u: alpha_number("alpha_u", u)?, v: alpha_number("alpha_v", v)? }
         }
@@ -242,6 +254,13 @@ fn parse_rough_plastic(mut object: Object) -> Result<BsdfDesc, Located> {
     let microfacet = take_microfacet(&mut object)?;
     if let AlphaDesc::Anisotropic { .. } = microfacet.alpha {
         return Err(Located::new("alpha_u", "roughplastic is isotropic (as in Mitsuba): give `alpha`"));
+    }
+    if let AlphaDesc::Textured(_) = microfacet.alpha {
+        return Err(Located::new(
+            "alpha",
+            "a textured roughness is not supported for roughplastic (its coating tables are precomputed for one \
+             roughness); expected a number in (0, 1]",
+        ));
     }
     let plastic = plastic_desc(object)?;
     Ok(BsdfDesc::RoughPlastic(RoughPlasticDesc { microfacet, plastic }))

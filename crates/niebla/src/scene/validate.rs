@@ -713,11 +713,14 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                 fail(format!("{base}.{field}"), format!("expected a number in (0, 1] or a texture, got {a}"))
             }
         };
-        match m.alpha {
-            AlphaDesc::Isotropic(a) => check("alpha", a),
+        match &m.alpha {
+            AlphaDesc::Isotropic(a) => check("alpha", *a),
+            AlphaDesc::Textured(t) => {
+                validate_reflectance(&format!("{base}.alpha"), &ReflectanceDesc::Texture((**t).clone()))
+            }
             AlphaDesc::Anisotropic { u, v } => {
-                check("alpha_u", u)?;
-                check("alpha_v", v)
+                check("alpha_u", *u)?;
+                check("alpha_v", *v)
             }
         }
     };

@@ -102,6 +102,20 @@ impl Texture {
         }
     }
 
+    /// The scalar value at `uv` (for a textured roughness): a gray color's
+    /// value, else its luminance, as Mitsuba 3's `Texture::eval_1` of a
+    /// color texture.
+    #[inline]
+    pub fn scalar(&self, uv: Vec2) -> f32 {
+        let c = self.eval(uv);
+        if c.r() == c.g() && c.g() == c.b() {
+            c.r()
+        } else {
+            // Mitsuba 3's `luminance` weights (Rec.709 Y, six digits).
+            0.212671 * c.r() + 0.715160 * c.g() + 0.072169 * c.b()
+        }
+    }
+
     /// Mean of the three channels over the texture (over the image's pixels,
     /// or of the two checkerboard colors), as Mitsuba's `Texture::mean`.
     pub fn mean(&self) -> f32 {

@@ -193,6 +193,7 @@ mod tests {
             bounds_medium: false,
             emitter: None,
             texture: None,
+            roughness: None,
         }
     }
 

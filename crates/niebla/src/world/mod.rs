@@ -40,6 +40,11 @@ pub struct SceneObject {
     /// specular reflectance), replacing `bsdf`'s constant one; see
     /// [`Scene::surface_bsdf`].
     pub texture: Option<std::sync::Arc<crate::texture::Texture>>,
+    /// A texture giving the isotropic roughness `alpha` of a
+    /// `roughconductor` or `roughdielectric` at each uv point (its
+    /// [`Texture::scalar`](crate::texture::Texture::scalar)), replacing
+    /// `bsdf`'s constant one; see [`Scene::surface_bsdf`].
+    pub roughness: Option<std::sync::Arc<crate::texture::Texture>>,
 }
 
 /// A surface hit with the object it belongs to.
@@ -121,17 +126,23 @@ impl Scene {
     }
 
     /// The surface model at `hit`: the object's BSDF, with its textured
-    /// color (see [`Bsdf::with_texture`]) looked up at the hit's uv.
+    /// color (see [`Bsdf::with_texture`]) and textured roughness (see
+    /// [`Bsdf::with_alpha`]) looked up at the hit's uv.
     #[inline]
     pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
         let object = self.object(hit);
-        match &object.texture {
-            Some(texture) => {
-                let uv = object.shape.uv(&hit.surface, &hit.local, hit.time);
-                object.bsdf.with_texture(texture.eval(uv))
-            }
-            None => object.bsdf,
+        if object.texture.is_none() && object.roughness.is_none() {
+            return object.bsdf;
         }
+        let uv = object.shape.uv(&hit.surface, &hit.local, hit.time);
+        let mut bsdf = object.bsdf;
+        if let Some(texture) = &object.texture {
+            bsdf = bsdf.with_texture(texture.eval(uv));
+        }
+        if let Some(roughness) = &object.roughness {
+            bsdf = bsdf.with_alpha(roughness.scalar(uv));
+        }
+        bsdf
     }
 
     /// Whether an opaque surface (any object that does not

@@ -2,16 +2,21 @@
 //! `roughconductor`, `roughdielectric`, `thindielectric`, `plastic`,
 //! `twosided`), with Mitsuba's parameter names and defaults.
 
-use super::{BsdfDesc, ColorDesc, ConductorDesc, ReflectanceDesc};
+use super::{BsdfDesc, ColorDesc, ConductorDesc, ReflectanceDesc, TextureDesc};
 pub use crate::bsdf::MicrofacetKind;
 
 /// Roughness of a microfacet surface: `alpha`, or `alpha_u` and `alpha_v`
 /// (along the surface's local x and y axes), each in (0, 1] in practice;
 /// Mitsuba's default is `alpha = 0.1`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum AlphaDesc {
     /// The same roughness in every direction.
     Isotropic(f32),
+    /// The same roughness in every direction, varying over the surface: a
+    /// texture's value at the hit's uv (a gray texture's value, else the
+    /// luminance of its color, as Mitsuba 3's `eval_1`). `roughconductor`
+    /// and `roughdielectric` only.
+    Textured(Box<TextureDesc>),
     /// Roughness along the tangent (`u`) and the bitangent (`v`).
     Anisotropic {
         /// `alpha_u`.
@@ -23,7 +28,7 @@ pub enum AlphaDesc {
 
 /// A microfacet distribution: `distribution` (`"beckmann"`, the default,
 /// or `"ggx"`) and the roughness.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MicrofacetDesc {
     /// Beckmann or GGX.
     pub distribution: MicrofacetKind,

@@ -71,16 +71,57 @@ fn unit_only(p: &Props, name: &str) -> Result<(), SceneError> {
     }
 }
 
-/// Microfacet keys: `distribution` (default beckmann) and `alpha` or `alpha_u` + `alpha_v`.
-fn microfacet(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneError> {
-    for name in ["alpha", "alpha_u", "alpha_v"] {
+/// Microfacet keys: `distribution` (default beckmann) and `alpha` or
+/// `alpha_u` + `alpha_v`. `alpha` may be a `<texture>` (or a `<ref>` to one)
+/// when `textured_alpha` (roughconductor, roughdielectric); anisotropic
+/// textured roughness is an error.
+fn microfacet<'a>(
+    c: &mut Converter<'a>,
+    p: &Props<'a>,
+    out: &mut Map<String, Value>,
+    textured_alpha: bool,
+) -> Result<(), SceneError> {
+    for name in ["alpha_u", "alpha_v"] {
         if let Some(t) = p.plugin_named(name) {
             return Err(t.loc.error(format!(
-                "{}: `{name}` as {}: a textured roughness is not supported (give a <float>)",
+                "{}: `{name}` as {}: a textured anisotropic roughness is not supported (give a <float>, or \
+                 an isotropic `alpha` texture)",
                 p.what(),
                 t.describe()
             )));
         }
+    }
+    if let Some(t) = p.plugin_named("alpha") {
+        if !textured_alpha {
+            return Err(t.loc.error(format!(
+                "{}: `alpha` as {}: a textured roughness is not supported here (roughplastic precomputes its \
+                 coating tables for one roughness; give a <float>)",
+                p.what(),
+                t.describe()
+            )));
+        }
+        if p.float("alpha_u")?.is_some() || p.float("alpha_v")?.is_some() {
+            return Err(p.error("give `alpha`, or both `alpha_u` and `alpha_v`"));
+        }
+        let d = p.string("distribution")?.unwrap_or("beckmann");
+        if d != "beckmann" && d != "ggx" {
+            return Err(p.error(format!("`distribution` \"{d}\": expected beckmann or ggx")));
+        }
+        out.insert("distribution".into(), json!(d));
+        let node = c.resolve(t, "texture")?;
+        let mut alpha = super::textures::convert_texture(c, node)?;
+        if alpha["type"] == "checkerboard" {
+            // Mitsuba 3's checkerboard gives its scalar value (`eval_1`,
+            // what a roughness reads) from the other color than its color
+            // (`eval`): color1 where `eval` gives color0 (checked against
+            // Mitsuba 3.9.1). niebla's checkerboard has one rule, so the
+            // colors are swapped here.
+            let (c0, c1) = (alpha["color0"].take(), alpha["color1"].take());
+            alpha["color0"] = c1;
+            alpha["color1"] = c0;
+        }
+        out.insert("alpha".into(), alpha);
+        return Ok(());
     }
     let d = p.string("distribution")?.unwrap_or("beckmann");
     if d != "beckmann" && d != "ggx" {
@@ -161,7 +202,7 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
             unit_only(&p, "specular_reflectance")?;
         }
         "roughconductor" => {
-            microfacet(&p, &mut out)?;
+            microfacet(c, &p, &mut out, true)?;
             conductor_index(&p, &mut out)?;
             if let Some(r) = color_or_texture(c, &p, "specular_reflectance")? {
                 out.insert("specular_reflectance".into(), r);
@@ -169,7 +210,7 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
         }
         "roughdielectric" | "thindielectric" => {
             if t == "roughdielectric" {
-                microfacet(&p, &mut out)?;
+                microfacet(c, &p, &mut out, true)?;
             }
             out.insert("int_ior".into(), json!(ior(&p, "int_ior", "bk7")?));
             out.insert("ext_ior".into(), json!(ior(&p, "ext_ior", "air")?));
@@ -178,7 +219,7 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
         }
         "plastic" | "roughplastic" => {
             if t == "roughplastic" {
-                microfacet(&p, &mut out)?;
+                microfacet(c, &p, &mut out, false)?;
                 if out.contains_key("alpha_u") {
                     return Err(p.error("roughplastic is isotropic: give `alpha`"));
                 }

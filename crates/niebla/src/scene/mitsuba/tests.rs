@@ -392,6 +392,39 @@ fn import_with_png(body: &str) -> Result<MitsubaImport, crate::scene::SceneError
     import_mitsuba_str(&text, "t.xml", &dir, &[])
 }
 
+/// A texture in `alpha` of roughconductor/roughdielectric becomes the
+/// JSON `alpha` texture object (nested or by `<ref>`), with the
+/// distribution kept; niebla's parser reads it back.
+#[test]
+fn textured_alpha_converts_for_rough_conductor_and_dielectric() {
+    let s = import_with_png(
+        r#"<texture type="bitmap" id="r"><string name="filename" value="a.png"/><boolean name="raw" value="true"/></texture>
+           <shape type="rectangle"><bsdf type="roughconductor"><string name="distribution" value="ggx"/><string name="material" value="Al"/>
+           <ref name="alpha" id="r"/></bsdf></shape>
+           <shape type="sphere"><bsdf type="roughdielectric"><float name="int_ior" value="1.5"/>
+           <texture type="checkerboard" name="alpha"><float name="color0" value="0.05"/>
+           <float name="color1" value="0.45"/></texture></bsdf></shape>"#,
+    )
+    .unwrap()
+    .scene;
+    let a = &s["shapes"][0]["bsdf"];
+    assert_eq!((&a["type"], &a["distribution"]), (&json!("roughconductor"), &json!("ggx")));
+    assert_eq!((&a["alpha"]["type"], &a["alpha"]["raw"]), (&json!("bitmap"), &json!(true)));
+    assert_eq!(a["alpha"]["to_uv"], json!([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0]]));
+    let b = &s["shapes"][1]["bsdf"];
+    assert_eq!((&b["type"], &b["distribution"]), (&json!("roughdielectric"), &json!("beckmann")));
+    assert_eq!(b["alpha"]["type"], json!("checkerboard"));
+    // Swapped: Mitsuba's checkerboard `eval_1` gives color1 where `eval` gives color0.
+    assert_eq!((&b["alpha"]["color0"], &b["alpha"]["color1"]), (&json!(0.45), &json!(0.05)));
+    let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+    match &desc.shapes[1].bsdf {
+        crate::scene::desc::BsdfDesc::RoughDielectric(d) => {
+            assert!(matches!(d.microfacet.alpha, crate::scene::desc::AlphaDesc::Textured(_)))
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 /// Mitsuba's bitmap reads row `v * height` from the image's top, niebla's
 /// `(1 - v) * height`: the imported `to_uv` is Mitsuba's followed by
 /// `v -> 1 - v`; Mitsuba's 4x4 `to_uv` contributes rows/columns 0, 1, 3.
@@ -489,17 +522,29 @@ fn texture_errors_name_file_line_and_attribute() {
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("t.xml:9: <texture type=\"mesh_attribute\">: not supported"), "{e}");
-    // Textured roughness, and shapes whose uvs are not converted.
+    // Textured roughness: isotropic on roughconductor/roughdielectric only;
+    // shapes whose uvs are not converted.
     let e = import_with_png(
-        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/>\n\
+        "<shape type=\"sphere\"><bsdf type=\"roughplastic\">\n\
                              <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
     )
     .unwrap_err()
     .to_string();
     assert!(
-        e.starts_with("t.xml:9: <bsdf type=\"roughconductor\">: `alpha` as <texture type=\"checkerboard\">"),
+        e.starts_with(
+            "t.xml:9: <bsdf type=\"roughplastic\">: `alpha` as <texture type=\"checkerboard\">: a textured \
+                       roughness is not supported here (roughplastic"
+        ),
         "{e}"
     );
+    let e = import_with_png(
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n\
+                             <texture type=\"checkerboard\" name=\"alpha_v\"/></bsdf></shape>",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.starts_with("t.xml:9: <bsdf type=\"roughconductor\">: `alpha_v` as <texture"), "{e}");
+    assert!(e.contains("anisotropic"), "{e}");
     let e = err("<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/>\
                  </bsdf></shape>");
     assert!(e.starts_with("t.xml:8: <shape type=\"cube\">: a textured bsdf on a cube"), "{e}");
