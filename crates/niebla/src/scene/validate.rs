@@ -722,6 +722,17 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                 check("alpha_u", *u)?;
                 check("alpha_v", *v)
             }
+            AlphaDesc::TexturedAnisotropic { u, v } => {
+                for (field, value) in [("alpha_u", u), ("alpha_v", v)] {
+                    match value {
+                        AlphaValue::Number(a) => check(field, *a)?,
+                        AlphaValue::Texture(t) => {
+                            validate_reflectance(&format!("{base}.{field}"), &ReflectanceDesc::Texture((**t).clone()))?
+                        }
+                    }
+                }
+                Ok(())
+            }
         }
     };
     let iors = |int_ior: f32, ext_ior: f32| -> Check {

@@ -24,6 +24,32 @@ pub enum AlphaDesc {
         /// `alpha_v`.
         v: f32,
     },
+    /// Roughness along the tangent and the bitangent, at least one of them
+    /// a texture (each read as for [`AlphaDesc::Textured`]).
+    /// `roughconductor` and `roughdielectric` only.
+    TexturedAnisotropic {
+        /// `alpha_u`.
+        u: AlphaValue,
+        /// `alpha_v`.
+        v: AlphaValue,
+    },
+}
+
+/// One roughness value of [`AlphaDesc::TexturedAnisotropic`]: a number or
+/// a texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AlphaValue {
+    /// A constant, in (0, 1].
+    Number(f32),
+    /// A texture's scalar value at the hit's uv.
+    Texture(Box<TextureDesc>),
+}
+
+impl AlphaDesc {
+    /// True when some roughness of this description is a texture.
+    pub fn is_textured(&self) -> bool {
+        matches!(self, AlphaDesc::Textured(_) | AlphaDesc::TexturedAnisotropic { .. })
+    }
 }
 
 /// A microfacet distribution: `distribution` (`"beckmann"`, the default,

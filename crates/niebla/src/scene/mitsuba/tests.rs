@@ -522,8 +522,9 @@ fn texture_errors_name_file_line_and_attribute() {
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("t.xml:9: <texture type=\"mesh_attribute\">: not supported"), "{e}");
-    // Textured roughness: isotropic on roughconductor/roughdielectric only;
-    // shapes whose uvs are not converted.
+    // Textured roughness: not on roughplastic (as in Mitsuba 3), whether
+    // `alpha` or a texture given with an anisotropic pair; shapes whose uvs
+    // are not converted.
     let e = import_with_png(
         "<shape type=\"sphere\"><bsdf type=\"roughplastic\">\n\
                              <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
@@ -533,18 +534,27 @@ fn texture_errors_name_file_line_and_attribute() {
     assert!(
         e.starts_with(
             "t.xml:9: <bsdf type=\"roughplastic\">: `alpha` as <texture type=\"checkerboard\">: a textured \
-                       roughness is not supported here (roughplastic"
+                       roughness is not supported for roughplastic (its coating tables"
         ),
         "{e}"
     );
+    assert!(e.contains("Mitsuba 3 refuses"), "{e}");
     let e = import_with_png(
-        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n\
-                             <texture type=\"checkerboard\" name=\"alpha_v\"/></bsdf></shape>",
+        "<shape type=\"sphere\"><bsdf type=\"twosided\"><bsdf type=\"roughplastic\">\
+                             <float name=\"alpha_u\" value=\"0.1\"/>\n\
+                             <texture type=\"checkerboard\" name=\"alpha_v\"/></bsdf></bsdf></shape>",
     )
     .unwrap_err()
     .to_string();
-    assert!(e.starts_with("t.xml:9: <bsdf type=\"roughconductor\">: `alpha_v` as <texture"), "{e}");
-    assert!(e.contains("anisotropic"), "{e}");
+    assert!(e.starts_with("t.xml:9: <bsdf type=\"roughplastic\">: `alpha_v` as <texture"), "{e}");
+    // A texture and a number for the same roughness.
+    let e = import_with_png(
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\">\n<float name=\"alpha_u\" value=\"0.1\"/>\
+                             <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("<bsdf type=\"roughconductor\">: give `alpha`, or both `alpha_u` and `alpha_v`"), "{e}");
     let e = err("<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/>\
                  </bsdf></shape>");
     assert!(e.starts_with("t.xml:8: <shape type=\"cube\">: a textured bsdf on a cube"), "{e}");
