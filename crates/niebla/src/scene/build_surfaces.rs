@@ -122,13 +122,13 @@ fn roughness_textures(
     };
     Ok(match &d.alpha {
         AlphaDesc::Textured(t) => Some(AlphaTextures::Isotropic(load(t, "alpha")?)),
-        AlphaDesc::TexturedAnisotropic { u, v } => {
+        AlphaDesc::TexturedAnisotropic(pair) => {
             let mut one = |value: &AlphaValue, name: &str| match value {
                 AlphaValue::Number(_) => Ok(None),
                 AlphaValue::Texture(t) => load(t, name).map(Some),
             };
-            let u = one(u, "alpha_u")?;
-            let v = one(v, "alpha_v")?;
+            let u = one(&pair.u, "alpha_u")?;
+            let v = one(&pair.v, "alpha_v")?;
             Some(AlphaTextures::Anisotropic { u, v })
         }
         AlphaDesc::Isotropic(_) | AlphaDesc::Anisotropic { .. } => None,
@@ -147,7 +147,7 @@ const ROUGH_PLASTIC_WHY: &str = "for roughplastic (its coating tables are precom
 /// An error for a textured roughness where niebla takes a constant one.
 fn constant_roughness(d: &MicrofacetDesc, path: &str, source: &str, why: &str) -> Result<(), SceneError> {
     if d.alpha.is_textured() {
-        let field = if let AlphaDesc::TexturedAnisotropic { .. } = d.alpha { "alpha_u" } else { "alpha" };
+        let field = if let AlphaDesc::TexturedAnisotropic(_) = d.alpha { "alpha_u" } else { "alpha" };
         return Err(SceneError::new(
             source,
             format!("{path}.{field}"),
@@ -157,13 +157,12 @@ fn constant_roughness(d: &MicrofacetDesc, path: &str, source: &str, why: &str) -
     Ok(())
 }
 
+/// A side of a `twosided`: its model, textured color and textured roughness.
+type Side = (Reflector, Option<Arc<Texture>>, Option<AlphaTextures>);
+
 /// A nested model of `twosided` (which must reflect only), its textured
 /// color and its textured roughness (a rough conductor's).
-fn reflector(
-    desc: &BsdfDesc,
-    path: &str,
-    ctx: &mut TextureContext,
-) -> Result<(Reflector, Option<Arc<Texture>>, Option<AlphaTextures>), SceneError> {
+fn reflector(desc: &BsdfDesc, path: &str, ctx: &mut TextureContext) -> Result<Side, SceneError> {
     Ok(match desc {
         BsdfDesc::Diffuse { reflectance } => match reflectance {
             ReflectanceDesc::Color(c) => (Reflector::Diffuse { reflectance: c.to_rgb() }, None, None),
@@ -212,7 +211,7 @@ fn microfacet(d: &MicrofacetDesc) -> Microfacet {
         AlphaDesc::Isotropic(a) => Microfacet::new(d.distribution, *a, *a),
         AlphaDesc::Anisotropic { u, v } => Microfacet::new(d.distribution, *u, *v),
         AlphaDesc::Textured(_) => Microfacet::new(d.distribution, 0.1, 0.1),
-        AlphaDesc::TexturedAnisotropic { u, v } => Microfacet::new(d.distribution, constant(u), constant(v)),
+        AlphaDesc::TexturedAnisotropic(pair) => Microfacet::new(d.distribution, constant(&pair.u), constant(&pair.v)),
     }
 }
 

@@ -84,7 +84,7 @@ fn isotropic(value: &Value) -> Result<AlphaDesc, Located> {
 fn anisotropic(u: &Value, v: &Value) -> Result<AlphaDesc, Located> {
     Ok(match (alpha_value("alpha_u", u)?, alpha_value("alpha_v", v)?) {
         (AlphaValue::Number(u), AlphaValue::Number(v)) => AlphaDesc::Anisotropic { u, v },
-        (u, v) => AlphaDesc::TexturedAnisotropic { u, v },
+        (u, v) => AlphaDesc::TexturedAnisotropic(Box::new(AlphaPair { u, v })),
     })
 }
 
@@ -255,7 +255,7 @@ fn parse_plastic(object: Object) -> Result<BsdfDesc, Located> {
 
 fn parse_rough_plastic(mut object: Object) -> Result<BsdfDesc, Located> {
     let microfacet = take_microfacet(&mut object)?;
-    if let AlphaDesc::Anisotropic { .. } | AlphaDesc::TexturedAnisotropic { .. } = microfacet.alpha {
+    if let AlphaDesc::Anisotropic { .. } | AlphaDesc::TexturedAnisotropic(_) = microfacet.alpha {
         return Err(Located::new("alpha_u", "roughplastic is isotropic (as in Mitsuba): give `alpha`"));
     }
     if let AlphaDesc::Textured(_) = microfacet.alpha {

@@ -722,8 +722,8 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                 check("alpha_u", *u)?;
                 check("alpha_v", *v)
             }
-            AlphaDesc::TexturedAnisotropic { u, v } => {
-                for (field, value) in [("alpha_u", u), ("alpha_v", v)] {
+            AlphaDesc::TexturedAnisotropic(pair) => {
+                for (field, value) in [("alpha_u", &pair.u), ("alpha_v", &pair.v)] {
                     match value {
                         AlphaValue::Number(a) => check(field, *a)?,
                         AlphaValue::Texture(t) => {

@@ -27,12 +27,17 @@ pub enum AlphaDesc {
     /// Roughness along the tangent and the bitangent, at least one of them
     /// a texture (each read as for [`AlphaDesc::Textured`]).
     /// `roughconductor` and `roughdielectric` only.
-    TexturedAnisotropic {
-        /// `alpha_u`.
-        u: AlphaValue,
-        /// `alpha_v`.
-        v: AlphaValue,
-    },
+    TexturedAnisotropic(Box<AlphaPair>),
+}
+
+/// `alpha_u` and `alpha_v` of [`AlphaDesc::TexturedAnisotropic`] (boxed so
+/// that a surface description stays small).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlphaPair {
+    /// `alpha_u`.
+    pub u: AlphaValue,
+    /// `alpha_v`.
+    pub v: AlphaValue,
 }
 
 /// One roughness value of [`AlphaDesc::TexturedAnisotropic`]: a number or
@@ -48,7 +53,7 @@ pub enum AlphaValue {
 impl AlphaDesc {
     /// True when some roughness of this description is a texture.
     pub fn is_textured(&self) -> bool {
-        matches!(self, AlphaDesc::Textured(_) | AlphaDesc::TexturedAnisotropic { .. })
+        matches!(self, AlphaDesc::Textured(_) | AlphaDesc::TexturedAnisotropic(_))
     }
 }
 
