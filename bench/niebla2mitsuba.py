@@ -24,7 +24,11 @@ an error rather than a silent approximation:
   `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
   `null`, `diffuse` -> `diffuse`, its reflectance a color or a `bitmap` or
   `checkerboard` texture (see `texture`; not on a box, whose uvs differ from
-  Mitsuba's cube); `interior`/`exterior` media by reference;
+  Mitsuba's cube); `roughconductor` (a Mitsuba `material` name or `eta`/`k`),
+  `roughdielectric` and `twosided` (of `diffuse` and `roughconductor`) with
+  the same names, their `alpha` or `alpha_u`/`alpha_v` numbers or textures
+  (see `alpha_texture`; anisotropic only on a rectangle turned about x, see
+  `_frames_agree`); `interior`/`exterior` media by reference;
 - lights: `point`, `spot` (look_at from position to target), `directional`,
   `constant`: the same parameters, since niebla follows Mitsuba's radiometry;
 - the camera's medium: niebla finds it (innermost closed shape with an
@@ -342,6 +346,111 @@ def texture(mi, t, scene_dir, field):
     raise Unsupported(f"{field}: texture type {kind!r}")
 
 
+def alpha_texture(mi, t, scene_dir, field):
+    """A niebla roughness texture as a Mitsuba `<texture>` whose `eval_1`
+    (what Mitsuba's microfacet models read) is niebla's scalar at every uv.
+    Mitsuba's checkerboard `eval_1` gives color1 where its `eval` gives
+    color0 (Mitsuba 3.9.1; niebla's importer swaps them on the way in), so a
+    checkerboard's colors are swapped here."""
+    out = texture(mi, t, scene_dir, field)
+    if out["type"] == "checkerboard":
+        out["color0"], out["color1"] = out["color1"], out["color0"]
+    return out
+
+
+def _mitsuba_conductors():
+    """Mitsuba 3's conductor names, as niebla lists them
+    (crates/niebla/src/bsdf/mitsuba_conductors.rs)."""
+    import re
+
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                        "crates", "niebla", "src", "bsdf", "mitsuba_conductors.rs")
+    with open(path) as f:
+        return set(re.findall(r'preset\("([^"]+)"', f.read()))
+
+
+def _frames_agree(shape):
+    """Whether niebla's tangent frame (built from the normal alone) is
+    Mitsuba's (`dp/du`) on `shape`: on a rectangle placed by `scale`,
+    `rotate_x` and `translate` only (its `dp/du` stays along +x, and
+    niebla's frame of a normal in the y-z plane has x = +x too)."""
+    t = shape.get("to_world") or {}
+    return shape["type"] == "rectangle" and set(t) <= {"scale", "rotate_x", "translate"}
+
+
+def _microfacet(mi, b, scene_dir, field, out, shape):
+    """`distribution` and `alpha` or `alpha_u`/`alpha_v` (numbers or textures).
+    Anisotropic roughness only where the two renderers' tangent frames agree."""
+    out["distribution"] = b.get("distribution", "beckmann").lower()
+    keys = ["alpha_u", "alpha_v"] if "alpha_u" in b or "alpha_v" in b else ["alpha"]
+    if keys != ["alpha"] and b.get("alpha_u") != b.get("alpha_v") and not _frames_agree(shape):
+        raise Unsupported(f"{field}: anisotropic roughness on a {shape['type']} placed so (niebla's tangent frame "
+                          "is Mitsuba's only on a rectangle turned about x)")
+    for k in keys:
+        v = b.get(k, 0.1)
+        out[k] = alpha_texture(mi, v, scene_dir, f"{field}.{k}") if isinstance(v, dict) else float(v)
+
+
+def _has_texture(v):
+    """True when a bsdf object (or anything in it) is or holds a texture."""
+    if isinstance(v, dict):
+        return v.get("type") in ("bitmap", "checkerboard") or any(_has_texture(x) for x in v.values())
+    if isinstance(v, list):
+        return any(_has_texture(x) for x in v)
+    return False
+
+
+def bsdf(mi, b, scene_dir, field, shape, nested=False):
+    """A niebla bsdf object as a Mitsuba bsdf dict (see the module doc)."""
+    kind = b["type"]
+    if _has_texture(b) and shape["type"] == "box":
+        # niebla's box uv (per face) is not Mitsuba's cube mesh's.
+        raise Unsupported(f"{field}: a textured box (Mitsuba's cube has other uvs)")
+    if kind == "null" and not nested:
+        return {"type": "null"}
+    if kind == "diffuse":
+        r = b.get("reflectance", 0.5)
+        if isinstance(r, dict):
+            return {"type": "diffuse", "reflectance": texture(mi, r, scene_dir, f"{field}.reflectance")}
+        return {"type": "diffuse", "reflectance": {"type": "rgb", "value": _color(r)}}
+    if kind == "roughconductor":
+        out = {"type": "roughconductor"}
+        _microfacet(mi, b, scene_dir, field, out, shape)
+        if "material" in b:
+            if b["material"] not in _mitsuba_conductors():
+                raise Unsupported(f"{field}.material: {b['material']!r} is not one of Mitsuba's names")
+            out["material"] = b["material"]
+        elif "eta" in b or "k" in b:
+            out["eta"] = {"type": "rgb", "value": _color(b["eta"])}
+            out["k"] = {"type": "rgb", "value": _color(b["k"])}
+        elif "reflectance" in b:
+            raise Unsupported(f"{field}.reflectance (niebla's conductor from a reflectance)")
+        r = b.get("specular_reflectance", 1.0)
+        if isinstance(r, dict):
+            out["specular_reflectance"] = texture(mi, r, scene_dir, f"{field}.specular_reflectance")
+        elif _color(r) != [1.0] * 3:
+            out["specular_reflectance"] = {"type": "rgb", "value": _color(r)}
+        return out
+    if kind == "roughdielectric" and not nested:
+        out = {"type": "roughdielectric"}
+        _microfacet(mi, b, scene_dir, field, out, shape)
+        for k in ("int_ior", "ext_ior"):
+            if k in b:
+                out[k] = float(b[k])
+        for k in ("specular_reflectance", "specular_transmittance"):
+            if k in b and _color(b[k]) != [1.0] * 3:
+                out[k] = {"type": "rgb", "value": _color(b[k])}
+        return out
+    if kind == "twosided" and not nested:
+        sides = b["bsdf"] if isinstance(b["bsdf"], list) else [b["bsdf"]]
+        out = {"type": "twosided"}
+        for j, side in enumerate(sides):
+            where = f"{field}.bsdf[{j}]" if len(sides) == 2 else f"{field}.bsdf"
+            out[f"bsdf_{j}"] = bsdf(mi, side, scene_dir, where, shape, nested=True)
+        return out
+    raise Unsupported(f"{field}: bsdf {kind!r}")
+
+
 def _inside(shape, p):
     t = shape["type"]
     if t == "box":
@@ -435,20 +544,7 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
             d = {"type": t, "to_world": placement(mi, niebla_transform_ops(s.get("to_world")))}
         else:
             raise Unsupported(f"shapes[{i}]: type {t!r}")
-        b = s.get("bsdf", {"type": "null"})
-        if b["type"] == "null":
-            d["bsdf"] = {"type": "null"}
-        elif b["type"] == "diffuse":
-            r = b.get("reflectance", 0.5)
-            if isinstance(r, dict):
-                if t == "box":
-                    # niebla's box uv (per face) is not Mitsuba's cube mesh's.
-                    raise Unsupported(f"shapes[{i}]: a textured box (Mitsuba's cube has other uvs)")
-                d["bsdf"] = {"type": "diffuse", "reflectance": texture(mi, r, scene_dir, f"shapes[{i}].bsdf.reflectance")}
-            else:
-                d["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": _color(r)}}
-        else:
-            raise Unsupported(f"shapes[{i}]: bsdf {b['type']!r}")
+        d["bsdf"] = bsdf(mi, s.get("bsdf", {"type": "null"}), scene_dir, f"shapes[{i}].bsdf", s)
         if s.get("interior"):
             d["interior"] = ref(s["interior"])
         if s.get("exterior"):

@@ -104,15 +104,14 @@ fn models() -> Vec<(&'static str, Bsdf)> {
     .collect()
 }
 
-/// A unit sphere at the origin whose `bsdf` has a checkerboard `alpha`
-/// (0.3 on cells of even parity, 0.55 on odd ones, four cells over the
-/// unit uv square), and the model at its surface point of polar angle
-/// `theta` and azimuth `phi` (degrees), found by a ray toward it and
-/// `Scene::surface_bsdf`, with the
-/// roughness that point should have: the sphere's uv (`u` the azimuth over
-/// 360 degrees, `v` the polar angle over 180) computed here, not by the
-/// renderer, and the cell's color.
-fn textured_alpha_at(bsdf: &str, theta: f32, phi: f32) -> (Bsdf, f32) {
+/// A unit sphere at the origin whose `bsdf` has checkerboard roughnesses
+/// (four cells over the unit uv square), and the model at its surface
+/// point of polar angle `theta` and azimuth `phi` (degrees), found by a ray
+/// toward it (from outside: a `twosided`'s front) and
+/// `Scene::surface_bsdf`, with the parity of that point's cell: the
+/// sphere's uv (`u` the azimuth over 360 degrees, `v` the polar angle over
+/// 180) computed here, not by the renderer.
+fn textured_alpha_at(bsdf: &str, theta: f32, phi: f32) -> (Bsdf, bool) {
     let text = format!(
         r#"{{"version": 1,
             "camera": {{"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 4, "height": 4}},
@@ -126,60 +125,154 @@ fn textured_alpha_at(bsdf: &str, theta: f32, phi: f32) -> (Bsdf, f32) {
     let hit = scene.intersect(&ray, 0.0, f32::INFINITY).expect("the ray hits the sphere");
     let (u, v) = (phi / 360.0, theta / 180.0);
     let odd = ((2.0 * u).floor() as i64 + (2.0 * v).floor() as i64).rem_euclid(2) == 1;
-    (scene.surface_bsdf(&hit), if odd { 0.55 } else { 0.3 })
+    (scene.surface_bsdf(&hit), odd)
 }
 
-/// The textured-alpha models added to the chi-square, reciprocity and
-/// energy tests: each surface point's model must carry exactly the cell's
-/// roughness (so those tests run at the roughness the texture gives).
-fn textured_alpha_models() -> Vec<(&'static str, Bsdf)> {
-    let checker = r#"{"type": "checkerboard", "color0": 0.3, "color1": 0.55}"#;
-    let conductor =
-        format!(r#"{{"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": {checker}}}"#);
-    let dielectric =
-        format!(r#"{{"type": "roughdielectric", "distribution": "beckmann", "int_ior": 1.5, "alpha": {checker}}}"#);
+/// A roughness in a template of [`textured_alpha_cases`]: one of two
+/// checkerboards or a constant.
+#[derive(Clone, Copy)]
+enum Rough {
+    /// 0.3 on cells of even parity, 0.55 on odd ones.
+    CheckerA,
+    /// 0.45 on even cells, 0.15 on odd ones.
+    CheckerB,
+    /// A constant.
+    Const(f32),
+}
+
+impl Rough {
+    /// As written in the textured scene file.
+    fn textured(self) -> String {
+        match self {
+            Rough::CheckerA => r#"{"type": "checkerboard", "color0": 0.3, "color1": 0.55}"#.into(),
+            Rough::CheckerB => r#"{"type": "checkerboard", "color0": 0.45, "color1": 0.15}"#.into(),
+            Rough::Const(a) => format!("{a}"),
+        }
+    }
+
+    /// The constant the point's cell should give.
+    fn at(self, odd: bool) -> f32 {
+        match (self, odd) {
+            (Rough::CheckerA, false) => 0.3,
+            (Rough::CheckerA, true) => 0.55,
+            (Rough::CheckerB, false) => 0.45,
+            (Rough::CheckerB, true) => 0.15,
+            (Rough::Const(a), _) => a,
+        }
+    }
+}
+
+/// The textured-roughness cases: a name, a `bsdf` template whose `$0`,
+/// `$1`, `$2` stand for the roughnesses, those roughnesses, and the point
+/// (theta, phi in degrees). Isotropic `alpha` on a rough conductor and
+/// dielectric, anisotropic pairs (one or both textured), and `twosided`
+/// with its two sides textured differently and with one child.
+#[allow(clippy::type_complexity)]
+fn textured_alpha_cases() -> Vec<(&'static str, &'static str, Vec<Rough>, f32, f32)> {
+    use Rough::*;
+    let conductor = r#"{"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": $0}"#;
+    let dielectric = r#"{"type": "roughdielectric", "distribution": "beckmann", "int_ior": 1.5, "alpha": $0}"#;
+    let conductor_uv = r#"{"type": "roughconductor", "distribution": "beckmann", "material": "Cu", "alpha_u": $0,
+                           "alpha_v": $1}"#;
+    let dielectric_uv = r#"{"type": "roughdielectric", "distribution": "ggx", "int_ior": 1.33, "alpha_u": $0,
+                            "alpha_v": $1}"#;
+    let two_sides = r#"{"type": "twosided", "bsdf": [
+                         {"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": $0},
+                         {"type": "roughconductor", "distribution": "beckmann", "material": "Cu", "alpha_u": $1,
+                          "alpha_v": $2}]}"#;
+    let one_child = r#"{"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "ggx",
+                         "alpha_u": $0, "alpha_v": $1}}"#;
+    vec![
+        ("roughconductor ggx, checkerboard alpha, odd cell", conductor, vec![CheckerA], 60.0, 200.0),
+        ("roughconductor ggx, checkerboard alpha, even cell", conductor, vec![CheckerA], 60.0, 30.0),
+        ("roughdielectric beckmann, checkerboard alpha, even cell", dielectric, vec![CheckerA], 50.0, 100.0),
+        ("roughdielectric beckmann, checkerboard alpha, odd cell", dielectric, vec![CheckerA], 120.0, 30.0),
+        (
+            "roughconductor beckmann, checkerboard alpha_u, alpha_v 0.2, odd",
+            conductor_uv,
+            vec![CheckerA, Const(0.2)],
+            60.0,
+            200.0,
+        ),
+        (
+            "roughconductor beckmann, alpha_u 0.5, checkerboard alpha_v, even",
+            conductor_uv,
+            vec![Const(0.5), CheckerB],
+            60.0,
+            30.0,
+        ),
+        (
+            "roughdielectric ggx, checkerboard alpha_u and alpha_v, even",
+            dielectric_uv,
+            vec![CheckerA, CheckerB],
+            50.0,
+            100.0,
+        ),
+        (
+            "roughdielectric ggx, checkerboard alpha_u and alpha_v, odd",
+            dielectric_uv,
+            vec![CheckerB, CheckerA],
+            120.0,
+            30.0,
+        ),
+        (
+            "twosided, textured alpha front, anisotropic back, odd",
+            two_sides,
+            vec![CheckerA, Const(0.25), CheckerB],
+            60.0,
+            200.0,
+        ),
+        ("twosided, one child, textured alpha_u and alpha_v, even", one_child, vec![CheckerB, CheckerA], 50.0, 100.0),
+    ]
+}
+
+/// `template` with `$i` replaced by `values[i]`.
+fn fill(template: &str, values: &[String]) -> String {
+    values.iter().enumerate().fold(template.to_string(), |t, (i, v)| t.replace(&format!("${i}"), v))
+}
+
+/// `(alpha_u, alpha_v)` of each microfacet model in `bsdf` (both sides of a
+/// `twosided`).
+fn roughnesses(bsdf: &Bsdf) -> Vec<(f32, f32)> {
+    let m = match bsdf {
+        Bsdf::RoughConductor(b) => vec![b.microfacet],
+        Bsdf::RoughDielectric(b) => vec![b.microfacet],
+        Bsdf::TwoSided(b) => [b.front.microfacet(), b.back.microfacet()].into_iter().flatten().collect(),
+        other => panic!("{other:?}"),
+    };
+    m.iter().map(|m| (m.alpha_u, m.alpha_v)).collect()
+}
+
+/// The textured-roughness models added to the chi-square, reciprocity and
+/// energy tests, each with the JSON of the same surface with the constant
+/// roughnesses its point should have: each point's model must carry
+/// exactly its cell's roughnesses (so those tests run at the roughness the
+/// textures give).
+fn textured_alpha_points() -> Vec<(&'static str, Bsdf, String)> {
     let mut out = Vec::new();
-    for (name, json, theta, phi) in [
-        ("roughconductor ggx, checkerboard alpha, odd cell", &conductor, 60.0, 200.0),
-        ("roughconductor ggx, checkerboard alpha, even cell", &conductor, 60.0, 30.0),
-        ("roughdielectric beckmann, checkerboard alpha, even cell", &dielectric, 50.0, 100.0),
-        ("roughdielectric beckmann, checkerboard alpha, odd cell", &dielectric, 120.0, 30.0),
-    ] {
-        let (bsdf, alpha) = textured_alpha_at(json, theta, phi);
-        let m = match bsdf {
-            Bsdf::RoughConductor(b) => b.microfacet,
-            Bsdf::RoughDielectric(b) => b.microfacet,
-            other => panic!("{name}: {other:?}"),
-        };
-        assert_eq!((m.alpha_u, m.alpha_v), (alpha, alpha), "{name}: roughness at the hit");
-        out.push((name, bsdf));
+    for (name, template, rough, theta, phi) in textured_alpha_cases() {
+        let textured = fill(template, &rough.iter().map(|r| r.textured()).collect::<Vec<_>>());
+        let (bsdf, odd) = textured_alpha_at(&textured, theta, phi);
+        let constant = fill(template, &rough.iter().map(|r| format!("{}", r.at(odd))).collect::<Vec<_>>());
+        let expected = roughnesses(&bsdf_from_json(&constant));
+        assert_eq!(roughnesses(&bsdf), expected, "{name}: roughness at the hit");
+        out.push((name, bsdf, constant));
     }
     out
 }
 
+fn textured_alpha_models() -> Vec<(&'static str, Bsdf)> {
+    textured_alpha_points().into_iter().map(|(name, bsdf, _)| (name, bsdf)).collect()
+}
+
 /// A textured roughness gives, at a hit, the model the same surface with
-/// that constant roughness has: `f` and `pdf` equal to the last bit at 6 x
-/// 6 direction pairs, for each of the four textured points.
+/// those constant roughnesses has: `f` and `pdf` equal to the last bit at 6
+/// x 6 direction pairs (both sides), for each of the ten textured points.
 #[test]
 fn textured_alpha_at_a_hit_is_the_constant_model() {
-    for (name, bsdf) in textured_alpha_models() {
-        let (alpha, constant) = match bsdf {
-            Bsdf::RoughConductor(b) => (
-                b.microfacet.alpha_u,
-                format!(
-                    r#"{{"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha": {}}}"#,
-                    b.microfacet.alpha_u
-                ),
-            ),
-            Bsdf::RoughDielectric(b) => (
-                b.microfacet.alpha_u,
-                format!(
-                    r#"{{"type": "roughdielectric", "distribution": "beckmann", "int_ior": 1.5, "alpha": {}}}"#,
-                    b.microfacet.alpha_u
-                ),
-            ),
-            other => panic!("{other:?}"),
-        };
+    let points = textured_alpha_points();
+    assert_eq!(points.len(), 10);
+    for (name, bsdf, constant) in points {
         let reference = bsdf_from_json(&constant);
         let dirs: Vec<Vec3> = [10.0f32, 40.0, 70.0, 100.0, 140.0, 170.0]
             .iter()
@@ -189,9 +282,9 @@ fn textured_alpha_at_a_hit_is_the_constant_model() {
         for wo in &dirs {
             for wi in &dirs {
                 let (a, b) = (bsdf.eval(Vec3::Z, *wo, *wi), reference.eval(Vec3::Z, *wo, *wi));
-                assert_eq!(a.0.map(f32::to_bits), b.0.map(f32::to_bits), "{name} (alpha {alpha}): f");
+                assert_eq!(a.0.map(f32::to_bits), b.0.map(f32::to_bits), "{name} ({constant}): f");
                 let (a, b) = (bsdf.pdf(Vec3::Z, *wo, *wi), reference.pdf(Vec3::Z, *wo, *wi));
-                assert_eq!(a.to_bits(), b.to_bits(), "{name} (alpha {alpha}): pdf");
+                assert_eq!(a.to_bits(), b.to_bits(), "{name} ({constant}): pdf");
             }
         }
     }
@@ -283,7 +376,7 @@ fn ln_gamma(x: f64) -> f64 {
 /// fewer than 5 expected samples are pooled, and the statistic's p-value
 /// must exceed 0.01 divided by the number of tests (Bonferroni): the
 /// models of [`models`] (both distributions, isotropic and anisotropic, alphas 0.15 to
-/// 0.7, indices 1.33 to 1.8, and four points of textured-alpha surfaces),
+/// 0.7, indices 1.33 to 1.8, and ten points of textured-roughness surfaces),
 /// each at 10, 50, 80 and 135 degrees (the last
 /// from behind or inside). `CHI2_SAMPLES` and `CHI2_SEED` override the
 /// sample count and seed; `CHI2_DEBUG` prints the worst bins.

@@ -204,3 +204,15 @@ fn bitmap_and_checkerboard_textures_match_mitsuba() {
 fn textured_roughness_matches_mitsuba() {
     check("rough_textured");
 }
+
+/// Textured anisotropic roughness and textured roughness inside `twosided`:
+/// a GGX conductor floor whose `alpha_u` is a bilinear raw bitmap and
+/// `alpha_v` a checkerboard, a `twosided` wall (front: checkerboard `alpha`;
+/// back: `alpha_u` 0.05, nearest bitmap `alpha_v`) whose back is seen on a
+/// tilted panel sharing it, and a rough glass pane with a checkerboard
+/// `alpha_u`, all on rectangles turned about x (where niebla's tangent
+/// frame is Mitsuba's), lit by a disk and a constant environment.
+#[test]
+fn textured_anisotropic_and_twosided_roughness_match_mitsuba() {
+    check("rough_aniso_twosided");
+}

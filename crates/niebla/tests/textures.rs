@@ -150,34 +150,52 @@ fn bad_textures_are_errors() {
 
 /// A textured roughness where niebla takes only a constant one is an error
 /// naming the field: roughplastic (its coating tables are precomputed per
-/// roughness), a rough surface inside a twosided, an anisotropic pair; a
-/// bad texture in `alpha` is checked like a color texture.
+/// roughness; Mitsuba 3 refuses it too), alone or inside a twosided, with
+/// `alpha` or an anisotropic pair; a bad texture in `alpha`, `alpha_u` or
+/// `alpha_v` (also of a twosided's side) is checked like a color texture.
 #[test]
 fn unsupported_textured_roughness_is_an_error() {
     let checker = r#"{"type": "checkerboard", "color0": 0.1, "color1": 0.4}"#;
     let cases = [
         (format!(r#"{{"type": "roughplastic", "alpha": {checker}}}"#), vec!["shapes[0].bsdf.alpha", "roughplastic"]),
         (
-            format!(
-                r#"{{"type": "twosided", "bsdf": {{"type": "roughconductor", "material": "Au", "alpha": {checker}}}}}"#
-            ),
-            vec!["shapes[0].bsdf.bsdf.alpha", "twosided"],
-        ),
-        (
             format!(r#"{{"type": "twosided", "bsdf": {{"type": "roughplastic", "alpha": {checker}}}}}"#),
-            vec!["shapes[0].bsdf.bsdf.alpha", "roughplastic"],
+            vec!["shapes[0].bsdf.bsdf.alpha", "roughplastic", "Mitsuba 3 refuses"],
         ),
         (
-            format!(r#"{{"type": "roughconductor", "alpha_u": {checker}, "alpha_v": 0.2}}"#),
-            vec!["shapes[0].bsdf.alpha_u", "anisotropic"],
+            format!(r#"{{"type": "roughplastic", "alpha_u": {checker}, "alpha_v": 0.2}}"#),
+            vec!["shapes[0].bsdf.alpha_u", "roughplastic is isotropic"],
+        ),
+        (
+            format!(r#"{{"type": "roughconductor", "alpha": {checker}, "alpha_v": 0.2}}"#),
+            vec!["shapes[0].bsdf.alpha", "not both"],
+        ),
+        (
+            r#"{"type": "roughconductor", "alpha_u": 0.1, "alpha_v": "rough"}"#.to_string(),
+            vec!["shapes[0].bsdf.alpha_v", "a number in (0, 1] or a texture"],
+        ),
+        (
+            format!(r#"{{"type": "roughconductor", "alpha_u": {checker}, "alpha_v": 1.5}}"#),
+            vec!["shapes[0].bsdf.alpha_v", "(0, 1]"],
         ),
         (
             r#"{"type": "roughdielectric", "alpha": {"type": "checkerboard", "scale": [0, 1]}}"#.to_string(),
             vec!["shapes[0].bsdf.alpha.scale[0]"],
         ),
         (
+            r#"{"type": "roughdielectric", "alpha_u": 0.2, "alpha_v": {"type": "checkerboard", "scale": [0, 1]}}"#
+                .to_string(),
+            vec!["shapes[0].bsdf.alpha_v.scale[0]"],
+        ),
+        (
             r#"{"type": "roughdielectric", "alpha": {"type": "bitmap", "file": "missing.png"}}"#.to_string(),
             vec!["shapes[0].bsdf.alpha.file", "missing.png"],
+        ),
+        (
+            r#"{"type": "twosided", "bsdf": [{"type": "diffuse"}, {"type": "roughconductor",
+                "alpha_u": {"type": "bitmap", "file": "missing.png"}, "alpha_v": 0.3}]}"#
+                .to_string(),
+            vec!["shapes[0].bsdf.bsdf[1].alpha_u.file", "missing.png"],
         ),
     ];
     for (bsdf, expected) in cases {

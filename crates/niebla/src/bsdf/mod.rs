@@ -431,16 +431,35 @@ impl Bsdf {
     /// roughness to no others).
     #[inline]
     pub fn with_alpha(self, alpha: f32) -> Bsdf {
+        self.with_alpha_uv(alpha, alpha)
+    }
+
+    /// The model with its roughness set to `alpha_u` along the tangent and
+    /// `alpha_v` along the bitangent (each raised to
+    /// [`MIN_ALPHA`](microfacet::MIN_ALPHA)), as [`Bsdf::with_alpha`].
+    #[inline]
+    pub fn with_alpha_uv(self, alpha_u: f32, alpha_v: f32) -> Bsdf {
         match self {
             Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor {
-                microfacet: Microfacet::new(b.microfacet.kind, alpha, alpha),
+                microfacet: Microfacet::new(b.microfacet.kind, alpha_u, alpha_v),
                 ..b
             }),
             Bsdf::RoughDielectric(b) => Bsdf::RoughDielectric(RoughDielectric {
-                microfacet: Microfacet::new(b.microfacet.kind, alpha, alpha),
+                microfacet: Microfacet::new(b.microfacet.kind, alpha_u, alpha_v),
                 ..b
             }),
             other => other,
+        }
+    }
+
+    /// The microfacet distribution of a rough conductor or rough
+    /// dielectric; `None` for other models.
+    #[inline]
+    pub fn microfacet(&self) -> Option<Microfacet> {
+        match self {
+            Bsdf::RoughConductor(b) => Some(b.microfacet),
+            Bsdf::RoughDielectric(b) => Some(b.microfacet),
+            _ => None,
         }
     }
 

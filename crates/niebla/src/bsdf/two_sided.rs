@@ -3,7 +3,7 @@
 //! (local `z -> -z`) and the back model is used, as Mitsuba does.
 
 use super::fresnel::fresnel_complex;
-use super::{LocalSample, Plastic, RoughConductor, RoughPlastic};
+use super::{LocalSample, Microfacet, Plastic, RoughConductor, RoughPlastic};
 use crate::color::Rgb;
 use crate::math::{Vec2, Vec3, INV_PI};
 use crate::sampling::sample_cosine_hemisphere;
@@ -46,6 +46,31 @@ impl Reflector {
             }
             Reflector::Plastic(b) => Reflector::Plastic(Plastic { diffuse_reflectance: color, ..b }),
             Reflector::RoughPlastic(b) => Reflector::RoughPlastic(RoughPlastic { diffuse_reflectance: color, ..b }),
+        }
+    }
+
+    /// The model with its roughness set to `alpha_u`, `alpha_v` (each
+    /// raised to [`MIN_ALPHA`](super::microfacet::MIN_ALPHA)): a rough
+    /// conductor's distribution; other models unchanged (the scene builder
+    /// gives a textured roughness to no others).
+    #[inline]
+    pub fn with_alpha_uv(self, alpha_u: f32, alpha_v: f32) -> Reflector {
+        match self {
+            Reflector::RoughConductor(b) => Reflector::RoughConductor(RoughConductor {
+                microfacet: Microfacet::new(b.microfacet.kind, alpha_u, alpha_v),
+                ..b
+            }),
+            other => other,
+        }
+    }
+
+    /// The microfacet distribution of a rough conductor; `None` for other
+    /// models.
+    #[inline]
+    pub fn microfacet(&self) -> Option<Microfacet> {
+        match self {
+            Reflector::RoughConductor(b) => Some(b.microfacet),
+            _ => None,
         }
     }
 

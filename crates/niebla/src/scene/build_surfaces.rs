@@ -13,7 +13,7 @@ use crate::bsdf::{
 };
 use crate::color::Rgb;
 use crate::limits::MemoryBudget;
-use crate::texture::Texture;
+use crate::texture::{AlphaTextures, RoughnessTextures, Texture};
 
 /// What the builder needs to load textures.
 pub(super) struct TextureContext<'a> {
@@ -24,19 +24,21 @@ pub(super) struct TextureContext<'a> {
 }
 
 /// The textures of a surface: at most one textured color, and a textured
-/// isotropic roughness (`roughconductor`, `roughdielectric`).
+/// roughness (`roughconductor`, `roughdielectric`, and rough-conductor
+/// sides of a `twosided`).
 #[derive(Default)]
 pub(super) struct SurfaceTextures {
     /// The textured color (see [`Bsdf::with_texture`]).
     pub color: Option<Arc<Texture>>,
-    /// The textured roughness (see [`Bsdf::with_alpha`]).
-    pub roughness: Option<Arc<Texture>>,
+    /// The textured roughness (see [`RoughnessTextures::apply`]).
+    pub roughness: Option<Arc<RoughnessTextures>>,
 }
 
 /// The surface model of `desc` (one of this module's types, found at JSON
 /// path `path`, e.g. `shapes[2].bsdf`) and its textures. At most one color
-/// of a surface may be textured, and the roughness of a top-level
-/// `roughconductor` or `roughdielectric`.
+/// of a surface may be textured; the roughness (`alpha`, or `alpha_u` and
+/// `alpha_v`) of a `roughconductor` or `roughdielectric`, also as a side of
+/// a `twosided`, may be textured too.
 pub(super) fn build_surface(
     desc: &BsdfDesc,
     path: &str,
@@ -48,11 +50,11 @@ pub(super) fn build_surface(
         BsdfDesc::RoughConductor(d) => {
             let (b, t) = rough_conductor(d, path, ctx)?;
             texture = t;
-            roughness = roughness_texture(&d.microfacet, path, ctx)?;
+            roughness = front_only(roughness_textures(&d.microfacet, path, ctx)?);
             Bsdf::RoughConductor(b)
         }
         BsdfDesc::RoughDielectric(d) => {
-            roughness = roughness_texture(&d.microfacet, path, ctx)?;
+            roughness = front_only(roughness_textures(&d.microfacet, path, ctx)?);
             Bsdf::RoughDielectric(RoughDielectric {
                 microfacet: microfacet(&d.microfacet),
                 eta: d.int_ior / d.ext_ior,
@@ -76,9 +78,19 @@ pub(super) fn build_surface(
             Bsdf::RoughPlastic(b)
         }
         BsdfDesc::TwoSided(d) => {
-            let (front, t_front) = reflector(&d.front, &format!("{path}.bsdf"), ctx)?;
-            let (back, t_back) = reflector(&d.back, &format!("{path}.bsdf"), ctx)?;
+            // Mitsuba's one-child form: one model (and its textures) for both sides.
             let same = d.front == d.back;
+            let (front_path, back_path) = if same {
+                (format!("{path}.bsdf"), format!("{path}.bsdf"))
+            } else {
+                (format!("{path}.bsdf[0]"), format!("{path}.bsdf[1]"))
+            };
+            let (front, t_front, a_front) = reflector(&d.front, &front_path, ctx)?;
+            let (back, t_back, a_back) =
+                if same { (front, t_front.clone(), a_front.clone()) } else { reflector(&d.back, &back_path, ctx)? };
+            if a_front.is_some() || a_back.is_some() {
+                roughness = Some(Arc::new(RoughnessTextures { front: a_front, back: a_back }));
+            }
             let textured = u8::from(t_front.is_some()) | (u8::from(t_back.is_some()) << 1);
             if !same && t_front.is_some() && t_back.is_some() {
                 return Err(SceneError::new(
@@ -97,66 +109,85 @@ pub(super) fn build_surface(
     Ok((bsdf, SurfaceTextures { color: texture, roughness }))
 }
 
-/// The texture of a textured `alpha` (at `path.alpha`); `None` for a
-/// constant roughness.
-fn roughness_texture(
+/// The textures of a textured roughness (`alpha`, or `alpha_u` and
+/// `alpha_v`, at `path.alpha...`); `None` for a constant roughness.
+fn roughness_textures(
     d: &MicrofacetDesc,
     path: &str,
     ctx: &mut TextureContext,
-) -> Result<Option<Arc<Texture>>, SceneError> {
-    match &d.alpha {
-        AlphaDesc::Textured(t) => {
-            let field = format!("{path}.alpha");
-            Ok(Some(Arc::new(ctx.loader.texture(t, &field, ctx.source, ctx.base_dir, ctx.budget)?)))
+) -> Result<Option<AlphaTextures>, SceneError> {
+    let mut load = |t: &TextureDesc, name: &str| -> Result<Arc<Texture>, SceneError> {
+        let field = format!("{path}.{name}");
+        Ok(Arc::new(ctx.loader.texture(t, &field, ctx.source, ctx.base_dir, ctx.budget)?))
+    };
+    Ok(match &d.alpha {
+        AlphaDesc::Textured(t) => Some(AlphaTextures::Isotropic(load(t, "alpha")?)),
+        AlphaDesc::TexturedAnisotropic(pair) => {
+            let mut one = |value: &AlphaValue, name: &str| match value {
+                AlphaValue::Number(_) => Ok(None),
+                AlphaValue::Texture(t) => load(t, name).map(Some),
+            };
+            let u = one(&pair.u, "alpha_u")?;
+            let v = one(&pair.v, "alpha_v")?;
+            Some(AlphaTextures::Anisotropic { u, v })
         }
-        _ => Ok(None),
-    }
+        AlphaDesc::Isotropic(_) | AlphaDesc::Anisotropic { .. } => None,
+    })
 }
+
+/// The roughness textures of a model that is not a `twosided`.
+fn front_only(front: Option<AlphaTextures>) -> Option<Arc<RoughnessTextures>> {
+    front.map(|a| Arc::new(RoughnessTextures { front: Some(a), back: None }))
+}
+
+/// Why `roughplastic` takes a constant roughness only.
+const ROUGH_PLASTIC_WHY: &str = "for roughplastic (its coating tables are precomputed for one roughness, and \
+                                 Mitsuba 3 refuses a texture there too)";
 
 /// An error for a textured roughness where niebla takes a constant one.
 fn constant_roughness(d: &MicrofacetDesc, path: &str, source: &str, why: &str) -> Result<(), SceneError> {
-    match d.alpha {
-        AlphaDesc::Textured(_) => Err(SceneError::new(
+    if d.alpha.is_textured() {
+        let field = if let AlphaDesc::TexturedAnisotropic(_) = d.alpha { "alpha_u" } else { "alpha" };
+        return Err(SceneError::new(
             source,
-            format!("{path}.alpha"),
+            format!("{path}.{field}"),
             format!("a textured roughness is not supported {why}; expected a number in (0, 1]"),
-        )),
-        _ => Ok(()),
+        ));
     }
+    Ok(())
 }
 
-/// A nested model of `twosided` (which must reflect only).
-fn reflector(
-    desc: &BsdfDesc,
-    path: &str,
-    ctx: &mut TextureContext,
-) -> Result<(Reflector, Option<Arc<Texture>>), SceneError> {
+/// A side of a `twosided`: its model, textured color and textured roughness.
+type Side = (Reflector, Option<Arc<Texture>>, Option<AlphaTextures>);
+
+/// A nested model of `twosided` (which must reflect only), its textured
+/// color and its textured roughness (a rough conductor's).
+fn reflector(desc: &BsdfDesc, path: &str, ctx: &mut TextureContext) -> Result<Side, SceneError> {
     Ok(match desc {
         BsdfDesc::Diffuse { reflectance } => match reflectance {
-            ReflectanceDesc::Color(c) => (Reflector::Diffuse { reflectance: c.to_rgb() }, None),
+            ReflectanceDesc::Color(c) => (Reflector::Diffuse { reflectance: c.to_rgb() }, None, None),
             ReflectanceDesc::Texture(t) => {
                 let field = format!("{path}.reflectance");
                 let t = ctx.loader.texture(t, &field, ctx.source, ctx.base_dir, ctx.budget)?;
-                (Reflector::Diffuse { reflectance: Rgb::splat(0.5) }, Some(Arc::new(t)))
+                (Reflector::Diffuse { reflectance: Rgb::splat(0.5) }, Some(Arc::new(t)), None)
             }
         },
         BsdfDesc::Conductor(c) => {
             let (eta, k) = conductor_index(c, path, ctx.source, false)?;
-            (Reflector::Conductor { eta, k }, None)
+            (Reflector::Conductor { eta, k }, None, None)
         }
         BsdfDesc::RoughConductor(d) => {
-            constant_roughness(&d.microfacet, path, ctx.source, "inside a twosided")?;
             let (b, t) = rough_conductor(d, path, ctx)?;
-            (Reflector::RoughConductor(b), t)
+            let alpha = roughness_textures(&d.microfacet, path, ctx)?;
+            (Reflector::RoughConductor(b), t, alpha)
         }
         BsdfDesc::Plastic(d) => {
             let (b, t) = plastic(d, path, ctx)?;
-            (Reflector::Plastic(b), t)
+            (Reflector::Plastic(b), t, None)
         }
         BsdfDesc::RoughPlastic(d) => {
-            constant_roughness(&d.microfacet, path, ctx.source, "for roughplastic")?;
             let (b, t) = rough_plastic(d, path, ctx)?;
-            (Reflector::RoughPlastic(b), t)
+            (Reflector::RoughPlastic(b), t, None)
         }
         _ => {
             return Err(SceneError::new(
@@ -169,13 +200,18 @@ fn reflector(
 }
 
 /// The distribution of `d`. A textured roughness has no constant: every
-/// hit sets its own ([`Bsdf::with_alpha`]); the model keeps Mitsuba's
-/// default 0.1 until then.
+/// hit sets its own ([`RoughnessTextures::apply`]); the model keeps
+/// Mitsuba's default 0.1 for it until then.
 fn microfacet(d: &MicrofacetDesc) -> Microfacet {
-    match d.alpha {
-        AlphaDesc::Isotropic(a) => Microfacet::new(d.distribution, a, a),
-        AlphaDesc::Anisotropic { u, v } => Microfacet::new(d.distribution, u, v),
+    let constant = |a: &AlphaValue| match a {
+        AlphaValue::Number(a) => *a,
+        AlphaValue::Texture(_) => 0.1,
+    };
+    match &d.alpha {
+        AlphaDesc::Isotropic(a) => Microfacet::new(d.distribution, *a, *a),
+        AlphaDesc::Anisotropic { u, v } => Microfacet::new(d.distribution, *u, *v),
         AlphaDesc::Textured(_) => Microfacet::new(d.distribution, 0.1, 0.1),
+        AlphaDesc::TexturedAnisotropic(pair) => Microfacet::new(d.distribution, constant(&pair.u), constant(&pair.v)),
     }
 }
 
@@ -228,7 +264,7 @@ fn rough_plastic(
     path: &str,
     ctx: &mut TextureContext,
 ) -> Result<(RoughPlastic, Option<Arc<Texture>>), SceneError> {
-    constant_roughness(&d.microfacet, path, ctx.source, "for roughplastic")?;
+    constant_roughness(&d.microfacet, path, ctx.source, ROUGH_PLASTIC_WHY)?;
     let p = &d.plastic;
     let (diffuse, texture) = color_or_texture(&p.diffuse_reflectance, &format!("{path}.diffuse_reflectance"), ctx)?;
     let specular = p.specular_reflectance.to_rgb();

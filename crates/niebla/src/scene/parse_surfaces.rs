@@ -60,27 +60,32 @@ struct RawMicrofacet {
     alpha_v: Option<Value>,
 }
 
-/// A roughness value: a number (checked later to lie in (0, 1]).
-fn alpha_number(field: &str, value: &Value) -> Result<f32, Located> {
+/// A roughness value: a number (checked later to lie in (0, 1]) or a
+/// texture object.
+fn alpha_value(field: &str, value: &Value) -> Result<AlphaValue, Located> {
     match value {
-        Value::Number(n) => Ok(n.as_f64().unwrap_or(f64::NAN) as f32),
-        Value::Object(_) => Err(Located::new(
-            field,
-            "a textured anisotropic roughness is not supported; expected a number in (0, 1] \
-             (an isotropic `alpha` may be a texture)",
-        )),
+        Value::Number(n) => Ok(AlphaValue::Number(n.as_f64().unwrap_or(f64::NAN) as f32)),
+        Value::Object(o) => {
+            super::parse::parse_texture(o.clone()).map(|t| AlphaValue::Texture(Box::new(t))).map_err(|e| e.under(field))
+        }
         other => Err(Located::new(field, format!("expected a number in (0, 1] or a texture, got {}", describe(other)))),
     }
 }
 
 /// The isotropic roughness `alpha`: a number or a texture object.
-fn alpha_value(value: &Value) -> Result<AlphaDesc, Located> {
-    match value {
-        Value::Object(o) => super::parse::parse_texture(o.clone())
-            .map(|t| AlphaDesc::Textured(Box::new(t)))
-            .map_err(|e| e.under("alpha")),
-        other => alpha_number("alpha", other).map(AlphaDesc::Isotropic),
-    }
+fn isotropic(value: &Value) -> Result<AlphaDesc, Located> {
+    Ok(match alpha_value("alpha", value)? {
+        AlphaValue::Number(a) => AlphaDesc::Isotropic(a),
+        AlphaValue::Texture(t) => AlphaDesc::Textured(t),
+    })
+}
+
+/// `alpha_u` and `alpha_v`, each a number or a texture object.
+fn anisotropic(u: &Value, v: &Value) -> Result<AlphaDesc, Located> {
+    Ok(match (alpha_value("alpha_u", u)?, alpha_value("alpha_v", v)?) {
+        (AlphaValue::Number(u), AlphaValue::Number(v)) => AlphaDesc::Anisotropic { u, v },
+        (u, v) => AlphaDesc::TexturedAnisotropic(Box::new(AlphaPair { u, v })),
+    })
 }
 
 fn microfacet(raw: &RawMicrofacet) -> Result<MicrofacetDesc, Located> {
@@ -96,10 +101,8 @@ fn microfacet(raw: &RawMicrofacet) -> Result<MicrofacetDesc, Located> {
     };
     let alpha = match (&raw.alpha, &raw.alpha_u, &raw.alpha_v) {
         (None, None, None) => AlphaDesc::Isotropic(0.1),
-        (Some(a), None, None) => alpha_value(a)?,
-        (None, Some(u), Some(v)) => {
-            AlphaDesc::Anisotropic { u: alpha_number("alpha_u", u)?, v: alpha_number("alpha_v", v)? }
-        }
+        (Some(a), None, None) => isotropic(a)?,
+        (None, Some(u), Some(v)) => anisotropic(u, v)?,
         (Some(_), _, _) => {
             return Err(Located::new("alpha", "give either `alpha` or `alpha_u` with `alpha_v`, not both"))
         }
@@ -252,14 +255,14 @@ fn parse_plastic(object: Object) -> Result<BsdfDesc, Located> {
 
 fn parse_rough_plastic(mut object: Object) -> Result<BsdfDesc, Located> {
     let microfacet = take_microfacet(&mut object)?;
-    if let AlphaDesc::Anisotropic { .. } = microfacet.alpha {
+    if let AlphaDesc::Anisotropic { .. } | AlphaDesc::TexturedAnisotropic(_) = microfacet.alpha {
         return Err(Located::new("alpha_u", "roughplastic is isotropic (as in Mitsuba): give `alpha`"));
     }
     if let AlphaDesc::Textured(_) = microfacet.alpha {
         return Err(Located::new(
             "alpha",
             "a textured roughness is not supported for roughplastic (its coating tables are precomputed for one \
-             roughness); expected a number in (0, 1]",
+             roughness, and Mitsuba 3 refuses a texture there too); expected a number in (0, 1]",
         ));
     }
     let plastic = plastic_desc(object)?;

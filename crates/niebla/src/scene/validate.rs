@@ -722,6 +722,17 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                 check("alpha_u", *u)?;
                 check("alpha_v", *v)
             }
+            AlphaDesc::TexturedAnisotropic(pair) => {
+                for (field, value) in [("alpha_u", &pair.u), ("alpha_v", &pair.v)] {
+                    match value {
+                        AlphaValue::Number(a) => check(field, *a)?,
+                        AlphaValue::Texture(t) => {
+                            validate_reflectance(&format!("{base}.{field}"), &ReflectanceDesc::Texture((**t).clone()))?
+                        }
+                    }
+                }
+                Ok(())
+            }
         }
     };
     let iors = |int_ior: f32, ext_ior: f32| -> Check {

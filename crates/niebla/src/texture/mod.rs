@@ -11,8 +11,10 @@
 //! its left column.
 
 mod bitmap;
+mod roughness;
 
 pub use bitmap::{Bitmap, FilterMode, TextureError, WrapMode};
+pub use roughness::{AlphaTextures, RoughnessTextures};
 
 use crate::color::Rgb;
 use crate::math::Vec2;

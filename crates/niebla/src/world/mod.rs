@@ -40,11 +40,12 @@ pub struct SceneObject {
     /// specular reflectance), replacing `bsdf`'s constant one; see
     /// [`Scene::surface_bsdf`].
     pub texture: Option<std::sync::Arc<crate::texture::Texture>>,
-    /// A texture giving the isotropic roughness `alpha` of a
-    /// `roughconductor` or `roughdielectric` at each uv point (its
+    /// Textures giving the roughness (`alpha`, or `alpha_u` and `alpha_v`)
+    /// of a `roughconductor`, a `roughdielectric` or the rough-conductor
+    /// sides of a `twosided` at each uv point (their
     /// [`Texture::scalar`](crate::texture::Texture::scalar)), replacing
-    /// `bsdf`'s constant one; see [`Scene::surface_bsdf`].
-    pub roughness: Option<std::sync::Arc<crate::texture::Texture>>,
+    /// `bsdf`'s constants; see [`Scene::surface_bsdf`].
+    pub roughness: Option<std::sync::Arc<crate::texture::RoughnessTextures>>,
 }
 
 /// A surface hit with the object it belongs to.
@@ -127,7 +128,8 @@ impl Scene {
 
     /// The surface model at `hit`: the object's BSDF, with its textured
     /// color (see [`Bsdf::with_texture`]) and textured roughness (see
-    /// [`Bsdf::with_alpha`]) looked up at the hit's uv.
+    /// [`RoughnessTextures::apply`](crate::texture::RoughnessTextures::apply))
+    /// looked up at the hit's uv.
     #[inline]
     pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
         let object = self.object(hit);
@@ -140,7 +142,7 @@ impl Scene {
             bsdf = bsdf.with_texture(texture.eval(uv));
         }
         if let Some(roughness) = &object.roughness {
-            bsdf = bsdf.with_alpha(roughness.scalar(uv));
+            bsdf = roughness.apply(bsdf, uv);
         }
         bsdf
     }

@@ -24,6 +24,37 @@ pub enum AlphaDesc {
         /// `alpha_v`.
         v: f32,
     },
+    /// Roughness along the tangent and the bitangent, at least one of them
+    /// a texture (each read as for [`AlphaDesc::Textured`]).
+    /// `roughconductor` and `roughdielectric` only.
+    TexturedAnisotropic(Box<AlphaPair>),
+}
+
+/// `alpha_u` and `alpha_v` of [`AlphaDesc::TexturedAnisotropic`] (boxed so
+/// that a surface description stays small).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AlphaPair {
+    /// `alpha_u`.
+    pub u: AlphaValue,
+    /// `alpha_v`.
+    pub v: AlphaValue,
+}
+
+/// One roughness value of [`AlphaDesc::TexturedAnisotropic`]: a number or
+/// a texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AlphaValue {
+    /// A constant, in (0, 1].
+    Number(f32),
+    /// A texture's scalar value at the hit's uv.
+    Texture(Box<TextureDesc>),
+}
+
+impl AlphaDesc {
+    /// True when some roughness of this description is a texture.
+    pub fn is_textured(&self) -> bool {
+        matches!(self, AlphaDesc::Textured(_) | AlphaDesc::TexturedAnisotropic(_))
+    }
 }
 
 /// A microfacet distribution: `distribution` (`"beckmann"`, the default,

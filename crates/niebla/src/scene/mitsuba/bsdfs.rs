@@ -72,74 +72,72 @@ fn unit_only(p: &Props, name: &str) -> Result<(), SceneError> {
 }
 
 /// Microfacet keys: `distribution` (default beckmann) and `alpha` or
-/// `alpha_u` + `alpha_v`. `alpha` may be a `<texture>` (or a `<ref>` to one)
-/// when `textured_alpha` (roughconductor, roughdielectric); anisotropic
-/// textured roughness is an error.
+/// `alpha_u` + `alpha_v`. When `textured_alpha` (roughconductor,
+/// roughdielectric), each may be a `<texture>` (or a `<ref>` to one); a
+/// texture elsewhere (roughplastic) is an error at its line.
 fn microfacet<'a>(
     c: &mut Converter<'a>,
     p: &Props<'a>,
     out: &mut Map<String, Value>,
     textured_alpha: bool,
 ) -> Result<(), SceneError> {
-    for name in ["alpha_u", "alpha_v"] {
-        if let Some(t) = p.plugin_named(name) {
-            return Err(t.loc.error(format!(
-                "{}: `{name}` as {}: a textured anisotropic roughness is not supported (give a <float>, or \
-                 an isotropic `alpha` texture)",
-                p.what(),
-                t.describe()
-            )));
-        }
-    }
-    if let Some(t) = p.plugin_named("alpha") {
-        if !textured_alpha {
-            return Err(t.loc.error(format!(
-                "{}: `alpha` as {}: a textured roughness is not supported here (roughplastic precomputes its \
-                 coating tables for one roughness; give a <float>)",
-                p.what(),
-                t.describe()
-            )));
-        }
-        if p.float("alpha_u")?.is_some() || p.float("alpha_v")?.is_some() {
-            return Err(p.error("give `alpha`, or both `alpha_u` and `alpha_v`"));
-        }
-        let d = p.string("distribution")?.unwrap_or("beckmann");
-        if d != "beckmann" && d != "ggx" {
-            return Err(p.error(format!("`distribution` \"{d}\": expected beckmann or ggx")));
-        }
-        out.insert("distribution".into(), json!(d));
-        let node = c.resolve(t, "texture")?;
-        let mut alpha = super::textures::convert_texture(c, node)?;
-        if alpha["type"] == "checkerboard" {
-            // Mitsuba 3's checkerboard gives its scalar value (`eval_1`,
-            // what a roughness reads) from the other color than its color
-            // (`eval`): color1 where `eval` gives color0 (checked against
-            // Mitsuba 3.9.1). niebla's checkerboard has one rule, so the
-            // colors are swapped here.
-            let (c0, c1) = (alpha["color0"].take(), alpha["color1"].take());
-            alpha["color0"] = c1;
-            alpha["color1"] = c0;
-        }
-        out.insert("alpha".into(), alpha);
-        return Ok(());
-    }
     let d = p.string("distribution")?.unwrap_or("beckmann");
     if d != "beckmann" && d != "ggx" {
         return Err(p.error(format!("`distribution` \"{d}\": expected beckmann or ggx")));
     }
     out.insert("distribution".into(), json!(d));
-    let (a, au, av) = (p.float("alpha")?, p.float("alpha_u")?, p.float("alpha_v")?);
+    let mut values = Vec::new();
+    for name in ["alpha", "alpha_u", "alpha_v"] {
+        let value = match p.plugin_named(name) {
+            Some(t) if !textured_alpha => {
+                return Err(t.loc.error(format!(
+                    "{}: `{name}` as {}: a textured roughness is not supported for roughplastic (its coating \
+                     tables are precomputed for one roughness, and Mitsuba 3 refuses a texture there too; give a \
+                     <float>)",
+                    p.what(),
+                    t.describe()
+                )));
+            }
+            Some(t) => Some(alpha_texture(c, t)?),
+            None => p.float(name)?.map(|a| json!(a)),
+        };
+        values.push(value);
+    }
+    let mut values = values.into_iter();
+    let (a, au, av) = (values.next().flatten(), values.next().flatten(), values.next().flatten());
     match (a, au, av) {
         (a, None, None) => {
-            out.insert("alpha".into(), json!(a.unwrap_or(0.1)));
+            out.insert("alpha".into(), a.unwrap_or(json!(0.1)));
         }
         (None, Some(u), Some(v)) => {
-            out.insert("alpha_u".into(), json!(u));
-            out.insert("alpha_v".into(), json!(v));
+            out.insert("alpha_u".into(), u);
+            out.insert("alpha_v".into(), v);
         }
         _ => return Err(p.error("give `alpha`, or both `alpha_u` and `alpha_v`")),
     }
     Ok(())
+}
+
+/// A roughness `<texture>` (or `<ref>` to one) as niebla's texture object.
+fn alpha_texture<'a>(c: &mut Converter<'a>, t: &'a Node) -> Result<Value, SceneError> {
+    let node = c.resolve(t, "texture")?;
+    let mut alpha = super::textures::convert_texture(c, node)?;
+    if alpha["type"] == "checkerboard" {
+        // Mitsuba 3's checkerboard gives its scalar value (`eval_1`, what a
+        // roughness reads) from the other color than its color (`eval`):
+        // color1 where `eval` gives color0 (checked against Mitsuba 3.9.1).
+        // niebla's checkerboard has one rule, so the colors are swapped here.
+        let (c0, c1) = (alpha["color0"].take(), alpha["color1"].take());
+        alpha["color0"] = c1;
+        alpha["color1"] = c0;
+    }
+    Ok(alpha)
+}
+
+/// True when a converted bsdf has a textured color (a textured roughness,
+/// `alpha...`, does not count: each side of a `twosided` may have its own).
+fn has_color_texture(bsdf: &Value) -> bool {
+    bsdf.as_object().is_some_and(|o| o.iter().any(|(k, v)| !k.starts_with("alpha") && has_texture(v)))
 }
 
 /// Copies color `name` into `out` when given.
@@ -241,7 +239,8 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
                     convert_bsdf(c, n)
                 })
                 .collect::<Result<Vec<_>, _>>()?;
-            if sides.len() == 2 && sides[0] != sides[1] && has_texture(&sides[0]) && has_texture(&sides[1]) {
+            if sides.len() == 2 && sides[0] != sides[1] && has_color_texture(&sides[0]) && has_color_texture(&sides[1])
+            {
                 return Err(p.error("textures on both sides are not supported (niebla textures one color per surface)"));
             }
             match sides.len() {

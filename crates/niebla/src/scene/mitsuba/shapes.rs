@@ -42,6 +42,16 @@ const CUBE_TRIANGLES: [[u32; 3]; 12] = [
     [4, 7, 6],
 ];
 
+/// True when a converted bsdf (or a side of its `twosided`) has an
+/// anisotropic roughness (`alpha_u` other than `alpha_v`).
+fn anisotropic(bsdf: &Value) -> bool {
+    match bsdf.get("bsdf") {
+        Some(Value::Array(sides)) => sides.iter().any(anisotropic),
+        Some(side @ Value::Object(_)) => anisotropic(side),
+        _ => bsdf.get("alpha_u").is_some() && bsdf.get("alpha_u") != bsdf.get("alpha_v"),
+    }
+}
+
 /// Converts one `<shape>` and appends it to the scene's shapes (or lights).
 pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<(), SceneError> {
     let p = Props::new(node)?;
@@ -155,6 +165,19 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         // Mitsuba's default surface.
         None => json!({"type": "diffuse", "reflectance": 0.5}),
     };
+    // niebla's tangent frame (from the normal alone) is Mitsuba's (dp/du)
+    // on a rectangle whose dp/du, to_world's first column, stays along +x
+    // (a half turn for flip_normals keeps it).
+    let x_axis = [m[0][0], m[1][0], m[2][0]];
+    let frames_agree = t == "rectangle" && x_axis[0] > 0.0 && x_axis[1].abs().max(x_axis[2].abs()) <= 1e-6 * x_axis[0];
+    if anisotropic(&bsdf) && !frames_agree {
+        c.notes.push(format!(
+            "{}: {}: anisotropic roughness follows niebla's tangent frame (built from the normal), which is \
+             Mitsuba's (dp/du) only on a rectangle turned about x: its direction differs here",
+            node.loc.at(),
+            p.what()
+        ));
+    }
     if super::textures::has_texture(&bsdf) {
         if let Some(why) = untexturable {
             return Err(p.error(format!("a textured bsdf on {why} is not supported")));

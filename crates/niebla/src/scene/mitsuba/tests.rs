@@ -425,6 +425,59 @@ fn textured_alpha_converts_for_rough_conductor_and_dielectric() {
     }
 }
 
+/// Textured `alpha_u`/`alpha_v` (one may be a number) and textured
+/// roughness inside `twosided` (each side its own) convert to JSON texture
+/// objects, checkerboards swapped; niebla's parser reads them back.
+#[test]
+fn textured_anisotropic_and_twosided_alpha_convert() {
+    let import = import_with_png(
+        r#"<texture type="bitmap" id="r"><string name="filename" value="a.png"/><boolean name="raw" value="true"/></texture>
+           <shape type="rectangle"><bsdf type="roughconductor"><string name="material" value="Au"/><ref name="alpha_u" id="r"/>
+           <float name="alpha_v" value="0.3"/></bsdf></shape>
+           <shape type="rectangle"><bsdf type="twosided">
+             <bsdf type="roughconductor"><string name="material" value="Au"/><texture type="checkerboard" name="alpha"><float name="color0" value="0.05"/>
+               <float name="color1" value="0.45"/></texture></bsdf>
+             <bsdf type="roughconductor"><string name="material" value="Au"/><string name="distribution" value="ggx"/><float name="alpha_u" value="0.2"/>
+               <ref name="alpha_v" id="r"/></bsdf></bsdf></shape>"#,
+    )
+    .unwrap();
+    let s = &import.scene;
+    let a = &s["shapes"][0]["bsdf"];
+    assert_eq!((&a["alpha_u"]["type"], &a["alpha_v"]), (&json!("bitmap"), &json!(0.3)));
+    let sides = &s["shapes"][1]["bsdf"]["bsdf"];
+    assert_eq!((&sides[0]["alpha"]["color0"], &sides[0]["alpha"]["color1"]), (&json!(0.45), &json!(0.05)));
+    assert_eq!((&sides[1]["alpha_u"], &sides[1]["alpha_v"]["type"]), (&json!(0.2), &json!("bitmap")));
+    // Both rectangles are unrotated: niebla's tangent frame is Mitsuba's.
+    assert!(!import.notes.iter().any(|n| n.contains("anisotropic")), "{:?}", import.notes);
+    let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+    match &desc.shapes[0].bsdf {
+        crate::scene::desc::BsdfDesc::RoughConductor(d) => {
+            assert!(matches!(d.microfacet.alpha, crate::scene::desc::AlphaDesc::TexturedAnisotropic(_)))
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// Anisotropic roughness on a shape where niebla's tangent frame is not
+/// Mitsuba's (a sphere; a rectangle turned about y) is noted at the
+/// shape's line; on a rectangle turned about x it is not.
+#[test]
+fn anisotropic_roughness_off_the_shared_frame_is_noted() {
+    let notes = |shape: &str, to_world: &str| {
+        let body = format!(
+            "<shape type=\"{shape}\">{to_world}\n<bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/><float name=\"alpha_u\" \
+             value=\"0.1\"/><float name=\"alpha_v\" value=\"0.4\"/></bsdf></shape>"
+        );
+        import_with_png(&body).unwrap().notes.into_iter().filter(|n| n.contains("anisotropic")).collect::<Vec<_>>()
+    };
+    let sphere = notes("sphere", "");
+    assert!(sphere.len() == 1 && sphere[0].starts_with("t.xml:8: <shape type=\"sphere\">"), "{sphere:?}");
+    let turned = |axis: &str| format!("<transform name=\"to_world\"><rotate {axis}=\"1\" angle=\"40\"/></transform>");
+    assert_eq!(notes("rectangle", &turned("y")).len(), 1);
+    assert_eq!(notes("disk", "").len(), 1);
+    assert!(notes("rectangle", &turned("x")).is_empty());
+}
+
 /// Mitsuba's bitmap reads row `v * height` from the image's top, niebla's
 /// `(1 - v) * height`: the imported `to_uv` is Mitsuba's followed by
 /// `v -> 1 - v`; Mitsuba's 4x4 `to_uv` contributes rows/columns 0, 1, 3.
@@ -522,8 +575,9 @@ fn texture_errors_name_file_line_and_attribute() {
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("t.xml:9: <texture type=\"mesh_attribute\">: not supported"), "{e}");
-    // Textured roughness: isotropic on roughconductor/roughdielectric only;
-    // shapes whose uvs are not converted.
+    // Textured roughness: not on roughplastic (as in Mitsuba 3), whether
+    // `alpha` or a texture given with an anisotropic pair; shapes whose uvs
+    // are not converted.
     let e = import_with_png(
         "<shape type=\"sphere\"><bsdf type=\"roughplastic\">\n\
                              <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
@@ -533,18 +587,27 @@ fn texture_errors_name_file_line_and_attribute() {
     assert!(
         e.starts_with(
             "t.xml:9: <bsdf type=\"roughplastic\">: `alpha` as <texture type=\"checkerboard\">: a textured \
-                       roughness is not supported here (roughplastic"
+                       roughness is not supported for roughplastic (its coating tables"
         ),
         "{e}"
     );
+    assert!(e.contains("Mitsuba 3 refuses"), "{e}");
     let e = import_with_png(
-        "<shape type=\"sphere\"><bsdf type=\"roughconductor\"><float name=\"alpha_u\" value=\"0.1\"/>\n\
-                             <texture type=\"checkerboard\" name=\"alpha_v\"/></bsdf></shape>",
+        "<shape type=\"sphere\"><bsdf type=\"twosided\"><bsdf type=\"roughplastic\">\
+                             <float name=\"alpha_u\" value=\"0.1\"/>\n\
+                             <texture type=\"checkerboard\" name=\"alpha_v\"/></bsdf></bsdf></shape>",
     )
     .unwrap_err()
     .to_string();
-    assert!(e.starts_with("t.xml:9: <bsdf type=\"roughconductor\">: `alpha_v` as <texture"), "{e}");
-    assert!(e.contains("anisotropic"), "{e}");
+    assert!(e.starts_with("t.xml:9: <bsdf type=\"roughplastic\">: `alpha_v` as <texture"), "{e}");
+    // A texture and a number for the same roughness.
+    let e = import_with_png(
+        "<shape type=\"sphere\"><bsdf type=\"roughconductor\">\n<float name=\"alpha_u\" value=\"0.1\"/>\
+                             <texture type=\"checkerboard\" name=\"alpha\"/></bsdf></shape>",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("<bsdf type=\"roughconductor\">: give `alpha`, or both `alpha_u` and `alpha_v`"), "{e}");
     let e = err("<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/>\
                  </bsdf></shape>");
     assert!(e.starts_with("t.xml:8: <shape type=\"cube\">: a textured bsdf on a cube"), "{e}");
