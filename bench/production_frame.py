@@ -25,7 +25,7 @@ Times, two ways:
   render call net of its per-call fixed cost, a 1x1-pixel render, mostly
   its volume octree; Mitsuba's mi.render after a JIT warm-up);
 - CPU: CPU seconds (user + system, all threads) of the render call, net of
-  the same fixed cost measured in CPU seconds (niebla: a 8x8-pixel render
+  the same fixed cost measured in CPU seconds (niebla: an 8x8-pixel render
   of the same scene, i.e. start-up, VDB load and majorant grid; Cycles: the
   1x1-pixel render; Mitsuba: none subtracted). On a machine shared with
   other work, CPU seconds are the figures to read.
@@ -44,9 +44,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
-import resource
+import re
 import subprocess
 import sys
 import time
@@ -68,7 +67,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, HERE)
 import compare  # noqa: E402
-from compare import CYCLES_PY, Cycles, Mitsuba, read_exr, rel_mse, time_to_reach  # noqa: E402
+from compare import Cycles, Mitsuba, read_exr, rel_mse, time_to_reach  # noqa: E402
 from volumes import vdb_to_vol  # noqa: E402
 
 
@@ -131,8 +130,6 @@ class MeasuredNiebla:
         text = open(log).read()
         if p.returncode:
             raise RuntimeError(f"{' '.join(cmd)} failed:\n{text}")
-        import re
-
         m = re.search(r"rendered \S+ at (\d+) spp with \S+ in ([0-9.]+) s", text)
         if not m or int(m.group(1)) != spp:
             raise RuntimeError(f"unexpected niebla output: {text!r}")
@@ -403,7 +400,7 @@ def main():
         results.append(res)
 
     total = time.perf_counter() - t_start
-    log(f"\nimage means against niebla's reference (R, G, B; peer / niebla - 1 +- one standard error):")
+    log("\nimage means against niebla's reference (R, G, B; peer / niebla - 1 +- one standard error):")
     log("| image | spp | mean R | mean G | mean B | / niebla - 1 (R, G, B) |")
     log("|---|---|---|---|---|---|")
     n_mean = ref.astype(np.float64).mean((0, 1))
