@@ -6,7 +6,8 @@
 builds the scene once (bench/niebla2cycles.py), prints one JSON line
 {"ready": true, "build_s": ...} (or {"unsupported": "why"}), then for each
 request line {"spp": N, "seed": S, "out": "x.exr", "width": W, "height": H}
-renders and answers {"seconds": T}: the wall time of the render call alone
+renders and answers {"seconds": T, "cpu_seconds": C}: the wall time of the
+render call alone and the CPU seconds of the process (all threads) during it
 (scene building, Blender start and the EXR write excluded; the per-call volume
 octree build that Cycles does is included, and measured separately by
 requesting a 1x1-pixel, 1-spp render). width/height override the film size
@@ -47,12 +48,12 @@ def main():
         scene.render.resolution_y = int(req.get("height", h0))
         scene.render.filepath = req["out"]
         with contextlib.redirect_stdout(sys.stderr):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             bpy.ops.render.render(write_still=False)
-            t = time.perf_counter() - t0
+            t, cpu = time.perf_counter() - t0, time.process_time() - c0
             img = bpy.data.images["Render Result"]
             img.save_render(req["out"])
-        print(json.dumps({"seconds": t}), flush=True)
+        print(json.dumps({"seconds": t, "cpu_seconds": cpu}), flush=True)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,10 @@ means with niebla; see bench/README.md):
   boundary, niebla's `null` BSDF). A grid medium is a Volume object reading a
   VDB written from the same voxels (cell-centred, voxel size = the cell size
   of niebla's bounds, float precision, no clipping), its `density` attribute
-  multiplying the coefficients.
+  multiplying the coefficients. A grid medium whose density is itself a VDB
+  grid (`{"type": "vdb"}`, grid `density`) reads that file directly, placed
+  by the medium's `to_world`; its active voxels must lie in the container box
+  (niebla clips to the box, Cycles does not).
 - lights: a directional light of irradiance E is a Sun of strength E and
   angle 0; a point light of intensity I (W/sr) a Point of radius 0, soft
   falloff off, power 4 pi I; a constant environment of radiance L the World
@@ -476,6 +479,41 @@ def _pyro_object(bpy, scene, name, m, shape, scene_dir):
     obj.data.materials.append(mat)
 
 
+def _vdb_grid_object(bpy, scene, name, m, d, shape, scene_dir):
+    """A `grid` medium whose density is a VDB grid (`{"type": "vdb"}`): a
+    Volume object reading the same file (placed by the medium's `to_world`),
+    its `density` grid multiplying the coefficients (Volume Info's Density
+    reads the grid named `density`). niebla clips the grid to the container
+    box, Cycles renders every active voxel: the box must hold them all."""
+    grid = d.get("grid", "density")
+    if grid != "density":
+        raise Unsupported(f"a VDB density grid named {grid!r} (Volume Info reads 'density')")
+    for key in ("velocity", "albedo_grid", "emission"):
+        if m.get(key):
+            raise Unsupported(f"a VDB grid medium with {key}")
+    path = d["file"] if os.path.isabs(d["file"]) else os.path.join(scene_dir, d["file"])
+    grids = vdb_grids(path)
+    if grid not in grids:
+        raise Unsupported(f"grid {grid!r} absent from {path}")
+    xf = niebla_transform(m.get("to_world"))
+    bmin, bmax = np.asarray(shape["min"], float), np.asarray(shape["max"], float)
+    lo, hi = grids[grid][1], grids[grid][2]
+    if lo is not None:
+        for c in np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T:
+            w = (xf @ np.array([*c, 1.0]))[:3]
+            if np.any(w < bmin - 1e-4) or np.any(w > bmax + 1e-4):
+                raise Unsupported(f"VDB grid {grid!r} reaches beyond its container box ({w} outside {bmin}..{bmax})")
+    vol = bpy.data.volumes.new(name)
+    vol.filepath = path
+    vol.render.precision = "FULL"
+    vol.render.clipping = 0.0
+    vol.render.space = "OBJECT"
+    obj = bpy.data.objects.new(name, vol)
+    obj.matrix_world = xf.T.tolist()
+    scene.collection.objects.link(obj)
+    obj.data.materials.append(_material_volume(bpy, name + "_volume", m, True))
+
+
 def _shape(bpy, scene, shape, media, scene_dir, grid_objects):
     kind = shape["type"]
     name = f"shape{len(scene.collection.objects)}"
@@ -515,6 +553,11 @@ def _shape(bpy, scene, shape, media, scene_dir, grid_objects):
             _pyro_object(bpy, scene, name, m, shape, scene_dir)
             return
         d = m["density"]
+        if d.get("type") == "vdb":
+            if kind != "box" or surf is not None:
+                raise Unsupported("a VDB grid medium outside a null box")
+            _vdb_grid_object(bpy, scene, name, m, d, shape, scene_dir)
+            return
         if d.get("type") != "npy":
             raise Unsupported(f"density {d.get('type')!r}")
         if kind != "box" or [list(map(float, shape["min"])), list(map(float, shape["max"]))] != [

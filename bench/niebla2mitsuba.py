@@ -9,9 +9,11 @@ an error rather than a silent approximation:
 - integrator: niebla `volpath` with `max_depth` N (N scattering events, surface
   or medium) -> Mitsuba `volpath` or `volpathmis` with `max_depth` N + 1
   (Mitsuba counts path segments: 1 = directly visible emitters only);
-- media: `homogeneous` -> `homogeneous`; `grid` with an `npy`/`vol` density ->
-  `heterogeneous` whose `sigma_t` is a `gridvolume` read from the `.vol`
-  file with the same voxels (the `.npy` next to it is what niebla reads),
+- media: `homogeneous` -> `homogeneous`; `grid` with an `npy`/`vol`/`vdb`
+  density -> `heterogeneous` whose `sigma_t` is a `gridvolume` read from the
+  `.vol` file with the same voxels (the `.npy` or `.vdb` next to it, same
+  stem, is what niebla reads; a VDB's `.vol` is written by
+  `volumes.vdb_to_vol`, dense, with a border of zero voxels),
   trilinear, placed by an explicit `to_world` (Mitsuba ignores the bbox stored
   in a `.vol` unless `use_grid_bbox` is set). Coefficients are passed as
   `sigma_t` and `albedo` (Mitsuba's form). `has_spectral_extinction` is set
@@ -254,10 +256,20 @@ def _medium(mi, name, m, scene_dir):
     elif d["type"] == "vol":
         vol = os.path.join(scene_dir, d["file"])
         bounds = None
+    elif d["type"] == "vdb":
+        # Mitsuba reads no VDB: the .vol with the same stem holds the same
+        # voxels, densely, with a border of zero voxels (volumes.vdb_to_vol).
+        if d.get("grid", "density") != "density":
+            raise Unsupported(f"media.{name}: VDB grid {d.get('grid')!r} (vdb_to_vol converts 'density')")
+        src = os.path.join(scene_dir, d["file"])
+        vol = os.path.splitext(src)[0] + ".vol"
+        if os.path.exists(vol) and os.path.exists(src) and os.path.getmtime(vol) < os.path.getmtime(src):
+            raise Unsupported(f"media.{name}: {vol} is older than {src} (rerun volumes.vdb_to_vol)")
+        bounds = None
     else:
         raise Unsupported(f"media.{name}: density type {d['type']!r}")
     if not os.path.exists(vol):
-        raise Unsupported(f"media.{name}: {vol} missing (run bench/volumes.py)")
+        raise Unsupported(f"media.{name}: {vol} missing (run bench/volumes.py, or volumes.vdb_to_vol for a VDB)")
     from volumes import read_vol
 
     grid, bmin, bmax = read_vol(vol)

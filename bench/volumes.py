@@ -53,6 +53,58 @@ def read_vol(path: str):
     return data[..., 0], bbox[:3], bbox[3:]
 
 
+def vdb_to_vol(vdb_path: str, vol_path: str, grid: str = "density") -> dict:
+    """Writes the float grid `grid` of a VDB file as a dense Mitsuba `.vol`:
+    the voxels of its active bounding box plus one voxel of zeros on each
+    side (so that Mitsuba's clamped lookups beyond the box give 0, and its
+    trilinear ramp from the last active voxel to 0 is OpenVDB's), cell
+    centred: voxel index (i, j, k) sits at the VDB's own voxel centre. Needs
+    an axis-aligned, uniform, unrotated index-to-world map. Done by Debian's
+    python3-openvdb (the system python); skipped when `vol_path` is newer.
+    Returns {"shape": (nz, ny, nx), "min": [...], "max": [...]} read back from
+    the header."""
+    import subprocess
+
+    if not (os.path.exists(vol_path) and os.path.getmtime(vol_path) >= os.path.getmtime(vdb_path)):
+        script = r"""
+import struct, sys
+import numpy as np
+try:
+    import pyopenvdb as vdb
+except ImportError:
+    import openvdb as vdb
+src, out, name = sys.argv[1:4]
+g = vdb.read(src, name)
+lo, hi = g.evalActiveVoxelBoundingBox()
+lo = [c - 1 for c in lo]
+hi = [c + 1 for c in hi]
+o = g.transform.indexToWorld((0, 0, 0))
+vs = [g.transform.indexToWorld(tuple(1 if a == b else 0 for b in range(3)))[a] - o[a] for a in range(3)]
+assert max(vs) - min(vs) <= 1e-6 * max(vs), ("non-uniform voxels", vs)
+for a in range(3):
+    e = [0, 0, 0]; e[(a + 1) % 3] = 1
+    p = g.transform.indexToWorld(tuple(e))
+    assert abs(p[a] - o[a]) <= 1e-9 + 1e-6 * max(vs), "a rotated index-to-world map"
+shape = [hi[a] - lo[a] + 1 for a in range(3)]
+arr = np.zeros(shape, dtype=np.float32)          # [x][y][z]
+g.copyToArray(arr, ijk=tuple(lo))
+dens = np.ascontiguousarray(arr.transpose(2, 1, 0))   # [z][y][x], x fastest
+bmin = [o[a] + (lo[a] - 0.5) * vs[a] for a in range(3)]
+bmax = [o[a] + (hi[a] + 0.5) * vs[a] for a in range(3)]
+with open(out + ".tmp", "wb") as f:
+    f.write(b"VOL" + struct.pack("<B", 3) + struct.pack("<iiiii", 1, shape[0], shape[1], shape[2], 1))
+    f.write(struct.pack("<6f", *bmin, *bmax))
+    dens.tofile(f)
+"""
+        subprocess.run(["/usr/bin/python3", "-c", script, vdb_path, vol_path, grid], check=True)
+        os.replace(vol_path + ".tmp", vol_path)
+    with open(vol_path, "rb") as f:
+        head = f.read(48)
+    _, nx, ny, nz, _ = struct.unpack("<iiiii", head[4:24])
+    bbox = struct.unpack("<6f", head[24:48])
+    return {"shape": (nz, ny, nx), "min": list(bbox[:3]), "max": list(bbox[3:])}
+
+
 def _smooth(t):
     return t * t * (3.0 - 2.0 * t)
 
