@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use clap::Args;
 use niebla::film::{read_checkpoint_full, Image, SplitReference};
-use niebla::integrator::hegeman::Calibration;
+use niebla::integrator::hegeman::{Calibration, SurfaceScattering};
 use niebla::integrator::zhou::{Compensation, LocalLights};
 use niebla::integrator::{
     HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator, ZhouIntegrator, ZhouSettings,
@@ -306,11 +306,12 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             single_ratio
         );
         for (name, multiple, calibration, surface) in [
-            ("hegeman", true, Calibration::None, false),
-            ("hegeman (lit surfaces)", true, Calibration::None, true),
-            ("hegeman (mc_tables)", true, Calibration::McTables, false),
-            ("hegeman (mc_fluence)", true, Calibration::McFluence, false),
-            ("hegeman (single only)", false, Calibration::None, false),
+            ("hegeman", true, Calibration::None, SurfaceScattering::Cone),
+            ("hegeman (line surfaces)", true, Calibration::None, SurfaceScattering::Line),
+            ("hegeman (direct surfaces)", true, Calibration::None, SurfaceScattering::Off),
+            ("hegeman (mc_tables)", true, Calibration::McTables, SurfaceScattering::Cone),
+            ("hegeman (mc_fluence)", true, Calibration::McFluence, SurfaceScattering::Cone),
+            ("hegeman (single only)", false, Calibration::None, SurfaceScattering::Off),
         ] {
             let settings = HegemanSettings {
                 multiple_scattering: multiple,

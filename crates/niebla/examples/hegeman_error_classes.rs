@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use niebla::film::{read_exr, write_exr, write_png, Image};
-use niebla::integrator::hegeman::Calibration;
+use niebla::integrator::hegeman::{Calibration, SurfaceScattering};
 use niebla::integrator::{HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator};
 use niebla::light::Light;
 use niebla::math::{Vec2, Vec3};
@@ -146,12 +146,13 @@ fn main() -> ExitCode {
         _ => HegemanSettings::default(),
     };
     for (name, multiple, calibration, surface) in [
-        ("hegeman", true, Calibration::None, true),
-        ("hegeman (unlit surfaces)", true, Calibration::None, false),
-        ("hegeman (mc_tables)", true, Calibration::McTables, true),
-        ("hegeman (mc_tables unlit)", true, Calibration::McTables, false),
-        ("hegeman (mc_fluence)", true, Calibration::McFluence, true),
-        ("hegeman (single only)", false, Calibration::None, false),
+        ("hegeman", true, Calibration::None, SurfaceScattering::Cone),
+        ("hegeman (line surfaces)", true, Calibration::None, SurfaceScattering::Line),
+        ("hegeman (unlit surfaces)", true, Calibration::None, SurfaceScattering::Off),
+        ("hegeman (mc_tables)", true, Calibration::McTables, SurfaceScattering::Cone),
+        ("hegeman (mc_tables unlit)", true, Calibration::McTables, SurfaceScattering::Off),
+        ("hegeman (mc_fluence)", true, Calibration::McFluence, SurfaceScattering::Cone),
+        ("hegeman (single only)", false, Calibration::None, SurfaceScattering::Off),
     ] {
         let settings = HegemanSettings {
             multiple_scattering: multiple,

@@ -51,6 +51,7 @@
 
 pub mod blur;
 pub mod calibration;
+pub mod cone;
 pub mod line_integrals;
 pub(crate) mod settings;
 
@@ -112,6 +113,34 @@ impl Calibration {
     }
 }
 
+/// How opaque surfaces inside a grid medium are lit besides the direct
+/// light (ours, not in Hegeman et al. 2005).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceScattering {
+    /// Direct light only (shadow rays), as before surfaces were lit by the model.
+    Off,
+    /// The scattered fluence of the medium's lattice at the surface point
+    /// (`k_loss = 1` along the line toward the light: exact in a laterally
+    /// unbounded medium, too bright in the shadow of a localized plume).
+    Line,
+    /// As `Line`, with the scattered term's optical depth averaged over the
+    /// cone of single-scattering deflections around the line ([`cone`]): the
+    /// same in an unbounded homogeneous medium, less light where the medium
+    /// around the line is thinner than on it (the default).
+    Cone,
+}
+
+impl SurfaceScattering {
+    /// Name in scene files (`"off"`, `"line"`, `"cone"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceScattering::Off => "off",
+            SurfaceScattering::Line => "line",
+            SurfaceScattering::Cone => "cone",
+        }
+    }
+}
+
 /// Parameters of the `hegeman` integrator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HegemanSettings {
@@ -127,14 +156,13 @@ pub struct HegemanSettings {
     pub resolution: u32,
     /// View-ray march step in lattice cells (> 0).
     pub step_cells: f32,
-    /// Light opaque surfaces inside a grid medium with the model's
-    /// multiply scattered light too ([`HegemanIntegrator::surface_scattered`];
-    /// ours, not in Hegeman et al. 2005); `false` (the default): direct
-    /// light only. On: the fog's floor is lit right on average, but under
-    /// the smoke plume the forward-energy assumption (all scattered light
-    /// reaches the receiver, as in a laterally unbounded medium) over-fills
-    /// the shadow (bench relative MSE 0.0053 -> 0.0099).
-    pub surface_scattering: bool,
+    /// How opaque surfaces inside a grid medium receive the model's
+    /// multiply scattered light ([`HegemanIntegrator::surface_scattered`];
+    /// ours, not in Hegeman et al. 2005); default [`SurfaceScattering::Cone`].
+    /// `Line` lights the fog's floor right on average but over-fills the
+    /// smoke plume's shadow (all scattered light reaching the receiver, as
+    /// in a laterally unbounded medium); `Off` is direct light only.
+    pub surface_scattering: SurfaceScattering,
 }
 
 impl Default for HegemanSettings {
@@ -145,7 +173,7 @@ impl Default for HegemanSettings {
             multiple_scattering: true,
             resolution: 48,
             step_cells: 1.0,
-            surface_scattering: false,
+            surface_scattering: SurfaceScattering::Cone,
         }
     }
 }
@@ -223,6 +251,12 @@ struct GridModel {
     blur: BlurredPhaseTable,
     tables: Option<Tables>,
     step: f32,
+    /// Cone-averaged density integrals ([`cone::cone_depth`]) per node and
+    /// non-ambient light (node-major), for [`SurfaceScattering::Cone`];
+    /// empty otherwise.
+    cone: Vec<f32>,
+    /// The deflection `cone` was integrated with (NaN: not yet).
+    cone_spread: f32,
 }
 
 /// The integrator with its precomputation (shadow/blur volumes per light and
@@ -303,8 +337,11 @@ impl HegemanIntegrator {
                         blur: BlurredPhaseTable::new(g.phase.mean_cosine()),
                         tables: calibration_tables(g, &settings),
                         step,
+                        cone: Vec::new(),
+                        cone_spread: f32::NAN,
                     };
                     model.update_factors(g, &lights, settings.multiple_scattering);
+                    model.update_cone(g, &lights, &settings, false);
                     Some(model)
                 }
                 Medium::Homogeneous(_) => None,
@@ -358,6 +395,7 @@ impl HegemanIntegrator {
                 })
                 .collect();
             model.update_factors(g, &lights, self.settings.multiple_scattering);
+            model.update_cone(g, &lights, &self.settings, true);
         }
         self.lights = lights;
         self.precompute_seconds = start.elapsed().as_secs_f64();
@@ -384,6 +422,7 @@ impl HegemanIntegrator {
             }
             model.tables = calibration_tables(g, &self.settings);
             model.update_factors(g, &self.lights, self.settings.multiple_scattering);
+            model.update_cone(g, &self.lights, &self.settings, false);
         }
         self.precompute_seconds = start.elapsed().as_secs_f64();
     }
@@ -396,6 +435,7 @@ impl HegemanIntegrator {
             .map(|m| {
                 m.volumes.iter().map(LineIntegralLattice::memory_bytes).sum::<usize>()
                     + m.factors.len() * 4
+                    + m.cone.len() * 4
                     + m.blur.memory_bytes()
                     + m.tables.as_ref().map_or(0, |t| t.point.memory_bytes() + t.collimated.memory_bytes())
             })
@@ -473,6 +513,7 @@ impl HegemanIntegrator {
     fn surface_scattered(
         &self,
         id: MediumId,
+        g: &GridMedium,
         surface: &crate::geometry::SurfaceHit,
         wo: Vec3,
         bsdf: &crate::bsdf::Bsdf,
@@ -498,7 +539,14 @@ impl HegemanIntegrator {
                     *v += w * model.factors[o + k];
                 }
             }
-            let scattered = Rgb::new(f[3], f[4], f[5]);
+            let scattered = match self.settings.surface_scattering {
+                SurfaceScattering::Cone if !model.cone.is_empty() => {
+                    let lights = model.cone.len() / (model.n[0] * model.n[1] * model.n[2]);
+                    let depth: f32 = base.iter().zip(weights).map(|(c, w)| w * model.cone[c * lights + index]).sum();
+                    model.scattered_ratio(g, light.source, depth)
+                }
+                _ => Rgb::new(f[3], f[4], f[5]),
+            };
             if scattered.is_black() {
                 continue;
             }
@@ -661,6 +709,55 @@ impl GridModel {
         });
         self.factors = factors;
         self.stride = stride;
+    }
+
+    /// Integrate [`GridModel::cone`] for [`SurfaceScattering::Cone`] (and
+    /// multiple scattering on; otherwise leave it empty): again when `moved`
+    /// (the lights changed) or when the medium's mean cosine changed the
+    /// deflection, else kept (it holds density only). One cone integral per
+    /// node and non-ambient light, with the line integrals' step.
+    fn update_cone(&mut self, g: &GridMedium, lights: &[ModelLight], settings: &HegemanSettings, moved: bool) {
+        if settings.surface_scattering != SurfaceScattering::Cone || !settings.multiple_scattering {
+            self.cone = Vec::new();
+            return;
+        }
+        let spread = cone::deflection(g.phase.mean_cosine());
+        if !moved && spread.to_bits() == self.cone_spread.to_bits() {
+            return;
+        }
+        let sources: Vec<LightSource> = lights.iter().filter(|l| !l.ambient).map(|l| l.source).collect();
+        let extent = self.hi - self.lo;
+        let step = extent.max_element().max(1e-6) / settings.resolution.max(2) as f32;
+        let (n, lo) = (self.n, self.lo);
+        let mut cone = vec![0f32; n[0] * n[1] * n[2] * sources.len()];
+        if !sources.is_empty() {
+            // Base cells of the lattice's spacing (nodes - 1 cells per side).
+            let pyramid = cone::DensityPyramid::new(g, n.map(|v| v.saturating_sub(1).max(1)));
+            cone.par_chunks_mut(sources.len()).enumerate().with_min_len(64).for_each(|(node, out)| {
+                let (x, y, z) = (node % n[0], (node / n[0]) % n[1], node / (n[0] * n[1]));
+                let f =
+                    Vec3::new(x as f32 / (n[0] - 1) as f32, y as f32 / (n[1] - 1) as f32, z as f32 / (n[2] - 1) as f32);
+                for (o, source) in out.iter_mut().zip(&sources) {
+                    *o = cone::cone_depth(g, &pyramid, lo + extent * f, *source, step, spread);
+                }
+            });
+        }
+        self.cone = cone;
+        self.cone_spread = spread;
+    }
+
+    /// The scattered fluence ratio of the model for density integral
+    /// `depth` toward a light of kind `source`: `exp(-tau_a) (1 - exp(-tau_s))`
+    /// uncalibrated, the table's `F(tau_t)` calibrated (as the per-node factor).
+    #[inline]
+    fn scattered_ratio(&self, g: &GridMedium, source: LightSource, depth: f32) -> Rgb {
+        match &self.tables {
+            Some(t) => match source {
+                LightSource::Point(_) => t.point.fluence(g.sigma_t() * depth),
+                LightSource::Direction(_) => t.collimated.fluence(g.sigma_t() * depth),
+            },
+            None => (g.sigma_a * depth).exp_neg() * (Rgb::ONE - (g.sigma_s * depth).exp_neg()),
+        }
     }
 
     /// Flat indices of the 8 lattice nodes around `x` and their trilinear weights.
@@ -865,8 +962,11 @@ impl CameraRayVisitor for HegemanWalk<'_> {
         let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
         let mut l = direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler);
         let h = self.integrator;
-        if let (Some(id), true, true) = (medium, h.settings.surface_scattering, h.settings.multiple_scattering) {
-            l += h.surface_scattered(id, &hit.surface, wo, bsdf);
+        let lit = h.settings.surface_scattering != SurfaceScattering::Off && h.settings.multiple_scattering;
+        if let (Some(id), true) = (medium, lit) {
+            if let Some(Medium::Grid(g)) = scene.media.get(id.0 as usize) {
+                l += h.surface_scattered(id, g, &hit.surface, wo, bsdf);
+            }
         }
         l
     }

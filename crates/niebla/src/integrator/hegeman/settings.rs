@@ -2,10 +2,11 @@
 //! in a scene file, their defaults and checks, and their stable key.
 
 use serde::Deserialize;
+use serde_json::Value;
 
-use super::{Calibration, HegemanSettings};
+use super::{Calibration, HegemanSettings, SurfaceScattering};
 use crate::integrator::common_settings::{positive, within};
-use crate::params::{rest, Located, Object};
+use crate::params::{describe, rest, Located, Object};
 
 /// The fields of a `hegeman` object; every one is optional.
 #[derive(Deserialize)]
@@ -26,9 +27,10 @@ struct HegemanFields {
     /// View-ray march step in lattice cells (> 0; default 1).
     #[serde(default)]
     step_cells: Option<f32>,
-    /// Light surfaces inside grid media with the model's scattered light (default false).
+    /// How surfaces inside grid media get the model's scattered light:
+    /// "cone" (default), "line" or "off"; `true` means "cone", `false` "off".
     #[serde(default)]
-    surface_scattering: Option<bool>,
+    surface_scattering: Option<Value>,
 }
 
 /// `hegeman`'s settings from its object (the `type` taken out).
@@ -47,13 +49,31 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
             ))
         }
     };
+    let surface_scattering = match fields.surface_scattering {
+        None => defaults.surface_scattering,
+        Some(Value::Bool(true)) => SurfaceScattering::Cone,
+        Some(Value::Bool(false)) => SurfaceScattering::Off,
+        Some(Value::String(name)) if name == "cone" => SurfaceScattering::Cone,
+        Some(Value::String(name)) if name == "line" => SurfaceScattering::Line,
+        Some(Value::String(name)) if name == "off" => SurfaceScattering::Off,
+        Some(other) => {
+            let found = match &other {
+                Value::String(name) => format!("\"{name}\""),
+                v => describe(v).to_string(),
+            };
+            return Err(Located::new(
+                "surface_scattering",
+                format!("expected \"cone\", \"line\", \"off\" or a boolean, found {found}"),
+            ));
+        }
+    };
     let settings = HegemanSettings {
         calibration,
         calibration_photons: fields.calibration_photons.unwrap_or(defaults.calibration_photons),
         multiple_scattering: fields.multiple_scattering.unwrap_or(defaults.multiple_scattering),
         resolution: fields.resolution.unwrap_or(defaults.resolution),
         step_cells: fields.step_cells.unwrap_or(defaults.step_cells),
-        surface_scattering: fields.surface_scattering.unwrap_or(defaults.surface_scattering),
+        surface_scattering,
     };
     within("resolution", settings.resolution, 2, 512)?;
     within("calibration_photons", settings.calibration_photons, 1000, 1 << 24)?;
@@ -71,6 +91,6 @@ pub(crate) fn key(s: &HegemanSettings) -> String {
         s.step_cells,
         s.calibration.name(),
         s.calibration_photons,
-        s.surface_scattering
+        s.surface_scattering.name()
     )
 }

@@ -77,7 +77,7 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
-use super::hegeman::{Calibration, HegemanIntegrator, HegemanSettings};
+use super::hegeman::{Calibration, HegemanIntegrator, HegemanSettings, SurfaceScattering};
 use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
 use fit::{FitReport, FitSettings};
 use lattice::Lattice;
@@ -275,6 +275,8 @@ impl ZhouIntegrator {
                     HegemanSettings {
                         multiple_scattering: settings.multiple_scattering,
                         calibration: Calibration::McTables,
+                        // zhou lights surfaces itself: no cone integrals.
+                        surface_scattering: SurfaceScattering::Off,
                         ..HegemanSettings::default()
                     },
                 );
