@@ -28,7 +28,8 @@ struct HegemanFields {
     #[serde(default)]
     step_cells: Option<f32>,
     /// How surfaces inside grid media get the model's scattered light:
-    /// "cone" (default), "line" or "off"; `true` means "cone", `false` "off".
+    /// "cone" (default), "line" or "off"; the booleans keep their meaning
+    /// from before the cone model: `true` is "line", `false` "off".
     #[serde(default)]
     surface_scattering: Option<Value>,
 }
@@ -51,7 +52,7 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
     };
     let surface_scattering = match fields.surface_scattering {
         None => defaults.surface_scattering,
-        Some(Value::Bool(true)) => SurfaceScattering::Cone,
+        Some(Value::Bool(true)) => SurfaceScattering::Line,
         Some(Value::Bool(false)) => SurfaceScattering::Off,
         Some(Value::String(name)) if name == "cone" => SurfaceScattering::Cone,
         Some(Value::String(name)) if name == "line" => SurfaceScattering::Line,
@@ -93,4 +94,26 @@ pub(crate) fn key(s: &HegemanSettings) -> String {
         s.calibration_photons,
         s.surface_scattering.name()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn surface(value: Value) -> SurfaceScattering {
+        let mut object = Object::new();
+        object.insert("surface_scattering".into(), value);
+        parse(object).expect("valid settings").surface_scattering
+    }
+
+    /// The booleans written before the cone model keep their meaning
+    /// (`true`: the line factor, `false`: direct light only); the default is
+    /// the cone.
+    #[test]
+    fn booleans_keep_their_old_meaning() {
+        assert_eq!(surface(Value::Bool(true)), SurfaceScattering::Line);
+        assert_eq!(surface(Value::Bool(false)), SurfaceScattering::Off);
+        assert_eq!(surface(Value::String("cone".into())), SurfaceScattering::Cone);
+        assert_eq!(parse(Object::new()).expect("defaults").surface_scattering, SurfaceScattering::Cone);
+    }
 }
