@@ -74,8 +74,18 @@ impl DensityBoundGrid {
     /// assert_eq!(minorant.value(0, 3, 3), 0.0);
     /// ```
     pub fn minorant_from_sparse(grid: &SparseGrid, max_cells: usize) -> DensityBoundGrid {
+        DensityBoundGrid::minorant_from_sparse_with_min_cell(grid, max_cells, LEAF_DIM as usize)
+    }
+
+    /// The minorants of a sparse grid over the same cells as
+    /// [`MajorantGrid::from_sparse_with_min_cell`]`(grid, max_cells, min_cell)`.
+    pub fn minorant_from_sparse_with_min_cell(
+        grid: &SparseGrid,
+        max_cells: usize,
+        min_cell: usize,
+    ) -> DensityBoundGrid {
         let background = grid.background();
-        let Some(layout) = SparseLayout::new(grid, max_cells) else {
+        let Some(layout) = SparseLayout::new(grid, max_cells, min_cell) else {
             return SparseLayout::empty_grid(background);
         };
         let mut m = layout.filled(f32::INFINITY);

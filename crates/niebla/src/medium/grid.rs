@@ -214,8 +214,14 @@ impl GridMotion {
 pub enum MinorantRecipe {
     /// [`DensityBoundGrid::minorant_from_dense`] with this resolution.
     Dense([usize; 3]),
-    /// [`DensityBoundGrid::minorant_from_sparse`] with this cell budget.
-    Sparse(usize),
+    /// [`DensityBoundGrid::minorant_from_sparse_with_min_cell`] with this
+    /// cell budget and smallest cell side (voxels).
+    Sparse {
+        /// Cell budget.
+        max_cells: usize,
+        /// Smallest cell side, voxels.
+        min_cell: usize,
+    },
 }
 
 /// A grid medium's minorant grid, built at most once, on first use: only
@@ -253,8 +259,8 @@ impl LazyMinorant {
                 (Some(MinorantRecipe::Dense(res)), DensityGrid::Dense(g)) => {
                     Some(DensityBoundGrid::minorant_from_dense(g, res))
                 }
-                (Some(MinorantRecipe::Sparse(max_cells)), DensityGrid::Sparse(g)) => {
-                    Some(DensityBoundGrid::minorant_from_sparse(g, max_cells))
+                (Some(MinorantRecipe::Sparse { max_cells, min_cell }), DensityGrid::Sparse(g)) => {
+                    Some(DensityBoundGrid::minorant_from_sparse_with_min_cell(g, max_cells, min_cell))
                 }
                 _ => None,
             })

@@ -117,12 +117,15 @@ fn build_grid_medium(
         }
         DensityGrid::Sparse(g) => {
             // A given resolution is a cell budget; the cells stay cubic and
-            // aligned to the VDB leaves.
-            let max_cells = desc
-                .majorant_resolution
-                .map_or(MajorantGrid::DEFAULT_MAX_CELLS, |r| r.dims().iter().map(|&n| n as usize).product());
+            // aligned to the VDB leaves, one per leaf where the budget
+            // allows. By default, cells of two leaves (fewer DDA steps).
+            let (max_cells, min_cell) = match desc.majorant_resolution {
+                Some(r) => (r.dims().iter().map(|&n| n as usize).product(), niebla_volume::LEAF_DIM as usize),
+                None => (MajorantGrid::DEFAULT_MAX_CELLS, MajorantGrid::DEFAULT_SPARSE_MIN_CELL),
+            };
             charge_cells(loader, max_cells)?;
-            (MajorantGrid::from_sparse(g, max_cells), MinorantRecipe::Sparse(max_cells))
+            let majorant = MajorantGrid::from_sparse_with_min_cell(g, max_cells, min_cell);
+            (majorant, MinorantRecipe::Sparse { max_cells, min_cell })
         }
     };
 
