@@ -32,7 +32,7 @@ use crate::{DenseGrid, DensityBoundGrid, SparseGrid, LEAF_DIM};
 impl DensityBoundGrid {
     /// The minorants of a dense grid over its local-space box, with `res`
     /// cells per axis (each at least 1): the same cells as
-    /// [`MajorantGrid::from_dense`]`(grid, res)`.
+    /// [`MajorantGrid::from_dense`](crate::MajorantGrid::from_dense)`(grid, res)`.
     ///
     /// ```
     /// use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid};
@@ -51,7 +51,8 @@ impl DensityBoundGrid {
     }
 
     /// The minorants of a sparse grid in its index space: the same cells as
-    /// [`MajorantGrid::from_sparse`]`(grid, max_cells)`. A grid that stores
+    /// [`MajorantGrid::from_sparse`](crate::MajorantGrid::from_sparse)`(grid, max_cells)`.
+    /// A grid that stores
     /// nothing gives the same single cell as its majorant grid, holding the
     /// background.
     ///
@@ -78,7 +79,8 @@ impl DensityBoundGrid {
     }
 
     /// The minorants of a sparse grid over the same cells as
-    /// [`MajorantGrid::from_sparse_with_min_cell`]`(grid, max_cells, min_cell)`.
+    /// [`MajorantGrid::from_sparse_with_min_cell`](crate::MajorantGrid::from_sparse_with_min_cell)
+    /// `(grid, max_cells, min_cell)`.
     pub fn minorant_from_sparse_with_min_cell(
         grid: &SparseGrid,
         max_cells: usize,
