@@ -52,9 +52,8 @@ impl DensityBoundGrid {
 
     /// The minorants of a sparse grid in its index space: the same cells as
     /// [`MajorantGrid::from_sparse`](crate::MajorantGrid::from_sparse)`(grid, max_cells)`.
-    /// A grid that stores
-    /// nothing gives the same single cell as its majorant grid, holding the
-    /// background.
+    /// A grid that stores nothing gives the same single cell as its majorant
+    /// grid, holding the background.
     ///
     /// ```
     /// use niebla_volume::{Affine, DensityBoundGrid, MajorantGrid, SparseGridBuilder};
