@@ -54,6 +54,12 @@ impl DensityBoundGrid {
     pub const DEFAULT_RESOLUTION: [usize; 3] = [16, 16, 16];
     /// Default cell budget for sparse grids (2^21 cells, 8 MiB).
     pub const DEFAULT_MAX_CELLS: usize = 1 << 21;
+    /// Default smallest cell side (voxels) of a scene's sparse majorant
+    /// grid: two VDB leaves. One cell per leaf bounds the density more
+    /// tightly, but a ray then crosses twice as many cells, and on clouds
+    /// the DDA steps cost more than the extra null collisions of the
+    /// looser bound (see bench/README.md, "Production frame").
+    pub const DEFAULT_SPARSE_MIN_CELL: usize = 16;
 
     /// A majorant grid from explicit values (`[z][y][x]`, x fastest) over
     /// the box `bounds_min..bounds_max`.
@@ -91,8 +97,26 @@ impl DensityBoundGrid {
     /// multiples of their size, so data straddling a cell boundary always
     /// takes two cells along that axis.
     pub fn from_sparse(grid: &SparseGrid, max_cells: usize) -> MajorantGrid {
+        MajorantGrid::from_sparse_with_min_cell(grid, max_cells, LEAF_DIM as usize)
+    }
+
+    /// [`MajorantGrid::from_sparse`] with cells of at least `min_cell`
+    /// voxels per side (rounded up to `8 * 2^k`): coarser cells than the
+    /// budget needs, so that a ray crosses fewer of them (see
+    /// [`MajorantGrid::DEFAULT_SPARSE_MIN_CELL`]).
+    ///
+    /// ```
+    /// use niebla_volume::{Affine, MajorantGrid, SparseGridBuilder};
+    /// let mut b = SparseGridBuilder::new(0.0, Affine::IDENTITY);
+    /// b.set_voxel([3, 3, 3], 1.0, true);
+    /// b.set_voxel([100, 3, 3], 4.0, true);
+    /// let g = b.build();
+    /// let m = MajorantGrid::from_sparse_with_min_cell(&g, MajorantGrid::DEFAULT_MAX_CELLS, 12);
+    /// assert_eq!(m.cell_size(), [16.0; 3]);
+    /// ```
+    pub fn from_sparse_with_min_cell(grid: &SparseGrid, max_cells: usize, min_cell: usize) -> MajorantGrid {
         let floor = grid.background().max(0.0);
-        let Some(layout) = SparseLayout::new(grid, max_cells) else {
+        let Some(layout) = SparseLayout::new(grid, max_cells, min_cell) else {
             return SparseLayout::empty_grid(floor);
         };
         let mut m = layout.filled(floor);
@@ -357,12 +381,15 @@ pub(crate) struct SparseLayout {
 
 impl SparseLayout {
     /// The layout for at most `max(max_cells, 1)` cells (8 when data
-    /// straddles cell boundaries along every axis), or `None` for a grid
-    /// that stores nothing.
-    pub(crate) fn new(grid: &SparseGrid, max_cells: usize) -> Option<SparseLayout> {
+    /// straddles cell boundaries along every axis) of at least `min_cell`
+    /// voxels per side, or `None` for a grid that stores nothing.
+    pub(crate) fn new(grid: &SparseGrid, max_cells: usize, min_cell: usize) -> Option<SparseLayout> {
         let (lo, hi) = grid.data_bounds_index()?;
         // Cell size 8 * 2^k voxels, aligned to multiples of itself.
         let mut size: i64 = 8;
+        while (size as u64) < (min_cell as u64).min(1 << 40) {
+            size *= 2;
+        }
         loop {
             let origin: [i64; 3] = std::array::from_fn(|a| (lo[a] as i64 - 1).div_euclid(size) * size);
             let res: [i64; 3] = std::array::from_fn(|a| (hi[a] as i64 + 1 - origin[a]).div_euclid(size) + 1);

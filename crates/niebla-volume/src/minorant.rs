@@ -32,7 +32,7 @@ use crate::{DenseGrid, DensityBoundGrid, SparseGrid, LEAF_DIM};
 impl DensityBoundGrid {
     /// The minorants of a dense grid over its local-space box, with `res`
     /// cells per axis (each at least 1): the same cells as
-    /// [`MajorantGrid::from_dense`]`(grid, res)`.
+    /// [`MajorantGrid::from_dense`](crate::MajorantGrid::from_dense)`(grid, res)`.
     ///
     /// ```
     /// use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid};
@@ -51,9 +51,9 @@ impl DensityBoundGrid {
     }
 
     /// The minorants of a sparse grid in its index space: the same cells as
-    /// [`MajorantGrid::from_sparse`]`(grid, max_cells)`. A grid that stores
-    /// nothing gives the same single cell as its majorant grid, holding the
-    /// background.
+    /// [`MajorantGrid::from_sparse`](crate::MajorantGrid::from_sparse)`(grid, max_cells)`.
+    /// A grid that stores nothing gives the same single cell as its majorant
+    /// grid, holding the background.
     ///
     /// ```
     /// use niebla_volume::{Affine, DensityBoundGrid, MajorantGrid, SparseGridBuilder};
@@ -74,8 +74,19 @@ impl DensityBoundGrid {
     /// assert_eq!(minorant.value(0, 3, 3), 0.0);
     /// ```
     pub fn minorant_from_sparse(grid: &SparseGrid, max_cells: usize) -> DensityBoundGrid {
+        DensityBoundGrid::minorant_from_sparse_with_min_cell(grid, max_cells, LEAF_DIM as usize)
+    }
+
+    /// The minorants of a sparse grid over the same cells as
+    /// [`MajorantGrid::from_sparse_with_min_cell`](crate::MajorantGrid::from_sparse_with_min_cell)
+    /// `(grid, max_cells, min_cell)`.
+    pub fn minorant_from_sparse_with_min_cell(
+        grid: &SparseGrid,
+        max_cells: usize,
+        min_cell: usize,
+    ) -> DensityBoundGrid {
         let background = grid.background();
-        let Some(layout) = SparseLayout::new(grid, max_cells) else {
+        let Some(layout) = SparseLayout::new(grid, max_cells, min_cell) else {
             return SparseLayout::empty_grid(background);
         };
         let mut m = layout.filled(f32::INFINITY);

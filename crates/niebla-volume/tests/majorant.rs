@@ -203,3 +203,65 @@ fn majorants_bound_grids_read_from_vdb_files() {
         }
     }
 }
+
+/// A cloud shaped like the production frame's (bench/make_big_vdb.py): noisy
+/// balls, density `2.5 (1 - d / r)` times a ripple, clamped to 1, stored
+/// only where positive, in a 96^3 index box.
+fn noisy_balls(rng: &mut Rng) -> SparseGrid {
+    let n = 96.0f32;
+    let balls: Vec<([f32; 3], f32)> =
+        (0..4).map(|_| ([0, 1, 2].map(|_| rng.range(0.3 * n, 0.7 * n)), rng.range(n / 8.0, n / 4.0))).collect();
+    let mut b = SparseGridBuilder::new(0.0, Affine::IDENTITY);
+    for z in 0..96 {
+        for y in 0..96 {
+            for x in 0..96 {
+                let p = [x as f32, y as f32, z as f32];
+                let mut v = 0.0f32;
+                for (c, r) in &balls {
+                    let d = ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt();
+                    let ripple = 0.75 + 0.25 * (0.7 * p[0]).sin() * (0.5 * p[1]).cos() * (0.9 * p[2]).sin();
+                    v = v.max((2.5 * (1.0 - d / r)).min(1.0) * ripple);
+                }
+                if v > 0.0 {
+                    b.set_voxel([x, y, z], v, true);
+                }
+            }
+        }
+    }
+    b.build()
+}
+
+/// Coarser-than-leaf cells (the scene default for sparse grids, cells of 16
+/// voxels) bound the density of a generated cloud at random points and along
+/// DDA segments, and the minorant grid built with the same minimum has the
+/// same cells.
+#[test]
+fn coarse_sparse_cells_bound_a_generated_cloud() {
+    let mut rng = Rng::new(14);
+    for case in 0..2 {
+        let g = noisy_balls(&mut rng);
+        for min_cell in [MajorantGrid::DEFAULT_SPARSE_MIN_CELL, 12, 32] {
+            let m = MajorantGrid::from_sparse_with_min_cell(&g, MajorantGrid::DEFAULT_MAX_CELLS, min_cell);
+            let side = min_cell.next_power_of_two().max(8) as f32;
+            assert_eq!(m.cell_size(), [side; 3], "min_cell {min_cell}");
+            let min = MajorantGrid::minorant_from_sparse_with_min_cell(&g, MajorantGrid::DEFAULT_MAX_CELLS, min_cell);
+            assert!(min.same_layout(&m));
+            assert!(min.values().iter().zip(m.values()).all(|(lo, hi)| lo <= hi));
+            let (lo, hi) = m.bounds();
+            for _ in 0..8000 {
+                let p = [0, 1, 2].map(|a| rng.range(lo[a] - 2.0, hi[a] + 2.0));
+                let v = g.lookup_index(p);
+                let cells = cells_containing(&m, p);
+                if cells.is_empty() {
+                    assert_eq!(v, g.background(), "case {case}: outside the majorant box at {p:?}");
+                }
+                for c in cells {
+                    let (upper, lower) = (m.value(c[0], c[1], c[2]), min.value(c[0], c[1], c[2]));
+                    assert!(bounded(v, upper), "case {case} cell {c:?}: majorant {upper} < {v} at {p:?}");
+                    assert!(v >= lower - lower.abs() * 1e-6, "case {case} cell {c:?}: minorant {lower} > {v}");
+                }
+            }
+            check_segments(&mut rng, &m, &|p| g.lookup_index(p));
+        }
+    }
+}

@@ -170,7 +170,7 @@ fn constant_density_fills_its_bounds() {
     let m = grid(&built);
     assert_eq!(m.majorant.res(), [1, 1, 1]);
     assert_eq!(m.majorant.values(), &[0.5]);
-    assert_eq!(m.minorant.as_ref().map(|g| g.values().to_vec()), Some(vec![0.5]));
+    assert_eq!(m.minorant().map(|g| g.values().to_vec()), Some(vec![0.5]));
     // Default type, a unit box and value 1.
     let built = build(r#"{"type": "grid", "sigma_t": 1, "albedo": 1, "density": {"type": "constant"}}"#);
     assert_eq!(density(&built, [0.5, 0.5, 0.5]), 1.0);
@@ -186,7 +186,7 @@ fn majorants_and_minorants_bound_the_density() {
     let m = grid(&built);
     assert_eq!(m.majorant.res(), [2, 2, 1]);
     assert_eq!(m.majorant.max_value(), 5.0);
-    let minorant = m.minorant.as_ref().expect("a minorant grid");
+    let minorant = m.minorant().expect("a minorant grid");
     assert!(minorant.same_layout(&m.majorant));
     assert!(minorant.values().iter().all(|v| *v == 0.0));
     // Without a resolution, a 4^3 grid gets 4^3 cells (at most one per voxel).
@@ -406,7 +406,8 @@ fn vdb_density_composes_index_to_world_with_to_world() {
     let identity = medium("{}");
     let moved = medium(r#"{"scale": 2, "translate": [1, 0, -1]}"#);
     assert!(matches!(grid(&identity).density, DensityGrid::Sparse(_)));
-    assert!(grid(&identity).minorant.is_some());
+    assert!(!grid(&identity).minorant.is_built(), "built before first use");
+    assert!(grid(&identity).minorant().is_some());
     for (ijk, value) in probes {
         let world = sparse.index_to_world(ijk.map(|v| v as f32));
         assert_close(density(&identity, world), value, 1e-3);

@@ -2,7 +2,7 @@
 //! density (dense or sparse grid from `niebla-volume`), placed in the world
 //! by an affine map, with a majorant grid for tracking.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::{Affine3A, Mat3};
 use niebla_volume::{DenseGrid, DenseRgbGrid, DensityBoundGrid, MajorantGrid, SparseGrid, SparseVec3Grid};
@@ -208,6 +208,66 @@ impl GridMotion {
     }
 }
 
+/// How a minorant grid is made from a density grid: the parameters of the
+/// majorant grid it pairs with (so both have the same cells).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MinorantRecipe {
+    /// [`DensityBoundGrid::minorant_from_dense`] with this resolution.
+    Dense([usize; 3]),
+    /// [`DensityBoundGrid::minorant_from_sparse_with_min_cell`] with this
+    /// cell budget and smallest cell side (voxels).
+    Sparse {
+        /// Cell budget.
+        max_cells: usize,
+        /// Smallest cell side, voxels.
+        min_cell: usize,
+    },
+}
+
+/// A grid medium's minorant grid, built at most once, on first use: only
+/// residual ratio tracking reads it, so a render that never runs that
+/// tracker never builds it (on a 512^3 sparse grid that build is about as
+/// costly as the majorant grid's). Threads asking at the same time wait for
+/// one build; the grid is the same whenever it is built.
+#[derive(Clone, Debug)]
+pub struct LazyMinorant {
+    grid: OnceLock<Option<DensityBoundGrid>>,
+    recipe: Option<MinorantRecipe>,
+}
+
+impl LazyMinorant {
+    /// An already built minorant grid (or none).
+    pub fn built(grid: Option<DensityBoundGrid>) -> LazyMinorant {
+        LazyMinorant { grid: OnceLock::from(grid), recipe: None }
+    }
+
+    /// A minorant grid built by `recipe` from the medium's density grid on
+    /// first use (none if the recipe's storage is not the grid's).
+    pub fn on_demand(recipe: MinorantRecipe) -> LazyMinorant {
+        LazyMinorant { grid: OnceLock::new(), recipe: Some(recipe) }
+    }
+
+    /// Whether the grid has been built (or given).
+    pub fn is_built(&self) -> bool {
+        self.grid.get().is_some()
+    }
+
+    /// The grid, built from `density` by the recipe if not yet built.
+    pub fn get(&self, density: &DensityGrid) -> Option<&DensityBoundGrid> {
+        self.grid
+            .get_or_init(|| match (self.recipe, density) {
+                (Some(MinorantRecipe::Dense(res)), DensityGrid::Dense(g)) => {
+                    Some(DensityBoundGrid::minorant_from_dense(g, res))
+                }
+                (Some(MinorantRecipe::Sparse { max_cells, min_cell }), DensityGrid::Sparse(g)) => {
+                    Some(DensityBoundGrid::minorant_from_sparse_with_min_cell(g, max_cells, min_cell))
+                }
+                _ => None,
+            })
+            .as_ref()
+    }
+}
+
 /// A heterogeneous medium: `sigma_x(p) = density(p) * sigma_x`, or with an
 /// albedo field `sigma_s(p) = density(p) sigma_t albedo(p)` and `sigma_a(p) =
 /// density(p) sigma_t - sigma_s(p)`.
@@ -225,9 +285,10 @@ pub struct GridMedium {
     pub world_to_grid: Affine3A,
     /// Per coarse cell, the largest density trilinear interpolation reaches.
     pub majorant: MajorantGrid,
-    /// Per coarse cell (same layout), the smallest density interpolation reaches;
-    /// the control of residual ratio tracking. `None`: zero.
-    pub minorant: Option<DensityBoundGrid>,
+    /// Per coarse cell (same layout), the smallest density interpolation
+    /// reaches: the control of residual ratio tracking, built on first use
+    /// (read it with [`GridMedium::minorant`]).
+    pub minorant: LazyMinorant,
     /// Emission.
     pub emission: GridEmission,
     /// Phase function.
@@ -262,7 +323,7 @@ impl GridMedium {
             density,
             world_to_grid,
             majorant,
-            minorant,
+            minorant: LazyMinorant::built(minorant),
             emission,
             phase,
             world_bounds,
@@ -309,11 +370,20 @@ impl GridMedium {
         });
         if radius != [0; 3] {
             // The minima no longer bound the moving density from below.
-            self.minorant = None;
+            self.minorant = LazyMinorant::built(None);
         }
         motion.majorant = self.majorant.dilated(radius);
         self.world_bounds = world_box(&self.world_to_grid, &motion.majorant);
         self.motion = Some(motion);
+    }
+
+    /// The minorant grid (the majorant grid's cells), built from the density
+    /// grid on the first call when the medium was given a recipe
+    /// ([`LazyMinorant::on_demand`]); `None` when the medium has none (a
+    /// moving medium, or none given).
+    #[inline]
+    pub fn minorant(&self) -> Option<&DensityBoundGrid> {
+        self.minorant.get(&self.density)
     }
 
     /// The majorant grid trackers use: the dilated one of a moving medium.

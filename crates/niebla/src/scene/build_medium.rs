@@ -25,7 +25,8 @@ use super::SceneError;
 use crate::color::{BlackbodyTable, Rgb};
 use crate::limits::{format_bytes, MemoryBudget};
 use crate::medium::{
-    AlbedoField, AlbedoGrid, DensityGrid, GridEmission, GridField, GridMedium, GridMotion, HomogeneousMedium, Medium,
+    AlbedoField, AlbedoGrid, DensityGrid, GridEmission, GridField, GridMedium, GridMotion, HomogeneousMedium,
+    LazyMinorant, Medium, MinorantRecipe,
 };
 use crate::phase::PhaseFunction;
 
@@ -96,7 +97,8 @@ fn build_grid_medium(
     let world_to_grid = loader.world_to_grid(&density_path, &density, &to_world)?;
 
     // Majorant and minorant grids (the same cells), in the density grid's
-    // space; the minorant is residual ratio tracking's control density.
+    // space; the minorant is residual ratio tracking's control density,
+    // built on first use (its memory is charged here all the same).
     let majorant_path = format!("{path}.majorant_resolution");
     let charge_cells = |loader: &mut Loader, cells: usize| {
         // Two grids (majorant and minorant) of one f32 per cell.
@@ -111,19 +113,21 @@ fn build_grid_medium(
                 None => g.dims().map(|n| n.min(DEFAULT_DENSE_MAJORANT_RESOLUTION)),
             };
             charge_cells(loader, res.iter().product())?;
-            (MajorantGrid::from_dense(g, res), MajorantGrid::minorant_from_dense(g, res))
+            (MajorantGrid::from_dense(g, res), MinorantRecipe::Dense(res))
         }
         DensityGrid::Sparse(g) => {
             // A given resolution is a cell budget; the cells stay cubic and
-            // aligned to the VDB leaves.
-            let max_cells = desc
-                .majorant_resolution
-                .map_or(MajorantGrid::DEFAULT_MAX_CELLS, |r| r.dims().iter().map(|&n| n as usize).product());
+            // aligned to the VDB leaves, one per leaf where the budget
+            // allows. By default, cells of two leaves (fewer DDA steps).
+            let (max_cells, min_cell) = match desc.majorant_resolution {
+                Some(r) => (r.dims().iter().map(|&n| n as usize).product(), niebla_volume::LEAF_DIM as usize),
+                None => (MajorantGrid::DEFAULT_MAX_CELLS, MajorantGrid::DEFAULT_SPARSE_MIN_CELL),
+            };
             charge_cells(loader, max_cells)?;
-            (MajorantGrid::from_sparse(g, max_cells), MajorantGrid::minorant_from_sparse(g, max_cells))
+            let majorant = MajorantGrid::from_sparse_with_min_cell(g, max_cells, min_cell);
+            (majorant, MinorantRecipe::Sparse { max_cells, min_cell })
         }
     };
-    let minorant = Some(minorant);
 
     // Emission.
     let emission = match &desc.emission {
@@ -167,7 +171,8 @@ fn build_grid_medium(
     };
 
     let (sigma_a, sigma_s) = desc.sigma_a_sigma_s();
-    let mut medium = GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, minorant, emission, phase);
+    let mut medium = GridMedium::new(sigma_a, sigma_s, density, world_to_grid, majorant, None, emission, phase);
+    medium.minorant = LazyMinorant::on_demand(minorant);
     medium.albedo = albedo;
     // Until the shutter is set, the moving medium is bounded by the static
     // majorant (valid at time 0).

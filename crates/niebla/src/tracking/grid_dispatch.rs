@@ -26,7 +26,9 @@ pub trait GridRayVisitor {
 /// (frames, the camera sample's [`crate::sampling::PixelSampler::time`]):
 /// a moving medium is seen at that instant, bounded by its dilated majorant.
 /// Per-cell minima are passed along when `with_minorant` is set and the
-/// medium has them.
+/// medium has them (built then on first use, see [`GridMedium::minorant`]):
+/// only residual ratio tracking reads them, and without them the walk skips
+/// empty cells.
 #[inline]
 pub fn with_grid_along_ray<V: GridRayVisitor>(
     g: &GridMedium,
@@ -37,7 +39,7 @@ pub fn with_grid_along_ray<V: GridRayVisitor>(
     visitor: V,
 ) -> V::Output {
     let majorant = g.tracking_majorant();
-    let minorant = if with_minorant { g.minorant.as_ref() } else { None };
+    let minorant = if with_minorant { g.minorant() } else { None };
     let motion = g.motion.as_ref().filter(|_| time != 0.0).map(|m| (m, time));
     match &g.density {
         DensityGrid::Dense(grid) => {

@@ -107,7 +107,12 @@ fn grid_transmittance(
         }
     }
     let time = sampler.time();
-    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, true, Track { sigma_t: g.sigma_t(), method, sampler })
+    // Only residual ratio tracking reads the minima; the other trackers skip
+    // zero-majorant cells without drawing a random number, so leaving the
+    // minima out (and with them those cells) changes no estimate.
+    let with_minorant = method == TransmittanceMethod::ResidualRatio;
+    let track = Track { sigma_t: g.sigma_t(), method, sampler };
+    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, with_minorant, track)
 }
 
 #[inline]

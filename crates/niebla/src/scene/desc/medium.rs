@@ -134,9 +134,12 @@ pub struct GridMediumDesc {
     /// Emitted radiance, if the medium glows.
     pub emission: Option<GridEmissionDesc>,
     /// Resolution of the majorant grid; `None` is the default (16^3 cells,
-    /// at most one per voxel, for dense sources; one cell per VDB leaf within
-    /// [`MajorantGrid::DEFAULT_MAX_CELLS`](niebla_volume::MajorantGrid::DEFAULT_MAX_CELLS)
-    /// cells for VDB grids).
+    /// at most one per voxel, for dense sources; for VDB grids, cubic cells
+    /// of two leaves (16 voxels,
+    /// [`MajorantGrid::DEFAULT_SPARSE_MIN_CELL`](niebla_volume::MajorantGrid::DEFAULT_SPARSE_MIN_CELL))
+    /// within [`MajorantGrid::DEFAULT_MAX_CELLS`](niebla_volume::MajorantGrid::DEFAULT_MAX_CELLS)
+    /// cells). For a VDB grid a given resolution is a cell budget, spent on
+    /// cells as small as one leaf.
     pub majorant_resolution: Option<ResolutionDesc>,
     /// Precision of dense voxel storage: `"f32"` (default) or `"f16"` (half
     /// the memory, about 3 significant digits; sparse VDB grids keep f32).
