@@ -635,6 +635,7 @@ fn sphere_scene(bsdf: Bsdf, interior: Option<Medium>, env: f32) -> Scene {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let env = Light::Constant(ConstantLight { radiance: Rgb::splat(env) });
     common::scene(common::camera_along_x(1, 1, 30.0), vec![object], interior.into_iter().collect(), vec![env], None)
