@@ -479,7 +479,9 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => {
                 Bsdf::RoughDielectric(RoughDielectric { microfacet: oriented(b.microfacet), ..b })
             }
-            Bsdf::TwoSided(b) => Bsdf::TwoSided(TwoSided { front: b.front.with_tangent(t), back: b.back.with_tangent(t), ..b }),
+            Bsdf::TwoSided(b) => {
+                Bsdf::TwoSided(TwoSided { front: b.front.with_tangent(t), back: b.back.with_tangent(t), ..b })
+            }
             other => other,
         }
     }

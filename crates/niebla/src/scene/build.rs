@@ -244,8 +244,7 @@ fn build_with_loaders(
         let exterior = medium_id(&s.exterior);
         // Only a bsdf that may be anisotropic (a constant pair, or
         // roughness textures) pays for the tangent.
-        let dpdu_frame =
-            s.tangent_frame == TangentFrameDesc::Dpdu && (bsdf.is_anisotropic() || roughness.is_some());
+        let dpdu_frame = s.tangent_frame == TangentFrameDesc::Dpdu && (bsdf.is_anisotropic() || roughness.is_some());
         objects.push(SceneObject {
             shape,
             bsdf,

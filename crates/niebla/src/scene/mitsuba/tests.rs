@@ -474,12 +474,17 @@ fn anisotropic_roughness_takes_mitsubas_frame() {
         (i.scene["shapes"][0]["tangent_frame"].clone(), notes)
     };
     let turned = |axis: &str| format!("<transform name=\"to_world\"><rotate {axis}=\"1\" angle=\"40\"/></transform>");
-    for (shape, to_world) in [("sphere", String::new()), ("rectangle", turned("y")), ("disk", turned("z")), ("rectangle", turned("x"))] {
+    for (shape, to_world) in
+        [("sphere", String::new()), ("rectangle", turned("y")), ("disk", turned("z")), ("rectangle", turned("x"))]
+    {
         assert_eq!(import(shape, &to_world, "0.4"), (json!("dpdu"), vec![]), "{shape} {to_world}");
     }
     assert_eq!(import("sphere", "", "0.1").0, serde_json::Value::Null);
     let (frame, cube) = import("cube", "", "0.4");
-    assert!(frame == json!("dpdu") && cube.len() == 1 && cube[0].starts_with("t.xml:8: <shape type=\"cube\">"), "{cube:?}");
+    assert!(
+        frame == json!("dpdu") && cube.len() == 1 && cube[0].starts_with("t.xml:8: <shape type=\"cube\">"),
+        "{cube:?}"
+    );
     assert_eq!(import("sphere", &turned("y"), "0.4").1.len(), 1);
 }
 
