@@ -38,7 +38,7 @@ OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
-         "rough_textured", "rough_aniso_twosided"]
+         "rough_textured", "rough_aniso_twosided", "aniso_dpdu"]
 
 
 def write_data(mi):

@@ -216,3 +216,13 @@ fn textured_roughness_matches_mitsuba() {
 fn textured_anisotropic_and_twosided_roughness_match_mitsuba() {
     check("rough_aniso_twosided");
 }
+
+/// Anisotropic roughness in Mitsuba's tangent frame (dp/du, imported as
+/// `"tangent_frame": "dpdu"`) where niebla's normal-only frame differs: a
+/// GGX sphere brushed along its azimuth (its pole toward the camera), a
+/// Beckmann disk floor brushed radially, and an OBJ quad with uvs turned
+/// 35 degrees about its normal, lit by a disk and a constant environment.
+#[test]
+fn anisotropic_roughness_along_dpdu_matches_mitsuba() {
+    check("aniso_dpdu");
+}
