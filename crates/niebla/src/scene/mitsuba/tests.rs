@@ -625,3 +625,35 @@ fn texture_errors_name_file_line_and_attribute() {
                  <bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/></bsdf></shape>");
     assert!(e.contains("a textured bsdf on a sphere rotated"), "{e}");
 }
+
+/// A `roughconductor` without `material`, `eta` and `k` (or with material
+/// "none", or `eta` or `k` alone) is Mitsuba's default, `eta` 0 and `k` 1
+/// (Fresnel 1): it converts to a JSON rough conductor with those keys left
+/// out, which niebla's parser reads with the same defaults; `material` with
+/// `eta` is refused (as Mitsuba does); the smooth `conductor` still needs one.
+#[test]
+fn roughconductor_without_an_index_is_mitsubas_perfect_mirror() {
+    use crate::scene::desc::{BsdfDesc, ColorDesc, ConductorDesc};
+    let index = |inner: &str| {
+        let s = import(&format!("<shape type=\"sphere\"><bsdf type=\"roughconductor\">{inner}</bsdf></shape>"))
+            .unwrap()
+            .scene;
+        let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+        match &desc.shapes[0].bsdf {
+            BsdfDesc::RoughConductor(d) => d.conductor.clone(),
+            other => panic!("{other:?}"),
+        }
+    };
+    let mirror = ConductorDesc::Index { eta: ColorDesc::Gray(0.0), k: ColorDesc::Gray(1.0) };
+    assert_eq!(index(""), mirror);
+    assert_eq!(index(r#"<string name="material" value="none"/>"#), mirror);
+    assert_eq!(
+        index(r#"<float name="eta" value="0.5"/>"#),
+        ConductorDesc::Index { eta: ColorDesc::Gray(0.5), k: ColorDesc::Gray(1.0) }
+    );
+    let both = err(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>
+        <float name="eta" value="0.5"/></bsdf></shape>"#);
+    assert!(both.contains("not both"), "{both}");
+    let smooth = err(r#"<shape type="sphere"><bsdf type="conductor"/></shape>"#);
+    assert!(smooth.contains("perfect mirror"), "{smooth}");
+}
