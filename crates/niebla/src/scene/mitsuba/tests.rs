@@ -640,7 +640,7 @@ fn roughconductor_without_an_index_is_mitsubas_perfect_mirror() {
             .scene;
         let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
         match &desc.shapes[0].bsdf {
-            BsdfDesc::RoughConductor(d) => d.conductor.clone(),
+            BsdfDesc::RoughConductor(d) => d.conductor,
             other => panic!("{other:?}"),
         }
     };
