@@ -210,8 +210,9 @@ fn textured_roughness_matches_mitsuba() {
 /// `alpha_v` a checkerboard, a `twosided` wall (front: checkerboard `alpha`;
 /// back: `alpha_u` 0.05, nearest bitmap `alpha_v`) whose back is seen on a
 /// tilted panel sharing it, and a rough glass pane with a checkerboard
-/// `alpha_u`, all on rectangles turned about x (where niebla's tangent
-/// frame is Mitsuba's), lit by a disk and a constant environment.
+/// `alpha_u`, all on rectangles turned about x (where even niebla's older,
+/// normal-only tangent frame was Mitsuba's), lit by a disk and a constant
+/// environment.
 #[test]
 fn textured_anisotropic_and_twosided_roughness_match_mitsuba() {
     check("rough_aniso_twosided");
