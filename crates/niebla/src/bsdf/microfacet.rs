@@ -41,20 +41,12 @@ pub struct Microfacet {
     pub alpha_u: f32,
     /// Roughness along local y, clamped to at least [`MIN_ALPHA`].
     pub alpha_v: f32,
-    /// World-space direction of the local x axis (`alpha_u`) at one hit:
-    /// the shape's `dp/du`, made orthogonal to the normal by
-    /// [`Frame::from_normal_tangent`](crate::math::Frame::from_normal_tangent)
-    /// (Mitsuba 3's frame). `None` (the default, and always for isotropic
-    /// roughness): x is [`Frame::from_z`](crate::math::Frame::from_z)'s,
-    /// built from the normal alone. Set per hit by
-    /// [`Bsdf::with_tangent`](super::Bsdf::with_tangent).
-    pub tangent: Option<Vec3>,
 }
 
 impl Microfacet {
     /// A distribution; roughnesses below [`MIN_ALPHA`] are raised to it.
     pub fn new(kind: MicrofacetKind, alpha_u: f32, alpha_v: f32) -> Microfacet {
-        Microfacet { kind, alpha_u: alpha_u.max(MIN_ALPHA), alpha_v: alpha_v.max(MIN_ALPHA), tangent: None }
+        Microfacet { kind, alpha_u: alpha_u.max(MIN_ALPHA), alpha_v: alpha_v.max(MIN_ALPHA) }
     }
 
     /// True when the roughness differs along x and y (the tangent frame's

@@ -469,16 +469,13 @@ impl Bsdf {
     /// The model with the world-space tangent `t` (a shape's `dp/du` at
     /// one hit; any length) set as the x axis (`alpha_u`) of its
     /// microfacet distributions, made orthogonal to the normal each
-    /// evaluation uses (see [`Microfacet::tangent`]). Models without one
+    /// evaluation uses (see [`RoughConductor::tangent`]). Models without one
     /// are returned unchanged.
     #[inline]
     pub fn with_tangent(self, t: Vec3) -> Bsdf {
-        let oriented = |m: Microfacet| Microfacet { tangent: Some(t), ..m };
         match self {
-            Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor { microfacet: oriented(b.microfacet), ..b }),
-            Bsdf::RoughDielectric(b) => {
-                Bsdf::RoughDielectric(RoughDielectric { microfacet: oriented(b.microfacet), ..b })
-            }
+            Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor { tangent: t, ..b }),
+            Bsdf::RoughDielectric(b) => Bsdf::RoughDielectric(RoughDielectric { tangent: t, ..b }),
             Bsdf::TwoSided(b) => {
                 Bsdf::TwoSided(TwoSided { front: b.front.with_tangent(t), back: b.back.with_tangent(t), ..b })
             }
@@ -492,16 +489,19 @@ impl Bsdf {
     #[inline]
     pub fn frame(&self, n: Vec3) -> Frame {
         let tangent = match self {
-            Bsdf::RoughConductor(b) => b.microfacet.tangent,
-            Bsdf::RoughDielectric(b) => b.microfacet.tangent,
-            Bsdf::TwoSided(b) => {
-                b.front.microfacet().and_then(|m| m.tangent).or_else(|| b.back.microfacet().and_then(|m| m.tangent))
-            }
-            _ => None,
+            Bsdf::RoughConductor(b) => b.tangent,
+            Bsdf::RoughDielectric(b) => b.tangent,
+            Bsdf::TwoSided(b) => match (b.front, b.back) {
+                (Reflector::RoughConductor(r), _) if r.tangent != Vec3::ZERO => r.tangent,
+                (_, Reflector::RoughConductor(r)) => r.tangent,
+                _ => Vec3::ZERO,
+            },
+            _ => Vec3::ZERO,
         };
-        match tangent {
-            Some(t) => Frame::from_normal_tangent(n, t),
-            None => Frame::from_z(n),
+        if tangent == Vec3::ZERO {
+            Frame::from_z(n)
+        } else {
+            Frame::from_normal_tangent(n, tangent)
         }
     }
 

@@ -69,10 +69,7 @@ impl Reflector {
     #[inline]
     pub fn with_tangent(self, t: Vec3) -> Reflector {
         match self {
-            Reflector::RoughConductor(b) => Reflector::RoughConductor(RoughConductor {
-                microfacet: Microfacet { tangent: Some(t), ..b.microfacet },
-                ..b
-            }),
+            Reflector::RoughConductor(b) => Reflector::RoughConductor(RoughConductor { tangent: t, ..b }),
             other => other,
         }
     }
