@@ -29,8 +29,10 @@ an error rather than a silent approximation:
   Mitsuba's cube); `roughconductor` (a Mitsuba `material` name or `eta`/`k`),
   `roughdielectric` and `twosided` (of `diffuse` and `roughconductor`) with
   the same names, their `alpha` or `alpha_u`/`alpha_v` numbers or textures
-  (see `alpha_texture`; anisotropic only on a rectangle turned about x, see
-  `_frames_agree`); `interior`/`exterior` media by reference;
+  (see `alpha_texture`; anisotropic only where the tangent frames agree:
+  with `"tangent_frame": "dpdu"` on a sphere, rectangle or disk, else on a
+  rectangle turned about x, see `_frames_agree`); `interior`/`exterior`
+  media by reference;
 - lights: `point`, `spot` (look_at from position to target), `directional`,
   `constant`: the same parameters, since niebla follows Mitsuba's radiometry;
 - the camera's medium: niebla finds it (innermost closed shape with an
@@ -382,10 +384,17 @@ def _mitsuba_conductors():
 
 
 def _frames_agree(shape):
-    """Whether niebla's tangent frame (built from the normal alone) is
-    Mitsuba's (`dp/du`) on `shape`: on a rectangle placed by `scale`,
-    `rotate_x` and `translate` only (its `dp/du` stays along +x, and
-    niebla's frame of a normal in the y-z plane has x = +x too)."""
+    """Whether niebla's tangent frame of anisotropic roughness is Mitsuba's
+    (`dp/du` made orthogonal to the normal) on `shape`. With
+    `"tangent_frame": "dpdu"` niebla uses its shapes' `dp/du`, which is
+    Mitsuba's on a sphere, rectangle and disk (the same uv
+    parameterizations), not on a box (written as a `cube`, whose uv layout
+    differs). With the default `"normal"` frame (built from the normal alone)
+    the two agree only on a rectangle placed by `scale`, `rotate_x` and
+    `translate` (its `dp/du` stays along +x, and niebla's frame of a normal
+    in the y-z plane has x = +x too)."""
+    if shape.get("tangent_frame", "normal") == "dpdu":
+        return shape["type"] in ("sphere", "rectangle", "disk")
     t = shape.get("to_world") or {}
     return shape["type"] == "rectangle" and set(t) <= {"scale", "rotate_x", "translate"}
 
@@ -396,8 +405,10 @@ def _microfacet(mi, b, scene_dir, field, out, shape):
     out["distribution"] = b.get("distribution", "beckmann").lower()
     keys = ["alpha_u", "alpha_v"] if "alpha_u" in b or "alpha_v" in b else ["alpha"]
     if keys != ["alpha"] and b.get("alpha_u") != b.get("alpha_v") and not _frames_agree(shape):
-        raise Unsupported(f"{field}: anisotropic roughness on a {shape['type']} placed so (niebla's tangent frame "
-                          "is Mitsuba's only on a rectangle turned about x)")
+        raise Unsupported(f"{field}: anisotropic roughness on a {shape['type']} with tangent_frame "
+                          f"\"{shape.get('tangent_frame', 'normal')}\" (niebla's tangent frame is Mitsuba's with "
+                          "\"dpdu\" on a sphere, rectangle or disk, and with \"normal\" only on a rectangle turned "
+                          "about x)")
     for k in keys:
         v = b.get(k, 0.1)
         out[k] = alpha_texture(mi, v, scene_dir, f"{field}.{k}") if isinstance(v, dict) else float(v)

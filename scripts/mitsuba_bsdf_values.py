@@ -5,13 +5,21 @@ Run with the bench venv (pip mitsuba):
         > crates/niebla/tests/reference/mitsuba_bsdf_values.txt
     /work/main/bench/.venv/bin/python scripts/mitsuba_bsdf_values.py --conductors
 
+    /work/main/bench/.venv/bin/python scripts/mitsuba_bsdf_values.py --frames \
+        > crates/niebla/tests/reference/mitsuba_bsdf_frames.txt
+
 The first form prints, per line, a JSON object: the BSDF's parameters (the
 same keys niebla's scene files use), Mitsuba's local-frame directions `wi`
 (toward the camera) and `wo` (toward the light), and Mitsuba's
 `bsdf.eval` (which includes |cos(wo)|) and `bsdf.pdf`, in variant
 scalar_rgb. The second prints the RGB eta and k of every named conductor
 material as Mitsuba's conductor plugin holds them in scalar_rgb (a Rust
-table for crates/niebla/src/bsdf/mitsuba_conductors.rs).
+table for crates/niebla/src/bsdf/mitsuba_conductors.rs). The third
+evaluates anisotropic BSDFs in a tilted shading frame built by Mitsuba from
+a normal and a dp/du that is not orthogonal to it
+(`SurfaceInteraction3f.initialize_sh_frame`, Gram-Schmidt): per line the
+BSDF, the world normal `n`, `dp_du`, world directions `wi` and `wo`, and
+Mitsuba's `eval` (including |cos(wo)|) and `pdf` of the local directions.
 """
 import json
 import math
@@ -96,8 +104,59 @@ def values():
                                   "eval": [float(e[0]), float(e[1]), float(e[2])], "pdf": float(p)}))
 
 
+FRAME_CONFIGS = [
+    {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.05, "alpha_v": 0.4, "eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.1]},
+    {"type": "roughconductor", "distribution": "beckmann", "alpha_u": 0.6, "alpha_v": 0.15, "material": "Al"},
+    {"type": "roughdielectric", "distribution": "ggx", "alpha_u": 0.1, "alpha_v": 0.5},
+    {"type": "roughdielectric", "distribution": "beckmann", "alpha_u": 0.4, "alpha_v": 0.08, "int_ior": 1.33, "ext_ior": 1.0},
+    {"type": "twosided", "bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.3, "alpha_v": 0.07, "material": "Au"}},
+]
+
+# (normal, dp/du) pairs: dp/du neither unit nor orthogonal to the normal.
+FRAMES = [
+    ([0.3, -0.5, 0.8], [1.0, 0.4, -0.7]),
+    ([-0.6, 0.1, -0.75], [0.2, 2.0, 0.5]),
+]
+
+
+def normalize(v):
+    n = math.sqrt(sum(c * c for c in v))
+    return [c / n for c in v]
+
+
+def frames():
+    print(f"# Mitsuba {mi.__version__}, variant scalar_rgb; world n, dp_du, wi (toward the camera), wo (toward the light); "
+          "sh_frame by initialize_sh_frame; eval includes |cos(wo)|")
+    ctx = mi.BSDFContext()
+    for config in FRAME_CONFIGS:
+        plugin = {key: {"type": "rgb", "value": v} if isinstance(v, list) else v for key, v in config.items()}
+        bsdf = mi.load_dict(plugin)
+        for n, dpdu in FRAMES:
+            n = normalize(n)
+            si = mi.SurfaceInteraction3f()
+            si.n = mi.Normal3f(n)
+            si.sh_frame = mi.Frame3f(mi.Vector3f(n))
+            si.dp_du = mi.Vector3f(dpdu)
+            si.initialize_sh_frame()
+            # World directions: the usual angles about n in coordinate_system(n),
+            # a frame turned against Mitsuba's shading frame.
+            basis = mi.Frame3f(mi.Vector3f(n))
+            for wi_angles in WI:
+                for wo_angles in WO:
+                    wi = basis.to_world(mi.Vector3f(direction(*wi_angles)))
+                    wo = basis.to_world(mi.Vector3f(direction(*wo_angles)))
+                    si.wi = si.to_local(wi)
+                    e = bsdf.eval(ctx, si, si.to_local(wo))
+                    p = bsdf.pdf(ctx, si, si.to_local(wo))
+                    print(json.dumps({"bsdf": config, "n": n, "dp_du": dpdu, "wi": [float(c) for c in wi],
+                                      "wo": [float(c) for c in wo], "eval": [float(e[0]), float(e[1]), float(e[2])],
+                                      "pdf": float(p)}))
+
+
 if __name__ == "__main__":
     if "--conductors" in sys.argv:
         conductors()
+    elif "--frames" in sys.argv:
+        frames()
     else:
         values()

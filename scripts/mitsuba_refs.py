@@ -2,8 +2,9 @@
 
     /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--renders 16] [--spp 64] [NAME ...]
 
-(disk_roughplastic was made with `--renders 64 disk_roughplastic`: its
-image mean needs the smaller standard error to be checked against 0.5%.)
+(disk_roughplastic was made with `--renders 64 disk_roughplastic`, and
+aniso_dpdu with `--renders 64 aniso_dpdu`: their image means need the
+smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
 uniform 16x8 sky, smoke.vol, a 16^3 smooth blob, and albedo_rgb.vol, a 3-channel
@@ -38,7 +39,7 @@ OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
-         "rough_textured", "rough_aniso_twosided"]
+         "rough_textured", "rough_aniso_twosided", "aniso_dpdu"]
 
 
 def write_data(mi):

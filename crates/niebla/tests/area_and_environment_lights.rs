@@ -33,6 +33,7 @@ fn floor(reflectance: f32) -> SceneObject {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     }
 }
 
@@ -63,6 +64,7 @@ fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
         emitter: Some(0),
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let camera = PerspectiveCamera::look_at(Vec3::new(3.0, 1.0, 0.0), Vec3::ZERO, Vec3::Y, 10.0, 1, 1).unwrap();
     let s = scene(camera, vec![emitter, floor(rho)], vec![], vec![Light::Area(light)], None);
@@ -152,6 +154,7 @@ fn uniform_environment_map_is_a_white_furnace_for_volpath() {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![medium], vec![env], None);
     let stats =

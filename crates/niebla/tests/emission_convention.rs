@@ -95,6 +95,7 @@ fn emitting_slab_shows_closed_form_radiance() {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let camera = PerspectiveCamera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 0.01, 4, 4).unwrap();
     let s = scene(camera, vec![slab], vec![medium], vec![], None);

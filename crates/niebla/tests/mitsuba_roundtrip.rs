@@ -518,19 +518,22 @@ const TEXTURED_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
 /// checkerboard `alpha`; back: `eta`/`k`, `alpha_u` 0.05 and a nearest bitmap
 /// `alpha_v`), a one-child `twosided` panel seen from behind with a bitmap
 /// `alpha`, and a rough glass pane with checkerboard `alpha_u` (scaled) and
-/// `alpha_v` (one color not gray); anisotropic roughness only on rectangles
-/// turned about x, where the converter writes it (niebla's tangent frame is
-/// Mitsuba's there).
+/// `alpha_v` (one color not gray), and a sphere and a turned disk with
+/// constant anisotropic roughness; every anisotropic shape says
+/// `"tangent_frame": "dpdu"` (Mitsuba's frame, which the importer gives back),
+/// so the converter writes them all. (A rectangle turned about x in the
+/// default `"normal"` frame is converted too, the frames agreeing, but its
+/// basis is computed otherwise and the images differ in rounding.)
 const ROUGH_JSON: &str = r#"{
  "version": 1,
  "camera": {"type": "perspective", "position": [0.2, 1.4, 4.2], "target": [0.0, 0.5, 0.0], "up": [0, 1, 0],
             "fov_y": 40, "width": 16, "height": 12},
  "shapes": [
-  {"type": "rectangle", "to_world": {"scale": 1.8, "rotate_x": -90},
+  {"type": "rectangle", "to_world": {"scale": 1.8, "rotate_x": -90}, "tangent_frame": "dpdu",
    "bsdf": {"type": "roughconductor", "distribution": "ggx", "material": "Al",
             "alpha_u": {"type": "bitmap", "file": "alpha_gray.png", "raw": true, "scale": [2, 1.5]},
             "alpha_v": {"type": "checkerboard", "color0": 0.03, "color1": 0.3, "scale": [6, 6]}}},
-  {"type": "rectangle", "to_world": {"scale": 1.5, "translate": [0, 1, -1.2]},
+  {"type": "rectangle", "to_world": {"scale": 1.5, "translate": [0, 1, -1.2]}, "tangent_frame": "dpdu",
    "bsdf": {"type": "twosided", "bsdf": [
      {"type": "roughconductor", "material": "Au", "alpha": {"type": "checkerboard", "color0": 0.06, "color1": 0.35}},
      {"type": "roughconductor", "distribution": "ggx", "eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.1],
@@ -539,9 +542,15 @@ const ROUGH_JSON: &str = r#"{
    "bsdf": {"type": "twosided", "bsdf": {"type": "roughconductor", "material": "Cu",
             "alpha": {"type": "bitmap", "file": "alpha_gray.png", "raw": true}}}},
   {"type": "rectangle", "to_world": {"scale": 0.5, "rotate_x": -20, "translate": [0.7, 0.5, 0.4]},
+   "tangent_frame": "dpdu",
    "bsdf": {"type": "roughdielectric", "distribution": "ggx", "int_ior": 1.5,
             "alpha_u": {"type": "checkerboard", "color0": 0.05, "color1": 0.5, "scale": [4, 2]},
-            "alpha_v": {"type": "checkerboard", "color0": [0.3, 0.1, 0.2], "color1": 0.1}}}
+            "alpha_v": {"type": "checkerboard", "color0": [0.3, 0.1, 0.2], "color1": 0.1}}},
+  {"type": "sphere", "center": [-0.3, 0.35, 0.9], "radius": 0.3, "tangent_frame": "dpdu",
+   "bsdf": {"type": "roughconductor", "distribution": "ggx", "material": "Au", "alpha_u": 0.04, "alpha_v": 0.4}},
+  {"type": "disk", "to_world": {"scale": 0.4, "rotate_x": -60, "rotate_y": 25, "translate": [0.9, 0.9, -0.3]},
+   "tangent_frame": "dpdu",
+   "bsdf": {"type": "roughconductor", "distribution": "beckmann", "material": "Cu", "alpha_u": 0.3, "alpha_v": 0.05}}
  ],
  "lights": [
   {"type": "spot", "position": [0.5, 3.0, 1.5], "target": [0.0, 0.0, 0.0], "intensity": [30, 28, 25],
@@ -676,6 +685,30 @@ const ROUGH_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
         <rgb name="color1" value="0.3, 0.1, 0.2"/>
       </texture>
       <float name="int_ior" value="1.5"/>
+    </bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="-0.3, 0.35, 0.9"/>
+    <float name="radius" value="0.3"/>
+    <bsdf type="roughconductor">
+      <string name="distribution" value="ggx"/>
+      <float name="alpha_u" value="0.04"/>
+      <float name="alpha_v" value="0.4"/>
+      <string name="material" value="Au"/>
+    </bsdf>
+  </shape>
+  <shape type="disk">
+    <transform name="to_world">
+      <scale value="0.4, 0.4, 0.4"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="-60.0"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="25.0"/>
+      <translate value="0.9, 0.9, -0.3"/>
+    </transform>
+    <bsdf type="roughconductor">
+      <string name="distribution" value="beckmann"/>
+      <float name="alpha_u" value="0.3"/>
+      <float name="alpha_v" value="0.05"/>
+      <string name="material" value="Cu"/>
     </bsdf>
   </shape>
   <emitter type="spot">

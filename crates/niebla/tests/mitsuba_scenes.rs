@@ -210,9 +210,20 @@ fn textured_roughness_matches_mitsuba() {
 /// `alpha_v` a checkerboard, a `twosided` wall (front: checkerboard `alpha`;
 /// back: `alpha_u` 0.05, nearest bitmap `alpha_v`) whose back is seen on a
 /// tilted panel sharing it, and a rough glass pane with a checkerboard
-/// `alpha_u`, all on rectangles turned about x (where niebla's tangent
-/// frame is Mitsuba's), lit by a disk and a constant environment.
+/// `alpha_u`, all on rectangles turned about x (where even niebla's older,
+/// normal-only tangent frame was Mitsuba's), lit by a disk and a constant
+/// environment.
 #[test]
 fn textured_anisotropic_and_twosided_roughness_match_mitsuba() {
     check("rough_aniso_twosided");
+}
+
+/// Anisotropic roughness in Mitsuba's tangent frame (dp/du, imported as
+/// `"tangent_frame": "dpdu"`) where niebla's normal-only frame differs: a
+/// GGX sphere brushed along its azimuth (its pole toward the camera), a
+/// Beckmann disk floor brushed radially, and an OBJ quad with uvs turned
+/// 35 degrees about its normal, lit by a disk and a constant environment.
+#[test]
+fn anisotropic_roughness_along_dpdu_matches_mitsuba() {
+    check("aniso_dpdu");
 }

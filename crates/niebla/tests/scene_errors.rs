@@ -883,6 +883,14 @@ fn phase_function_errors() {
 /// Shapes, their transforms and BSDFs.
 const SHAPES: &[ErrorCase] = &[
     ErrorCase {
+        name: "unknown tangent frame",
+        from: r#""interior": "haze", "exterior": "smoke"}"#,
+        to: r#""interior": "haze", "exterior": "smoke", "tangent_frame": "uv"}"#,
+        path: "shapes[1].tangent_frame",
+        message: "unknown value `uv`",
+        also: &["`normal`", "`dpdu`"],
+    },
+    ErrorCase {
         name: "unknown shape key lists the common fields",
         from: r#""interior": "smoke"}"#,
         to: r#""interor": "smoke"}"#,

@@ -48,6 +48,7 @@ fn glass_of_milk_in_a_uniform_environment_is_a_white_furnace() {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let env = Light::Constant(ConstantLight { radiance: Rgb::splat(0.8) });
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![glass], vec![milk], vec![env], None);
@@ -74,6 +75,7 @@ fn mirror_shows_the_environment_times_its_fresnel_reflectance() {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     let env = Light::Constant(ConstantLight { radiance: Rgb::splat(2.0) });
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![mirror], vec![], vec![env], None);

@@ -33,6 +33,7 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     };
     scene(common::camera_along_x(8, 8, 30.0), vec![sphere], vec![medium], lights, None)
 }
@@ -198,6 +199,7 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     });
     let stats = |integrator: &VolPathIntegrator| {
         let (spp, batches) = (256, 12u64);

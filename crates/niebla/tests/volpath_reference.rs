@@ -30,6 +30,7 @@ fn boundary(shape: Shape, interior: u32) -> SceneObject {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     }
 }
 
@@ -44,6 +45,7 @@ fn black_plane(y: f32) -> SceneObject {
         emitter: None,
         texture: None,
         roughness: None,
+        dpdu_frame: false,
     }
 }
 

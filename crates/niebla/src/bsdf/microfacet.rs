@@ -49,6 +49,13 @@ impl Microfacet {
         Microfacet { kind, alpha_u: alpha_u.max(MIN_ALPHA), alpha_v: alpha_v.max(MIN_ALPHA) }
     }
 
+    /// True when the roughness differs along x and y (the tangent frame's
+    /// orientation then matters).
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        self.alpha_u != self.alpha_v
+    }
+
     /// The distribution of normals `D(m)` (1/sr, projected-area normalized:
     /// `integral D(m) cos(m) dm = 1`) for a unit local-frame normal `m`.
     /// Zero where `D cos` falls below 1e-20 (as Mitsuba).

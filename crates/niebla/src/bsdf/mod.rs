@@ -217,11 +217,11 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } => diffuse::diffuse_eval(reflectance, n, wo, wi),
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => Rgb::ZERO,
             Bsdf::RoughConductor(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.eval_local(wo, wi)
             }
             Bsdf::RoughDielectric(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.eval_local(wo, wi)
             }
             Bsdf::Plastic(b) => {
@@ -233,7 +233,7 @@ impl Bsdf {
                 b.eval_local(wo, wi)
             }
             Bsdf::TwoSided(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.eval_local(wo, wi)
             }
         }
@@ -247,11 +247,11 @@ impl Bsdf {
             Bsdf::Diffuse { .. } => diffuse::diffuse_pdf(n, wo, wi),
             Bsdf::Null | Bsdf::Dielectric { .. } | Bsdf::Conductor { .. } | Bsdf::ThinDielectric(_) => 0.0,
             Bsdf::RoughConductor(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.pdf_local(wo, wi)
             }
             Bsdf::RoughDielectric(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.pdf_local(wo, wi)
             }
             Bsdf::Plastic(b) => {
@@ -263,7 +263,7 @@ impl Bsdf {
                 b.pdf_local(wo, wi)
             }
             Bsdf::TwoSided(b) => {
-                let (wo, wi) = to_local(n, wo, wi);
+                let (wo, wi) = to_local_in(self.frame(n), wo, wi);
                 b.pdf_local(wo, wi)
             }
         }
@@ -302,7 +302,7 @@ impl Bsdf {
             Bsdf::Dielectric { eta } => dielectric::sample_dielectric(eta, n, wo, u_lobe, mode),
             Bsdf::Conductor { eta, k } => conductor::sample_conductor(eta, k, n, wo),
             Bsdf::RoughConductor(b) => {
-                let frame = Frame::from_z(n);
+                let frame = self.frame(n);
                 let (wi, f, pdf) = b.sample_local(frame.to_local(wo), u)?;
                 Some(BsdfSample {
                     wi: frame.to_world(wi),
@@ -314,7 +314,7 @@ impl Bsdf {
                 })
             }
             Bsdf::RoughDielectric(b) => {
-                let frame = Frame::from_z(n);
+                let frame = self.frame(n);
                 let s = b.sample_local(frame.to_local(wo), u_lobe, u, mode)?;
                 Some(BsdfSample {
                     wi: frame.to_world(s.wi),
@@ -361,7 +361,7 @@ impl Bsdf {
                 })
             }
             Bsdf::TwoSided(b) => {
-                let frame = Frame::from_z(n);
+                let frame = self.frame(n);
                 let s = b.sample_local(frame.to_local(wo), u_lobe, u)?;
                 Some(BsdfSample {
                     wi: frame.to_world(s.wi),
@@ -452,6 +452,59 @@ impl Bsdf {
         }
     }
 
+    /// True when a microfacet distribution of the model (a rough
+    /// conductor's, a rough dielectric's, a rough-conductor side of a
+    /// `twosided`) has `alpha_u != alpha_v`: only then does the tangent
+    /// frame's orientation change the result.
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            Bsdf::RoughConductor(b) => b.microfacet.is_anisotropic(),
+            Bsdf::RoughDielectric(b) => b.microfacet.is_anisotropic(),
+            Bsdf::TwoSided(b) => [b.front, b.back].iter().any(|s| s.microfacet().is_some_and(|m| m.is_anisotropic())),
+            _ => false,
+        }
+    }
+
+    /// The model with the world-space tangent `t` (a shape's `dp/du` at
+    /// one hit; any length) set as the x axis (`alpha_u`) of its
+    /// microfacet distributions, made orthogonal to the normal each
+    /// evaluation uses (see [`RoughConductor::tangent`]). Models without one
+    /// are returned unchanged.
+    #[inline]
+    pub fn with_tangent(self, t: Vec3) -> Bsdf {
+        match self {
+            Bsdf::RoughConductor(b) => Bsdf::RoughConductor(RoughConductor { tangent: t, ..b }),
+            Bsdf::RoughDielectric(b) => Bsdf::RoughDielectric(RoughDielectric { tangent: t, ..b }),
+            Bsdf::TwoSided(b) => {
+                Bsdf::TwoSided(TwoSided { front: b.front.with_tangent(t), back: b.back.with_tangent(t), ..b })
+            }
+            other => other,
+        }
+    }
+
+    /// The shading frame about unit normal `n` (`+z = n`): x along the
+    /// microfacet tangent where one is set ([`Bsdf::with_tangent`]), else
+    /// [`Frame::from_z`]'s.
+    #[inline]
+    pub fn frame(&self, n: Vec3) -> Frame {
+        let tangent = match self {
+            Bsdf::RoughConductor(b) => b.tangent,
+            Bsdf::RoughDielectric(b) => b.tangent,
+            Bsdf::TwoSided(b) => match (b.front, b.back) {
+                (Reflector::RoughConductor(r), _) if r.tangent != Vec3::ZERO => r.tangent,
+                (_, Reflector::RoughConductor(r)) => r.tangent,
+                _ => Vec3::ZERO,
+            },
+            _ => Vec3::ZERO,
+        };
+        if tangent == Vec3::ZERO {
+            Frame::from_z(n)
+        } else {
+            Frame::from_normal_tangent(n, tangent)
+        }
+    }
+
     /// The microfacet distribution of a rough conductor or rough
     /// dielectric; `None` for other models.
     #[inline]
@@ -482,7 +535,12 @@ impl Bsdf {
 /// `wo` and `wi` in the local frame of `n` ([`Frame::from_z`]: `+z = n`).
 #[inline]
 fn to_local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
-    let frame = Frame::from_z(n);
+    to_local_in(Frame::from_z(n), wo, wi)
+}
+
+/// `wo` and `wi` in `frame`.
+#[inline]
+fn to_local_in(frame: Frame, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
     (frame.to_local(wo), frame.to_local(wi))
 }
 

@@ -21,6 +21,15 @@ pub struct RoughConductor {
     pub k: Rgb,
     /// Multiplier of the reflection (Mitsuba's `specular_reflectance`, default 1).
     pub specular_reflectance: Rgb,
+    /// World-space direction of the distribution's local x axis
+    /// (`alpha_u`) at one hit: the shape's `dp/du` (any length), made
+    /// orthogonal to the normal by [`Bsdf::frame`](super::Bsdf::frame)
+    /// (Mitsuba 3's frame); set per hit by
+    /// [`Bsdf::with_tangent`](super::Bsdf::with_tangent). `Vec3::ZERO` (the
+    /// default, and always for isotropic roughness): the x axis of
+    /// [`Frame::from_z`](crate::math::Frame::from_z), built from the
+    /// normal alone. A plain `Vec3`, so the model is no larger than before.
+    pub tangent: Vec3,
 }
 
 impl RoughConductor {

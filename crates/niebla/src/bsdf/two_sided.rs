@@ -64,6 +64,16 @@ impl Reflector {
         }
     }
 
+    /// The model with `t` as its microfacet distribution's tangent (see
+    /// [`Bsdf::with_tangent`](super::Bsdf::with_tangent)); other models unchanged.
+    #[inline]
+    pub fn with_tangent(self, t: Vec3) -> Reflector {
+        match self {
+            Reflector::RoughConductor(b) => Reflector::RoughConductor(RoughConductor { tangent: t, ..b }),
+            other => other,
+        }
+    }
+
     /// The microfacet distribution of a rough conductor; `None` for other
     /// models.
     #[inline]

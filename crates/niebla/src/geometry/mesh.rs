@@ -385,6 +385,33 @@ impl MeshInstance {
         SurfaceHit { t: hit.t, p, n, ns }
     }
 
+    /// Mitsuba 3's `dp/du` (world space, not normalized) at `hit` on this
+    /// instance: from the triangle's vertex uvs, `(duv1.v dp0 - duv0.v dp1) /
+    /// det` with `dp0 = p1 - p0`, `dp1 = p2 - p0`, `duv0 = uv1 - uv0`, `duv1 =
+    /// uv2 - uv0`, `det = duv0.u duv1.v - duv0.v duv1.u`; without uvs (or
+    /// where `det` is 0) the x axis of `coordinate_system(n)` of the world
+    /// geometric normal `n` ([`crate::math::Frame::from_z`]).
+    pub fn dpdu(&self, hit: &PrimitiveHit, n: Vec3) -> Vec3 {
+        self.dpdu_by(&self.transform, hit, n)
+    }
+
+    /// [`MeshInstance::dpdu`] with the mesh placed by `pose`.
+    pub fn dpdu_by(&self, pose: &Transform, hit: &PrimitiveHit, n: Vec3) -> Vec3 {
+        let mesh = &*self.mesh;
+        let fallback = || crate::math::Frame::from_z(n).x;
+        let Some(uvs) = &mesh.uvs else { return fallback() };
+        let tri = mesh.triangles[hit.prim as usize];
+        let [p0, p1, p2] = tri.map(|i| mesh.positions[i as usize]);
+        let [uv0, uv1, uv2] = tri.map(|i| uvs[i as usize]);
+        let (dp0, dp1) = (p1 - p0, p2 - p0);
+        let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
+        let det = duv0.x * duv1.y - duv0.y * duv1.x;
+        if det == 0.0 || !det.is_finite() {
+            return fallback();
+        }
+        pose.vector_to_world((dp0 * duv1.y - dp1 * duv0.y) / det)
+    }
+
     /// World box.
     pub fn bounds(&self) -> (Vec3, Vec3) {
         (self.world_bounds.min, self.world_bounds.max)

@@ -196,6 +196,43 @@ impl Shape {
         }
     }
 
+    /// Mitsuba 3's `dp/du` at a hit found on this shape (world space, not
+    /// normalized; see [`Shape::uv`] for each shape's `u`): the tangent of
+    /// anisotropic roughness with `"tangent_frame": "dpdu"`. Sphere: `2 pi
+    /// (-q.y, q.x, 0)` with `q = p - center` (zero at the poles); rectangle:
+    /// twice the placement's local x axis; disk: the placement of the local
+    /// radial direction `(cos phi, sin phi, 0)` (`(1, 0, 0)` at the
+    /// center); box: the axis its face's `u` runs along, times the box's
+    /// extent on it; mesh: from the triangle's uvs, else
+    /// `coordinate_system(n)` (see [`MeshInstance::dpdu`]); a moving shape's
+    /// in its pose at `time`.
+    pub fn dpdu(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> Vec3 {
+        use crate::math::PI;
+        match self {
+            Shape::Sphere(s) => {
+                let q = surface.p - s.center;
+                Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI)
+            }
+            Shape::Rectangle(r) => r.transform.vector_to_world(Vec3::X) * 2.0,
+            Shape::Disk(d) => {
+                let q = d.transform.to_local.transform_point3(surface.p);
+                let r = q.x.hypot(q.y);
+                let (c, s) = if r > 0.0 { (q.x / r, q.y / r) } else { (1.0, 0.0) };
+                d.transform.vector_to_world(Vec3::new(c, s, 0.0))
+            }
+            Shape::Box(b) => {
+                let e = b.max - b.min;
+                if surface.n.x != 0.0 {
+                    Vec3::new(0.0, 0.0, e.z)
+                } else {
+                    Vec3::new(e.x, 0.0, 0.0)
+                }
+            }
+            Shape::Mesh(m) => m.dpdu(local, surface.n),
+            Shape::Moving(m) => m.dpdu(surface, local, time),
+        }
+    }
+
     /// True for shapes that enclose a volume (and so can hold a medium).
     pub fn is_closed(&self) -> bool {
         match self {

@@ -384,6 +384,17 @@ impl MovingShape {
         }
     }
 
+    /// [`Shape::dpdu`] of a hit found at `time`, in the pose at `time`.
+    pub fn dpdu(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> Vec3 {
+        match self.still_at(time) {
+            Some(shape) => shape.dpdu(surface, local, time),
+            None => match self.mesh_pose(time) {
+                Some((instance, pose)) => instance.dpdu_by(&pose, local, surface.n),
+                None => crate::math::Frame::from_z(surface.n).x,
+            },
+        }
+    }
+
     /// World box of everything the shape sweeps while the shutter is open.
     #[inline]
     pub fn bounds(&self) -> (Vec3, Vec3) {

@@ -242,7 +242,20 @@ fn build_with_loaders(
         };
         let interior = medium_id(&s.interior);
         let exterior = medium_id(&s.exterior);
-        objects.push(SceneObject { shape, bsdf, interior, exterior, bounds_medium, emitter: None, texture, roughness });
+        // Only a bsdf that may be anisotropic (a constant pair, or
+        // roughness textures) pays for the tangent.
+        let dpdu_frame = s.tangent_frame == TangentFrameDesc::Dpdu && (bsdf.is_anisotropic() || roughness.is_some());
+        objects.push(SceneObject {
+            shape,
+            bsdf,
+            interior,
+            exterior,
+            bounds_medium,
+            emitter: None,
+            texture,
+            roughness,
+            dpdu_frame,
+        });
         explicit_exterior.push(s.exterior.is_some());
     }
     let ambient_medium = medium_id(&desc.ambient_medium);
@@ -321,6 +334,7 @@ fn build_with_loaders(
                     emitter: Some(i as u32),
                     texture: None,
                     roughness: None,
+                    dpdu_frame: false,
                 });
                 explicit_exterior.push(false);
                 Light::Area(light)

@@ -13,6 +13,7 @@ use crate::bsdf::{
 };
 use crate::color::Rgb;
 use crate::limits::MemoryBudget;
+use crate::math::Vec3;
 use crate::texture::{AlphaTextures, RoughnessTextures, Texture};
 
 /// What the builder needs to load textures.
@@ -60,6 +61,7 @@ pub(super) fn build_surface(
                 eta: d.int_ior / d.ext_ior,
                 specular_reflectance: d.specular_reflectance.to_rgb(),
                 specular_transmittance: d.specular_transmittance.to_rgb(),
+                tangent: Vec3::ZERO,
             })
         }
         BsdfDesc::ThinDielectric(d) => Bsdf::ThinDielectric(ThinDielectric {
@@ -241,7 +243,10 @@ fn rough_conductor(
     let (eta, k) = conductor_index(&d.conductor, path, ctx.source, true)?;
     let (specular_reflectance, texture) =
         color_or_texture(&d.specular_reflectance, &format!("{path}.specular_reflectance"), ctx)?;
-    Ok((RoughConductor { microfacet: microfacet(&d.microfacet), eta, k, specular_reflectance }, texture))
+    Ok((
+        RoughConductor { microfacet: microfacet(&d.microfacet), eta, k, specular_reflectance, tangent: Vec3::ZERO },
+        texture,
+    ))
 }
 
 fn plastic(

@@ -657,7 +657,7 @@ fn parse_phase(mut object: Object) -> Result<PhaseDesc, Located> {
 deserialize_object!(ShapeDesc, "a shape object with a \"type\" field", parse_shape);
 
 /// Fields every shape accepts besides its geometry's.
-const SHAPE_COMMON_FIELDS: &str = "`type`, `interior`, `exterior`, `bsdf`, `motion`";
+const SHAPE_COMMON_FIELDS: &str = "`type`, `interior`, `exterior`, `bsdf`, `motion`, `tangent_frame`";
 
 fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
     let tag = take_tag(&mut object, "shape", GeometryDesc::TYPES, None)?;
@@ -668,6 +668,7 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
     let exterior = take::<String>(&mut object, "exterior")?;
     let bsdf = take::<BsdfDesc>(&mut object, "bsdf")?.unwrap_or_default();
     let motion = take::<ShapeMotionDesc>(&mut object, "motion")?.map(Box::new);
+    let tangent_frame = take::<TangentFrameDesc>(&mut object, "tangent_frame")?.unwrap_or_default();
     let geometry = match tag.as_str() {
         "sphere" => rest(object).map(GeometryDesc::Sphere),
         "box" => rest(object).map(GeometryDesc::Box),
@@ -683,7 +684,7 @@ fn parse_shape(mut object: Object) -> Result<ShapeDesc, Located> {
         }
         e
     })?;
-    Ok(ShapeDesc { geometry, interior, exterior, bsdf, motion })
+    Ok(ShapeDesc { geometry, interior, exterior, bsdf, motion, tangent_frame })
 }
 
 deserialize_object!(BsdfDesc, "a bsdf object with a \"type\" field", parse_bsdf);

@@ -194,6 +194,7 @@ mod tests {
             emitter: None,
             texture: None,
             roughness: None,
+            dpdu_frame: false,
         }
     }
 

@@ -46,6 +46,12 @@ pub struct SceneObject {
     /// [`Texture::scalar`](crate::texture::Texture::scalar)), replacing
     /// `bsdf`'s constants; see [`Scene::surface_bsdf`].
     pub roughness: Option<std::sync::Arc<crate::texture::RoughnessTextures>>,
+    /// True when anisotropic roughness on this object is oriented along
+    /// the shape's `dp/du` (the scene's `"tangent_frame": "dpdu"`, Mitsuba
+    /// 3's frame; see [`Shape::dpdu`]) and `bsdf` may be anisotropic; false:
+    /// along the x axis of [`Frame::from_z`](crate::math::Frame::from_z) of
+    /// the normal, and no tangent is computed.
+    pub dpdu_frame: bool,
 }
 
 /// A surface hit with the object it belongs to.
@@ -129,20 +135,27 @@ impl Scene {
     /// The surface model at `hit`: the object's BSDF, with its textured
     /// color (see [`Bsdf::with_texture`]) and textured roughness (see
     /// [`RoughnessTextures::apply`](crate::texture::RoughnessTextures::apply))
-    /// looked up at the hit's uv.
+    /// looked up at the hit's uv, and, where [`SceneObject::dpdu_frame`] is
+    /// set and the roughness is anisotropic, the shape's `dp/du` as its
+    /// tangent ([`Bsdf::with_tangent`]).
     #[inline]
     pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
         let object = self.object(hit);
-        if object.texture.is_none() && object.roughness.is_none() {
+        if object.texture.is_none() && object.roughness.is_none() && !object.dpdu_frame {
             return object.bsdf;
         }
-        let uv = object.shape.uv(&hit.surface, &hit.local, hit.time);
         let mut bsdf = object.bsdf;
-        if let Some(texture) = &object.texture {
-            bsdf = bsdf.with_texture(texture.eval(uv));
+        if object.texture.is_some() || object.roughness.is_some() {
+            let uv = object.shape.uv(&hit.surface, &hit.local, hit.time);
+            if let Some(texture) = &object.texture {
+                bsdf = bsdf.with_texture(texture.eval(uv));
+            }
+            if let Some(roughness) = &object.roughness {
+                bsdf = roughness.apply(bsdf, uv);
+            }
         }
-        if let Some(roughness) = &object.roughness {
-            bsdf = roughness.apply(bsdf, uv);
+        if object.dpdu_frame && bsdf.is_anisotropic() {
+            bsdf = bsdf.with_tangent(object.shape.dpdu(&hit.surface, &hit.local, hit.time));
         }
         bsdf
     }

@@ -346,6 +346,7 @@ mod tests {
             eta: 1.5,
             specular_reflectance: Rgb::ONE,
             specular_transmittance: Rgb::ONE,
+            tangent: Vec3::ZERO,
         });
         let diffuse = Bsdf::Diffuse { reflectance: Rgb::splat(0.5) };
         let n = Vec3::Z;

@@ -23,6 +23,27 @@ pub struct ShapeDesc {
     /// The shape's pose one frame later (time 1), for motion blur; default:
     /// the shape does not move. Boxed, as few shapes move.
     pub motion: Option<Box<ShapeMotionDesc>>,
+    /// `"tangent_frame"`: how anisotropic roughness (`alpha_u` != `alpha_v`)
+    /// is oriented on this shape; default `"normal"`.
+    pub tangent_frame: TangentFrameDesc,
+}
+
+/// `"tangent_frame"` of a shape: the direction of a microfacet
+/// distribution's `alpha_u` axis (it matters for anisotropic roughness
+/// only).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TangentFrameDesc {
+    /// `"normal"` (the default, niebla's frame before 2026-12): the x axis
+    /// of a basis built from the shading normal alone (Duff et al. 2017),
+    /// which turns with the normal but follows no parameterization.
+    #[default]
+    Normal,
+    /// `"dpdu"`: the shape's `dp/du` made orthogonal to the shading normal,
+    /// Mitsuba 3's frame (sphere: along the azimuth; rectangle: its local
+    /// x; disk: radial; box: the face's u axis; mesh: from its uvs, else
+    /// the normal's basis).
+    Dpdu,
 }
 
 /// `"motion"` of a shape: its pose one frame after the rendered frame (time

@@ -148,8 +148,13 @@ fn copy_color(p: &Props, name: &str, out: &mut Map<String, Value>) -> Result<(),
     Ok(())
 }
 
-/// Conductor keys: `material`, or `eta` and `k`.
-fn conductor_index(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneError> {
+/// Conductor keys: `material`, or `eta` and `k`. A `roughconductor` may
+/// give none of them, or `eta` or `k` alone, or `material` "none": Mitsuba 3's
+/// defaults are then `eta` 0 and `k` 1, a Fresnel reflectance of exactly 1
+/// (its `roughconductor.cpp`: material defaults to "none", which reads `eta`
+/// and `k` with those defaults), which niebla's `roughconductor` JSON takes
+/// for absent keys as well. The smooth `conductor` needs one of them.
+fn conductor_index(p: &Props, out: &mut Map<String, Value>, rough: bool) -> Result<(), SceneError> {
     let material = p.string("material")?;
     let (eta, k) = (p.color("eta")?, p.color("k")?);
     match (material, eta, k) {
@@ -160,12 +165,21 @@ fn conductor_index(p: &Props, out: &mut Map<String, Value>) -> Result<(), SceneE
             out.insert("eta".into(), color_json(e));
             out.insert("k".into(), color_json(k));
         }
+        (None, e, k) if rough => {
+            if let Some(e) = e {
+                out.insert("eta".into(), color_json(e));
+            }
+            if let Some(k) = k {
+                out.insert("k".into(), color_json(k));
+            }
+        }
         (None, None, None) => {
             return Err(p.error(
                 "no `material` and no `eta`/`k`: Mitsuba's default is a perfect mirror (material \"none\"), which \
-                 niebla's conductors do not have",
+                 niebla's smooth conductors do not have",
             ))
         }
+        _ if rough => return Err(p.error("give `material`, or `eta` and `k`, not both")),
         _ => return Err(p.error("give `material`, or both `eta` and `k`")),
     }
     Ok(())
@@ -190,7 +204,7 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
             unit_only(&p, "specular_transmittance")?;
         }
         "conductor" => {
-            conductor_index(&p, &mut out)?;
+            conductor_index(&p, &mut out, false)?;
             if let Some(Value::String(m)) = out.get("material") {
                 if crate::bsdf::conductor_preset(m).is_none() {
                     let names: Vec<&str> = crate::bsdf::CONDUCTOR_PRESETS.iter().map(|p| p.symbol).collect();
@@ -201,7 +215,7 @@ pub(super) fn convert_bsdf<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result<
         }
         "roughconductor" => {
             microfacet(c, &p, &mut out, true)?;
-            conductor_index(&p, &mut out)?;
+            conductor_index(&p, &mut out, true)?;
             if let Some(r) = color_or_texture(c, &p, "specular_reflectance")? {
                 out.insert("specular_reflectance".into(), r);
             }

@@ -165,18 +165,25 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         // Mitsuba's default surface.
         None => json!({"type": "diffuse", "reflectance": 0.5}),
     };
-    // niebla's tangent frame (from the normal alone) is Mitsuba's (dp/du)
-    // on a rectangle whose dp/du, to_world's first column, stays along +x
-    // (a half turn for flip_normals keeps it).
-    let x_axis = [m[0][0], m[1][0], m[2][0]];
-    let frames_agree = t == "rectangle" && x_axis[0] > 0.0 && x_axis[1].abs().max(x_axis[2].abs()) <= 1e-6 * x_axis[0];
-    if anisotropic(&bsdf) && !frames_agree {
-        c.notes.push(format!(
-            "{}: {}: anisotropic roughness follows niebla's tangent frame (built from the normal), which is \
-             Mitsuba's (dp/du) only on a rectangle turned about x: its direction differs here",
-            node.loc.at(),
-            p.what()
-        ));
+    // Anisotropic roughness follows Mitsuba's dp/du ("tangent_frame":
+    // "dpdu"); niebla's shapes have Mitsuba's uv parameterization, and so its
+    // dp/du, except a cube (its uv layout is not converted) and a sphere
+    // turned by its to_world (niebla's spheres have no orientation).
+    if anisotropic(&bsdf) {
+        shape.insert("tangent_frame".into(), json!("dpdu"));
+        let differs = match t {
+            "cube" => Some("a cube (its uv layout is not converted)"),
+            "sphere" => untexturable.map(|_| "a sphere turned by its to_world (niebla's spheres have no orientation)"),
+            _ => None,
+        };
+        if let Some(why) = differs {
+            c.notes.push(format!(
+                "{}: {}: anisotropic roughness follows the shape's dp/du, which on {why} differs from Mitsuba's: \
+                 its direction differs here",
+                node.loc.at(),
+                p.what()
+            ));
+        }
     }
     if super::textures::has_texture(&bsdf) {
         if let Some(why) = untexturable {

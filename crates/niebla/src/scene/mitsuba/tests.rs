@@ -447,8 +447,9 @@ fn textured_anisotropic_and_twosided_alpha_convert() {
     let sides = &s["shapes"][1]["bsdf"]["bsdf"];
     assert_eq!((&sides[0]["alpha"]["color0"], &sides[0]["alpha"]["color1"]), (&json!(0.45), &json!(0.05)));
     assert_eq!((&sides[1]["alpha_u"], &sides[1]["alpha_v"]["type"]), (&json!(0.2), &json!("bitmap")));
-    // Both rectangles are unrotated: niebla's tangent frame is Mitsuba's.
+    // Anisotropic roughness takes Mitsuba's frame, without a note.
     assert!(!import.notes.iter().any(|n| n.contains("anisotropic")), "{:?}", import.notes);
+    assert_eq!((&s["shapes"][0]["tangent_frame"], &s["shapes"][1]["tangent_frame"]), (&json!("dpdu"), &json!("dpdu")));
     let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
     match &desc.shapes[0].bsdf {
         crate::scene::desc::BsdfDesc::RoughConductor(d) => {
@@ -458,24 +459,33 @@ fn textured_anisotropic_and_twosided_alpha_convert() {
     }
 }
 
-/// Anisotropic roughness on a shape where niebla's tangent frame is not
-/// Mitsuba's (a sphere; a rectangle turned about y) is noted at the
-/// shape's line; on a rectangle turned about x it is not.
+/// Anisotropic roughness takes Mitsuba's frame (`"tangent_frame": "dpdu"`)
+/// on every shape, noted only where niebla's dp/du is not Mitsuba's (a
+/// cube, a sphere turned by its to_world); isotropic roughness sets no key.
 #[test]
-fn anisotropic_roughness_off_the_shared_frame_is_noted() {
-    let notes = |shape: &str, to_world: &str| {
+fn anisotropic_roughness_takes_mitsubas_frame() {
+    let import = |shape: &str, to_world: &str, alpha_v: &str| {
         let body = format!(
             "<shape type=\"{shape}\">{to_world}\n<bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/><float name=\"alpha_u\" \
-             value=\"0.1\"/><float name=\"alpha_v\" value=\"0.4\"/></bsdf></shape>"
+             value=\"0.1\"/><float name=\"alpha_v\" value=\"{alpha_v}\"/></bsdf></shape>"
         );
-        import_with_png(&body).unwrap().notes.into_iter().filter(|n| n.contains("anisotropic")).collect::<Vec<_>>()
+        let i = import_with_png(&body).unwrap();
+        let notes = i.notes.into_iter().filter(|n| n.contains("anisotropic")).collect::<Vec<_>>();
+        (i.scene["shapes"][0]["tangent_frame"].clone(), notes)
     };
-    let sphere = notes("sphere", "");
-    assert!(sphere.len() == 1 && sphere[0].starts_with("t.xml:8: <shape type=\"sphere\">"), "{sphere:?}");
     let turned = |axis: &str| format!("<transform name=\"to_world\"><rotate {axis}=\"1\" angle=\"40\"/></transform>");
-    assert_eq!(notes("rectangle", &turned("y")).len(), 1);
-    assert_eq!(notes("disk", "").len(), 1);
-    assert!(notes("rectangle", &turned("x")).is_empty());
+    for (shape, to_world) in
+        [("sphere", String::new()), ("rectangle", turned("y")), ("disk", turned("z")), ("rectangle", turned("x"))]
+    {
+        assert_eq!(import(shape, &to_world, "0.4"), (json!("dpdu"), vec![]), "{shape} {to_world}");
+    }
+    assert_eq!(import("sphere", "", "0.1").0, serde_json::Value::Null);
+    let (frame, cube) = import("cube", "", "0.4");
+    assert!(
+        frame == json!("dpdu") && cube.len() == 1 && cube[0].starts_with("t.xml:8: <shape type=\"cube\">"),
+        "{cube:?}"
+    );
+    assert_eq!(import("sphere", &turned("y"), "0.4").1.len(), 1);
 }
 
 /// Mitsuba's bitmap reads row `v * height` from the image's top, niebla's
@@ -614,4 +624,36 @@ fn texture_errors_name_file_line_and_attribute() {
     let e = err("<shape type=\"sphere\"><transform name=\"to_world\"><rotate z=\"1\" angle=\"30\"/></transform>\
                  <bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/></bsdf></shape>");
     assert!(e.contains("a textured bsdf on a sphere rotated"), "{e}");
+}
+
+/// A `roughconductor` without `material`, `eta` and `k` (or with material
+/// "none", or `eta` or `k` alone) is Mitsuba's default, `eta` 0 and `k` 1
+/// (Fresnel 1): it converts to a JSON rough conductor with those keys left
+/// out, which niebla's parser reads with the same defaults; `material` with
+/// `eta` is refused (as Mitsuba does); the smooth `conductor` still needs one.
+#[test]
+fn roughconductor_without_an_index_is_mitsubas_perfect_mirror() {
+    use crate::scene::desc::{BsdfDesc, ColorDesc, ConductorDesc};
+    let index = |inner: &str| {
+        let s = import(&format!("<shape type=\"sphere\"><bsdf type=\"roughconductor\">{inner}</bsdf></shape>"))
+            .unwrap()
+            .scene;
+        let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+        match &desc.shapes[0].bsdf {
+            BsdfDesc::RoughConductor(d) => d.conductor,
+            other => panic!("{other:?}"),
+        }
+    };
+    let mirror = ConductorDesc::Index { eta: ColorDesc::Gray(0.0), k: ColorDesc::Gray(1.0) };
+    assert_eq!(index(""), mirror);
+    assert_eq!(index(r#"<string name="material" value="none"/>"#), mirror);
+    assert_eq!(
+        index(r#"<float name="eta" value="0.5"/>"#),
+        ConductorDesc::Index { eta: ColorDesc::Gray(0.5), k: ColorDesc::Gray(1.0) }
+    );
+    let both = err(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>
+        <float name="eta" value="0.5"/></bsdf></shape>"#);
+    assert!(both.contains("not both"), "{both}");
+    let smooth = err(r#"<shape type="sphere"><bsdf type="conductor"/></shape>"#);
+    assert!(smooth.contains("perfect mirror"), "{smooth}");
 }
