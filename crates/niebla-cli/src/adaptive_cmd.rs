@@ -138,7 +138,8 @@ pub fn run_pilot(
         }
     }
     if !run.quiet {
-        let (least, most) = (result.spp.iter().min().copied().unwrap_or(0), result.spp.iter().max().copied().unwrap_or(0));
+        let (least, most) =
+            (result.spp.iter().min().copied().unwrap_or(0), result.spp.iter().max().copied().unwrap_or(0));
         println!(
             "rendered {}x{} with a pilot allocation ({} pilot spp, then {} spp on average, {least} to {most}, {} sampler) with {} in {seconds:.2} s",
             scene.camera.width,

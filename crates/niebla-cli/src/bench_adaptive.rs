@@ -20,12 +20,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use niebla::adaptive::pilot::{
+    allocate, pilot_allocation, render_pilot, smooth, weights as pilot_weights, PilotOptions,
+};
 use niebla::adaptive::{
     allocation_bound, cost_allocation_bound, per_sample_relative_variance, render_adaptive, AdaptiveOptions, StopRule,
     COST_OFFSET,
-};
-use niebla::adaptive::pilot::{
-    allocate, pilot_allocation, render_pilot, smooth, weights as pilot_weights, PilotOptions,
 };
 use niebla::aov::{variance_of_mean, AovSet};
 use niebla::integrator::PreparedIntegrator;
@@ -478,8 +478,11 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
     for s in &sobol_plain {
         header += &format!(" {:>10} {:>10}", format!("{}_spp", s.name()), format!("{}_s", s.name()));
     }
-    let pilot_labels: Vec<String> =
-        args.pilot_spp.iter().flat_map(|k| pilot_samplers.iter().map(move |s| format!("p{k}{}", &s.name()[..1]))).collect();
+    let pilot_labels: Vec<String> = args
+        .pilot_spp
+        .iter()
+        .flat_map(|k| pilot_samplers.iter().map(move |s| format!("p{k}{}", &s.name()[..1])))
+        .collect();
     for label in &pilot_labels {
         header += &format!(" {:>10} {:>10}", format!("{label}_spp"), format!("{label}_s"));
     }

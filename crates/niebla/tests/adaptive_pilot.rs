@@ -38,9 +38,11 @@ fn mean_and_se(values: &[f64]) -> (f64, f64) {
 /// plain independent renders of 64 spp within 4 SE, with the independent
 /// and with the Owen-scrambled Sobol sampler (the claim of the module
 /// documentation: `n_p` independent of pass 2, any prefix of a scrambled
-/// Sobol sequence unbiased). The allocation must be uneven (the most
-/// samples of a pixel at least 3 times the least, else the test shows
-/// nothing) and the SE small (below 1% of the mean).
+/// Sobol sequence unbiased). Smoothing radius 0, so that the allocation
+/// follows every pilot's noise (the argument holds for any radius); the
+/// allocation must be uneven (the most samples of a pixel at least 3 times
+/// the least, else the test shows nothing) and the SE small (below 1% of
+/// the mean).
 #[test]
 fn pilot_mean_over_seeds_matches_the_plain_mean_with_both_samplers() {
     let built = fog_spot(16, 12);
@@ -50,8 +52,13 @@ fn pilot_mean_over_seeds_matches_the_plain_mean_with_both_samplers() {
     let prepared = PreparedIntegrator::new(scene, &volpath);
     let plain: Vec<f64> = (0..runs)
         .map(|seed| {
-            let options =
-                RenderOptions { spp: 64, seed: 1000 + seed, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
+            let options = RenderOptions {
+                spp: 64,
+                seed: 1000 + seed,
+                first_sample: 0,
+                threads: None,
+                sampler: SamplerKind::Independent,
+            };
             prepared.render(scene, &options, &|_, _| {}, None).unwrap().mean().average() as f64
         })
         .collect();
@@ -60,7 +67,7 @@ fn pilot_mean_over_seeds_matches_the_plain_mean_with_both_samplers() {
         let (mut least, mut most) = (u64::MAX, 0u64);
         let pilot: Vec<f64> = (0..runs)
             .map(|seed| {
-                let options = PilotOptions::new(64, seed, sampler);
+                let options = PilotOptions { radius: 0, ..PilotOptions::new(64, seed, sampler) };
                 let result = render_pilot(scene, &volpath, &options, None).unwrap();
                 least = least.min(*result.spp.iter().min().unwrap());
                 most = most.max(*result.spp.iter().max().unwrap());
@@ -90,7 +97,8 @@ fn sobol_pilot_image_matches_the_plain_image_pixel_by_pixel() {
     let scene = &built.scene;
     let volpath = registry::defaults("volpath").unwrap();
     let result = render_pilot(scene, &volpath, &PilotOptions::new(32, 5, SamplerKind::Sobol), None).unwrap();
-    let plain_options = RenderOptions { spp: 256, seed: 8, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
+    let plain_options =
+        RenderOptions { spp: 256, seed: 8, first_sample: 0, threads: None, sampler: SamplerKind::Independent };
     let set = AovSet::EMPTY.with(Aov::Variance);
     let prepared = PreparedIntegrator::new(scene, &volpath);
     let (sums, layers) = prepared.render_aov_sums(scene, &plain_options, set, &|_, _| {}, None).unwrap();
@@ -115,8 +123,9 @@ fn sobol_pilot_image_matches_the_plain_image_pixel_by_pixel() {
     assert!(outliers <= 3 * n / 100, "{outliers} pixel channels beyond 4 SE");
 }
 
-/// The allocation on a real render: the mean is `spp` exactly, every pixel
-/// lies between spp / 8 and 8 spp, and the noisy, costly pixels take more.
+/// The allocation on a real render (3x3 smoothing, so that it is uneven on
+/// this small image): the mean is `spp` exactly, every pixel lies between
+/// spp / 8 and 8 spp, and pixels of larger `sqrt(v / c)` take more.
 /// Layers change neither the beauty nor the spp map, and the split layers
 /// add up to the beauty in every pixel.
 #[test]
@@ -126,19 +135,26 @@ fn allocation_keeps_its_mean_and_bounds_and_layers_split_the_beauty() {
     let volpath = registry::defaults("volpath").unwrap();
     let split = [Aov::Direct, Aov::Indirect, Aov::Emission, Aov::Surface];
     let set = split.into_iter().fold(AovSet::EMPTY, AovSet::with).with(Aov::Variance).with(Aov::Alpha);
-    let mut options = PilotOptions::new(64, 3, SamplerKind::Independent);
+    let mut options = PilotOptions { radius: 1, ..PilotOptions::new(64, 3, SamplerKind::Independent) };
     let bare = render_pilot(scene, &volpath, &options, None).unwrap();
     let pixels = bare.spp.len() as u64;
     assert_eq!(bare.spp.iter().sum::<u64>(), 64 * pixels);
     let (least, most) = (*bare.spp.iter().min().unwrap(), *bare.spp.iter().max().unwrap());
     assert!(least >= 8 && most <= 512, "spp {least}..{most}");
-    assert!(most >= 4 * least, "spp {least}..{most}: the noise must be uneven");
+    assert!(most >= 3 * least, "spp {least}..{most}: the noise must be uneven");
     // Pixels of higher sqrt(v / c) take at least as many samples.
     let weight: Vec<f64> = bare.pilot_variance.iter().zip(&bare.pilot_cost).map(|(v, c)| (v / c).sqrt()).collect();
     for i in 0..bare.spp.len() {
         for j in 0..bare.spp.len() {
             if weight[i] > weight[j] * 1.01 {
-                assert!(bare.spp[i] + 1 >= bare.spp[j], "pixels {i}, {j}: weights {} > {}, spp {} < {}", weight[i], weight[j], bare.spp[i], bare.spp[j]);
+                assert!(
+                    bare.spp[i] + 1 >= bare.spp[j],
+                    "pixels {i}, {j}: weights {} > {}, spp {} < {}",
+                    weight[i],
+                    weight[j],
+                    bare.spp[i],
+                    bare.spp[j]
+                );
             }
         }
     }

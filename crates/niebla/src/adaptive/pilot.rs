@@ -260,7 +260,12 @@ fn pilot_estimates(sums: &[i128], k: u64, pixels: usize) -> (Vec<f64>, Vec<f64>)
     let moments: Vec<Moments> = (0..pixels)
         .map(|i| {
             let cell = &sums[i * 7..][..7];
-            Moments { sum: [cell[0], cell[1], cell[2]], square: [cell[3], cell[4], cell[5]], n: k, dimensions: cell[6] as u64 }
+            Moments {
+                sum: [cell[0], cell[1], cell[2]],
+                square: [cell[3], cell[4], cell[5]],
+                n: k,
+                dimensions: cell[6] as u64,
+            }
         })
         .collect();
     let image_mean =
@@ -305,8 +310,9 @@ fn pilot_pass(
     let all: Vec<u32> = (0..pixels as u32).collect();
     let seed = pilot_seed(options.seed);
     let ranges = vec![(0, k); pixels];
-    let pilot =
-        run(&|| prepared.render_range_sums(scene, SamplerKind::Independent, seed, AovSet::EMPTY, &all, &ranges, cancel))?;
+    let pilot = run(&|| {
+        prepared.render_range_sums(scene, SamplerKind::Independent, seed, AovSet::EMPTY, &all, &ranges, cancel)
+    })?;
     let (v, c) = pilot_estimates(&pilot, k, pixels);
     let radius = options.radius as usize;
     let (v, c) = (smooth(&v, w, h, radius), smooth(&c, w, h, radius));
@@ -393,16 +399,7 @@ pub fn render_pilot(
     let layers = (!options.layers.is_empty()).then(|| layer_image(options.layers, &channels, w, h, &means, &variance));
     let mut image = Image::new(w as u32, h as u32);
     image.pixels = value;
-    Ok(PilotImage {
-        image,
-        spp,
-        variance,
-        layers,
-        pilot_variance: v,
-        pilot_cost: c,
-        dimensions,
-        pilot_spp: k as u32,
-    })
+    Ok(PilotImage { image, spp, variance, layers, pilot_variance: v, pilot_cost: c, dimensions, pilot_spp: k as u32 })
 }
 
 /// Writes a pilot-allocated render as an EXR: `R G B`, `spp.Z` (pass-2
