@@ -333,8 +333,8 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             for seed in 0..args.seeds as u64 {
                 let mut options = PilotOptions::new(256, 11 + seed, SamplerKind::Independent);
                 (options.pilot_spp, options.threads) = (k, threads);
-                let (_, pv, pc) = pilot_allocation(&scene, &settings, &options, None)?;
-                estimates.push((pv, pc));
+                let allocation = pilot_allocation(&scene, &settings, &options, None)?;
+                estimates.push((allocation.variance, allocation.cost));
             }
             let mut line = String::new();
             for radius in 0..=3usize {

@@ -327,6 +327,17 @@ pub fn weights(v: &[f64], c: &[f64]) -> Vec<f64> {
     v.iter().zip(c).map(|(&v, &c)| if c > 0.0 { (v.max(0.0) / c).sqrt() } else { 0.0 }).collect()
 }
 
+/// A pilot's decision: what [`pilot_allocation`] returns.
+#[derive(Clone, Debug)]
+pub struct PilotAllocation {
+    /// Samples each pixel takes in pass 2.
+    pub spp: Vec<u64>,
+    /// The pilot's per-pixel per-sample relative variance, before smoothing.
+    pub variance: Vec<f64>,
+    /// The pilot's per-pixel cost of a sample, before smoothing.
+    pub cost: Vec<f64>,
+}
+
 /// The pilot of a pilot-allocated render without pass 2: the samples of
 /// each pixel [`render_pilot`] would take, and the pilot's per-sample
 /// relative variance and cost per pixel before smoothing (what the
@@ -336,7 +347,7 @@ pub fn pilot_allocation(
     settings: &IntegratorSettings,
     options: &PilotOptions,
     cancel: Option<&AtomicBool>,
-) -> Result<(Vec<u64>, Vec<f64>, Vec<f64>), RenderError> {
+) -> Result<PilotAllocation, RenderError> {
     let prepared = PreparedIntegrator::new(scene, settings);
     let pool = thread_pool(options.threads)?;
     let run = |render: &(dyn Fn() -> Result<Vec<i128>, RenderError> + Sync)| match &pool {
@@ -345,8 +356,8 @@ pub fn pilot_allocation(
     };
     let (spp, pilot, _, _) = pilot_pass(&prepared, scene, options, &run, cancel)?;
     let pixels = spp.len();
-    let (v, c) = pilot_estimates(&pilot, u64::from(options.pilot_spp.max(2)), pixels);
-    Ok((spp, v, c))
+    let (variance, cost) = pilot_estimates(&pilot, u64::from(options.pilot_spp.max(2)), pixels);
+    Ok(PilotAllocation { spp, variance, cost })
 }
 
 /// Render `scene` with samples allocated by an independent pilot (see the
