@@ -20,6 +20,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use niebla::adaptive::pilot::{
+    allocate, pilot_allocation, render_pilot, smooth, weights as pilot_weights, PilotOptions,
+};
 use niebla::adaptive::{
     allocation_bound, cost_allocation_bound, per_sample_relative_variance, render_adaptive, AdaptiveOptions, StopRule,
     COST_OFFSET,
@@ -59,6 +62,16 @@ pub struct AdaptiveBenchArgs {
     /// comma separated (default: none).
     #[arg(long, value_delimiter = ',')]
     pub cost_thresholds: Vec<f32>,
+    /// Pilot sizes (samples per pixel) measured with pilot allocation
+    /// (`render --adaptive-pilot --pilot-spp N`), comma separated (default:
+    /// none). The sweep's `--spp` is then the mean of pass 2; the pilot's
+    /// samples, seconds and dimensions count in the figures.
+    #[arg(long, value_delimiter = ',')]
+    pub pilot_spp: Vec<u32>,
+    /// Samplers of the pilot-allocated renders (and, for `sobol`, a plain
+    /// Sobol sweep too), comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "independent")]
+    pub pilot_samplers: Vec<String>,
     /// Target relative MSE.
     #[arg(long, default_value_t = 1e-2)]
     pub target: f64,
@@ -164,6 +177,18 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
     if let Some(t) = args.cost_thresholds.iter().find(|t| !(**t > 0.0 && **t < 1.0)) {
         return Err(CliError::invalid_option("--cost-thresholds", format!("each must lie in (0, 1), got {t}")));
     }
+    if let Some(k) = args.pilot_spp.iter().find(|&&k| k < 2) {
+        return Err(CliError::invalid_option("--pilot-spp", format!("each must be at least 2, got {k}")));
+    }
+    let mut pilot_samplers = Vec::new();
+    for name in &args.pilot_samplers {
+        pilot_samplers.push(SamplerKind::parse(name).ok_or_else(|| {
+            CliError::invalid_option(
+                "--pilot-samplers",
+                format!("unknown sampler {name:?}, expected one of {}", SamplerKind::NAMES.join(", ")),
+            )
+        })?);
+    }
     if !(args.target > 0.0 && args.target.is_finite()) {
         return Err(CliError::invalid_option("--target", "must be a positive number"));
     }
@@ -196,13 +221,9 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
         scene.camera.width = args.width;
         scene.camera.height = ((args.width as f64 * aspect).round() as u32).max(1);
         let prepared = PreparedIntegrator::new(&scene, &settings);
-        let plain_options = |spp: u32, seed: u64| RenderOptions {
-            spp,
-            seed,
-            first_sample: 0,
-            threads,
-            sampler: SamplerKind::Independent,
-        };
+        let sampled_options =
+            |spp: u32, seed: u64, sampler: SamplerKind| RenderOptions { spp, seed, first_sample: 0, threads, sampler };
+        let plain_options = |spp: u32, seed: u64| sampled_options(spp, seed, SamplerKind::Independent);
         let start = Instant::now();
         let reference = prepared.render(&scene, &plain_options(args.reference_spp, 1), &|_, _| {}, None)?;
         println!(
@@ -298,6 +319,44 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             if slope > 0.0 { intercept / slope } else { f64::NAN },
             fit.iter().map(|(d, t)| format!("({d:.1}, {:.3})", t * 1e6)).collect::<Vec<_>>().join(" ")
         );
+        // The pilots' allocations judged by the long render's v and c: the
+        // time gain over a uniform allocation for equal relative MSE,
+        // `mean(v) mean(c) / (mean(v / n) mean(c n))` (n normalised to mean 1;
+        // the time bound for n ~ sqrt(v / c)), and in parentheses with the
+        // pilot's cost, `mean(c)` per pilot sample, at the plain render's
+        // spp to the target; for smoothing radii 0 to 3.
+        let mean_v = v.iter().sum::<f64>() / pixels as f64;
+        let mean_c = cost.iter().sum::<f64>() / pixels as f64;
+        let (w, h) = (scene.camera.width as usize, scene.camera.height as usize);
+        for &k in &args.pilot_spp {
+            let mut estimates = Vec::new();
+            for seed in 0..args.seeds as u64 {
+                let mut options = PilotOptions::new(256, 11 + seed, SamplerKind::Independent);
+                (options.pilot_spp, options.threads) = (k, threads);
+                let allocation = pilot_allocation(&scene, &settings, &options, None)?;
+                estimates.push((allocation.variance, allocation.cost));
+            }
+            let mut line = String::new();
+            for radius in 0..=3usize {
+                let (mut gains, mut with_pilot) = (0.0, 0.0);
+                for (pv, pc) in &estimates {
+                    let weights = pilot_weights(&smooth(pv, w, h, radius), &smooth(pc, w, h, radius));
+                    let (least, most) = PilotOptions::new(256, 0, SamplerKind::Independent).bounds();
+                    let n: Vec<f64> = allocate(&weights, 256, least, most).iter().map(|&n| n as f64 / 256.0).collect();
+                    let error = v.iter().zip(&n).map(|(v, n)| v / n).sum::<f64>() / pixels as f64;
+                    let time = cost.iter().zip(&n).map(|(c, n)| c * n).sum::<f64>() / pixels as f64;
+                    gains += mean_v * mean_c / (error * time);
+                    // To the target: plain takes mean_v / target samples,
+                    // the allocation error / target (of mean 1) plus the
+                    // pilot's k.
+                    let plain = mean_v / args.target;
+                    with_pilot += plain * mean_c / (error / args.target * time + k as f64 * mean_c);
+                }
+                let m = estimates.len() as f64;
+                line += &format!(" {radius}: {:.2}x ({:.2}x)", gains / m, with_pilot / m);
+            }
+            println!("  pilot {k} spp, allocation gain in time (with the pilot's cost) by smoothing radius{line}");
+        }
         let seeds = args.seeds as u64;
         let (mut spp_points, mut time_points, mut work_points) = (Vec::new(), Vec::new(), Vec::new());
         for &spp in &spp_list {
@@ -350,6 +409,60 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
             cells.push(to_reach(&time_points, args.target, 3));
             work_cells.push(to_reach(&work_points, args.target, 0));
         }
+        for &sampler in pilot_samplers.iter().filter(|&&s| s != SamplerKind::Independent) {
+            // The plain sweep with this sampler, to compare the pilot's gain with.
+            let (mut spp_points, mut time_points, mut work_points) = (Vec::new(), Vec::new(), Vec::new());
+            for &spp in &spp_list {
+                let (mut error, mut time) = (0.0, 0.0);
+                for seed in 0..seeds {
+                    let watch = Stopwatch::start(args.clock)?;
+                    let image = prepared.render(&scene, &sampled_options(spp, 11 + seed, sampler), &|_, _| {}, None)?;
+                    time += watch.seconds()?;
+                    error += image.relative_mse(&reference);
+                }
+                let (error, time) = (error / seeds as f64, time / seeds as f64);
+                let work = spp as f64 * dimensions.iter().sum::<f64>() / pixels as f64;
+                println!(
+                    "  plain {:<8} {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s, {work:.1} dimensions per pixel",
+                    sampler.name()
+                );
+                spp_points.push((spp as f64, error));
+                time_points.push((time, error));
+                work_points.push((work, error));
+            }
+            cells.push(to_reach(&spp_points, args.target, 1));
+            cells.push(to_reach(&time_points, args.target, 3));
+            work_cells.push(to_reach(&work_points, args.target, 0));
+        }
+        for &k in &args.pilot_spp {
+            for &sampler in &pilot_samplers {
+                let (mut spp_points, mut time_points, mut work_points) = (Vec::new(), Vec::new(), Vec::new());
+                for &spp in &spp_list {
+                    let (mut error, mut time, mut work) = (0.0, 0.0, 0.0);
+                    for seed in 0..seeds {
+                        let mut options = PilotOptions::new(spp, 11 + seed, sampler);
+                        (options.pilot_spp, options.threads) = (k, threads);
+                        let watch = Stopwatch::start(args.clock)?;
+                        let result = render_pilot(&scene, &settings, &options, None)?;
+                        time += watch.seconds()?;
+                        error += result.image.relative_mse(&reference);
+                        work += result.dimensions.iter().sum::<u64>() as f64 / result.spp.len() as f64;
+                    }
+                    let (error, time, work) = (error / seeds as f64, time / seeds as f64, work / seeds as f64);
+                    let taken = (spp + k) as f64;
+                    println!(
+                        "  pilot {k} {:<11} {spp:>6} spp: rel MSE {error:.3e} in {time:.3} s, {taken} spp with the pilot's, {work:.1} dimensions per pixel",
+                        sampler.name()
+                    );
+                    spp_points.push((taken, error));
+                    time_points.push((time, error));
+                    work_points.push((work, error));
+                }
+                cells.push(to_reach(&spp_points, args.target, 1));
+                cells.push(to_reach(&time_points, args.target, 3));
+                work_cells.push(to_reach(&work_points, args.target, 0));
+            }
+        }
         rows.push(Row { scene: stem, bound, time_bound, cells, work_cells });
     }
     println!();
@@ -361,6 +474,18 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
     for t in &args.cost_thresholds {
         header += &format!(" {:>10} {:>10}", format!("c{t}_spp"), format!("c{t}_s"));
     }
+    let sobol_plain: Vec<&SamplerKind> = pilot_samplers.iter().filter(|&&s| s != SamplerKind::Independent).collect();
+    for s in &sobol_plain {
+        header += &format!(" {:>10} {:>10}", format!("{}_spp", s.name()), format!("{}_s", s.name()));
+    }
+    let pilot_labels: Vec<String> = args
+        .pilot_spp
+        .iter()
+        .flat_map(|k| pilot_samplers.iter().map(move |s| format!("p{k}{}", &s.name()[..1])))
+        .collect();
+    for label in &pilot_labels {
+        header += &format!(" {:>10} {:>10}", format!("{label}_spp"), format!("{label}_s"));
+    }
     println!("{header}");
     for row in &rows {
         let mut line = format!("{:<16} {:>7}", row.scene, format!("{:.2}x", row.bound));
@@ -369,7 +494,7 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
         }
         println!("{line}");
     }
-    if !args.cost_thresholds.is_empty() {
+    if !args.cost_thresholds.is_empty() || !args.pilot_spp.is_empty() {
         println!();
         println!(
             "random dimensions drawn per pixel (the cost proxy, about proportional to time) to relative MSE {:.1e}:",
@@ -381,6 +506,12 @@ pub fn run(args: &AdaptiveBenchArgs) -> Result<(), CliError> {
         }
         for t in &args.cost_thresholds {
             header += &format!(" {:>10}", format!("c{t}_dim"));
+        }
+        for s in &sobol_plain {
+            header += &format!(" {:>10}", format!("{}_dim", s.name()));
+        }
+        for label in &pilot_labels {
+            header += &format!(" {:>10}", format!("{label}_dim"));
         }
         println!("{header}");
         for row in &rows {

@@ -129,6 +129,22 @@ pub struct RenderArgs {
     /// THRESHOLD x sqrt((n / spp) (cost / mean cost)). Still unbiased.
     #[arg(long, requires = "adaptive")]
     pub adaptive_cost: bool,
+    /// Samples allocated by an independent pilot: a pilot render of
+    /// --pilot-spp samples per pixel (its own random stream) estimates each
+    /// pixel's relative variance v and cost c per sample (random numbers
+    /// drawn, counted), both averaged over the 5x5 neighbourhood; then each
+    /// pixel takes n ~ sqrt(v / c) samples (the least time for a relative
+    /// MSE), between spp / 8 (at least 1) and 8 spp, --spp on average. The
+    /// value is the mean of those n samples only (the pilot's are
+    /// discarded), so the image is unbiased with any --sampler, sobol
+    /// included. The EXR also holds `spp.Z`, `variance.RGB` and the --aovs
+    /// layers; not a checkpoint (no --resume).
+    #[arg(long, conflicts_with_all = ["time", "resume", "denoise", "adaptive"])]
+    pub adaptive_pilot: bool,
+    /// With --adaptive-pilot: samples per pixel of the pilot (at least 2;
+    /// they come on top of --spp).
+    #[arg(long, value_name = "N", requires = "adaptive_pilot", default_value_t = niebla::adaptive::pilot::DEFAULT_PILOT_SPP)]
+    pub pilot_spp: u32,
     /// Render frames of a sequence: `N`, `FIRST-LAST` or `FIRST-LAST:STEP`
     /// (frame numbers >= 0). Frame patterns in the scene's file names
     /// (`smoke.####.vdb`, `{frame}`, `{frame:04}`) and keyframes of the
@@ -313,6 +329,14 @@ pub fn render_loaded(
     let transparent = scene.transparent_background;
     let pixels = scene.camera.width as u64 * scene.camera.height as u64;
     let sampler = args.sampler.as_deref().and_then(SamplerKind::parse).unwrap_or(built.settings.sampler);
+    if args.adaptive_pilot {
+        let mut options = niebla::adaptive::pilot::PilotOptions::new(spp, args.seed.or(built.settings.seed), sampler);
+        options.pilot_spp = args.pilot_spp;
+        options.threads = threads;
+        options.layers = aovs;
+        let run = crate::adaptive_cmd::PilotRun { options, exposure, quiet: args.quiet.quiet };
+        return crate::adaptive_cmd::run_pilot(scene, &integrator, &run, args.first_sample, outputs).map(|()| None);
+    }
     if let Some(threshold) = args.adaptive {
         if args.sampler.as_deref().and_then(SamplerKind::parse) == Some(SamplerKind::Sobol) {
             return Err(CliError::invalid_option(

@@ -218,3 +218,42 @@ fn bench_adaptive_prints_a_consistent_table() {
         }
     }
 }
+
+/// `niebla render --adaptive-pilot` writes the image with its spp map and
+/// the pilot's header; bad pilot requests are errors naming the flag.
+#[test]
+fn render_adaptive_pilot_writes_the_spp_map_and_checks_its_flags() {
+    let dir = temp_dir("cli_adaptive_pilot");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/scenes/fog_spot.json");
+    let out = dir.join("pilot.exr");
+    let run = niebla()
+        .args(["render", "--width", "12", "--spp", "8", "--adaptive-pilot", "--pilot-spp", "4", "--sampler", "sobol"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(String::from_utf8_lossy(&run.stdout).contains("4 pilot spp, then 8 spp on average"));
+    let bytes = std::fs::read(&out).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(2000)]);
+    for name in ["spp.Z", "variance.R", "nieblaAdaptiveRule", "pilot", "nieblaPilotSpp"] {
+        assert!(header.contains(name), "{name} missing from the EXR header");
+    }
+    for (args, flag) in [
+        (vec!["--adaptive-pilot", "--pilot-spp", "1"], "--pilot-spp"),
+        (vec!["--adaptive-pilot", "--adaptive", "0.1"], "--adaptive"),
+        (vec!["--pilot-spp", "4"], "--adaptive-pilot"),
+    ] {
+        let run = niebla()
+            .args(["render", "--width", "4", "--spp", "4"])
+            .args(&args)
+            .arg(&scene)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success() && err.contains(flag), "{args:?}: {err}");
+    }
+}

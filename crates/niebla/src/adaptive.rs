@@ -85,6 +85,8 @@
 //! Decisions are made serially from exact per-pixel sums, so the image does
 //! not depend on the thread count.
 
+pub mod pilot;
+
 use std::collections::VecDeque;
 use std::sync::atomic::AtomicBool;
 
@@ -553,18 +555,45 @@ pub fn write_adaptive_exr(
     threshold: f32,
     path: &std::path::Path,
 ) -> Result<(), crate::film::OutputError> {
+    let attributes = [
+        ("nieblaAdaptiveThreshold", threshold.to_string()),
+        ("nieblaAdaptiveRule", result.rule.name().to_string()),
+        ("nieblaSpp", result.total_spp.to_string()),
+    ];
+    let maps = PixelMaps { image: &result.image, spp: &result.spp, variance: &result.variance };
+    write_maps_exr(&maps, result.layers.as_ref(), &attributes, path)
+}
+
+/// What every adaptive EXR holds per pixel: the image, the samples taken
+/// and the variance of the value.
+struct PixelMaps<'a> {
+    image: &'a Image,
+    spp: &'a [u64],
+    variance: &'a [Rgb],
+}
+
+/// Writes `R G B`, `spp.Z`, `variance.R/G/B` and the `layers` (channels
+/// named as those of `niebla render --aovs`) as an EXR, with the header
+/// attributes `attributes` and `nieblaAovs` (the layers recorded, so
+/// `aov::read_aov_exr` reads them).
+fn write_maps_exr(
+    maps: &PixelMaps,
+    layers: Option<&AovImage>,
+    attributes: &[(&str, String)],
+    path: &std::path::Path,
+) -> Result<(), crate::film::OutputError> {
     use exr::prelude::*;
     let encode = |message: String| crate::film::OutputError::Encode { path: path.to_path_buf(), message };
-    let image = &result.image;
+    let image = maps.image;
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for (c, name) in ["R", "G", "B"].iter().enumerate() {
         list.push(AnyChannel::new(*name, FlatSamples::F32(image.pixels.iter().map(|p| p[c]).collect())));
-        let variance = result.variance.iter().map(|v| v[c]).collect();
+        let variance = maps.variance.iter().map(|v| v[c]).collect();
         list.push(AnyChannel::new(format!("variance.{name}").as_str(), FlatSamples::F32(variance)));
     }
-    list.push(AnyChannel::new("spp.Z", FlatSamples::F32(result.spp.iter().map(|&n| n as f32).collect())));
+    list.push(AnyChannel::new("spp.Z", FlatSamples::F32(maps.spp.iter().map(|&n| n as f32).collect())));
     let mut recorded = AovSet::EMPTY.with(Aov::Variance);
-    for layer in result.layers.iter().flat_map(|l| &l.layers).filter(|l| l.aov != Aov::Variance) {
+    for layer in layers.iter().flat_map(|l| &l.layers).filter(|l| l.aov != Aov::Variance) {
         recorded = recorded.with(layer.aov);
         for (c, name) in layer.channel_names().iter().enumerate() {
             let values = layer.data.iter().skip(c).step_by(layer.components).copied().collect();
@@ -572,17 +601,12 @@ pub fn write_adaptive_exr(
         }
     }
     let recorded = recorded.iter().map(|a| a.name()).collect::<Vec<_>>().join(",");
-    let mut attributes = LayerAttributes::default();
-    for (name, value) in [
-        ("nieblaAdaptiveThreshold", threshold.to_string()),
-        ("nieblaAdaptiveRule", result.rule.name().to_string()),
-        ("nieblaSpp", result.total_spp.to_string()),
-        ("nieblaAovs", recorded),
-    ] {
-        attributes.other.insert(Text::from(name), AttributeValue::Text(Text::from(value.as_str())));
+    let mut header = LayerAttributes::default();
+    for (name, value) in attributes.iter().map(|(n, v)| (*n, v.as_str())).chain([("nieblaAovs", recorded.as_str())]) {
+        header.other.insert(Text::from(name), AttributeValue::Text(Text::from(value)));
     }
     let size = (image.width as usize, image.height as usize);
-    let layer = Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
+    let layer = Layer::new(size, header, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
     let mut bytes = Vec::new();
     exr::image::Image::from_layer(layer)
         .write()

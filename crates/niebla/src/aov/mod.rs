@@ -43,7 +43,10 @@ mod split;
 mod sums;
 
 pub use exr::{read_aov_exr, read_aov_sums, write_aov_checkpoint, write_aov_outputs, write_rgba_png};
-pub use render::{render_aov_sums_masked_with, render_aov_sums_with, render_segment_sums_with, segment_channels};
+pub use render::{
+    render_aov_sums_masked_with, render_aov_sums_with, render_range_sums_with, render_segment_sums_with,
+    segment_channels,
+};
 pub use split::{FirstVertex, LayerSplit, PathClass, RadianceSum};
 pub use sums::{variance_of_mean, AovChannel, AovImage, AovLayer, AovSample, AovSums};
 

@@ -144,8 +144,6 @@ pub fn render_segment_sums_with<I: Integrator>(
     let channels = segment_channels(set);
     let stride = 7 + channels.len();
     let per_pixel = stride * segments.len();
-    let needs_split = channels.iter().any(|c| matches!(c, AovChannel::Split(..)));
-    let needs_features = channels.iter().any(|c| !matches!(c, AovChannel::Split(..)));
     let width = scene.camera.width;
     // Small chunks balance uneven pixels (stopped neighbours leave few
     // active pixels per tile); large enough to keep rayon's cost negligible.
@@ -159,34 +157,95 @@ pub fn render_segment_sums_with<I: Integrator>(
             let mut out = vec![0i128; list.len() * per_pixel];
             for (j, &i) in list.iter().enumerate() {
                 let (x, y) = (i % width, i / width);
-                for (g, &(start, end)) in segments.iter().enumerate() {
+                for (g, &range) in segments.iter().enumerate() {
                     let cell = &mut out[j * per_pixel + g * stride..][..stride];
-                    for s in start..end {
-                        let (ray, split, dimensions) =
-                            traced_sample(scene, integrator, SamplerKind::Independent, seed, (x, y, s), needs_split);
-                        for (c, v) in split.total.0.into_iter().enumerate() {
-                            cell[c] += quantize_sample(v);
-                            cell[3 + c] += quantize_sample(v * v);
-                        }
-                        cell[6] += dimensions as i128;
-                        if channels.is_empty() {
-                            continue;
-                        }
-                        let features = if needs_features {
-                            let mut own = PixelSampler::for_pixel(
-                                SamplerKind::Independent,
-                                seed.wrapping_add(FEATURE_STREAM),
-                                x,
-                                y,
-                                s,
-                            );
-                            camera_features(scene, ray, scene.camera_medium, &mut own)
-                        } else {
-                            Default::default()
-                        };
-                        AovSums::accumulate(&channels, &AovSample { split, features }, &mut cell[7..]);
-                    }
+                    sum_samples(scene, integrator, SamplerKind::Independent, seed, &channels, (x, y), range, cell);
                 }
+            }
+            Some(out)
+        })
+        .collect();
+    if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) || chunks.iter().any(Option::is_none) {
+        return Err(RenderError::Cancelled);
+    }
+    Ok(chunks.into_iter().flatten().flatten().collect())
+}
+
+/// Adds to `cell` (`7 + channels.len()` sums, the layout of
+/// [`render_segment_sums_with`]) the samples `start .. end` of pixel
+/// `(x, y)` drawn by sampler `kind` with `seed`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn sum_samples<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    kind: SamplerKind,
+    seed: u64,
+    channels: &[AovChannel],
+    (x, y): (u32, u32),
+    (start, end): (u64, u64),
+    cell: &mut [i128],
+) {
+    let needs_split = channels.iter().any(|c| matches!(c, AovChannel::Split(..)));
+    let needs_features = channels.iter().any(|c| !matches!(c, AovChannel::Split(..)));
+    for s in start..end {
+        let (ray, split, dimensions) = traced_sample(scene, integrator, kind, seed, (x, y, s), needs_split);
+        for (c, v) in split.total.0.into_iter().enumerate() {
+            cell[c] += quantize_sample(v);
+            cell[3 + c] += quantize_sample(v * v);
+        }
+        cell[6] += dimensions as i128;
+        if channels.is_empty() {
+            continue;
+        }
+        let features = if needs_features {
+            let mut own = PixelSampler::for_pixel(SamplerKind::Independent, seed.wrapping_add(FEATURE_STREAM), x, y, s);
+            camera_features(scene, ray, scene.camera_medium, &mut own)
+        } else {
+            Default::default()
+        };
+        AovSums::accumulate(channels, &AovSample { split, features }, &mut cell[7..]);
+    }
+}
+
+/// Fixed-point sums of one range of sample indices per pixel, drawn by
+/// sampler `kind`: for pixel `pixels[j]` (index `y * width + x`) the
+/// samples `ranges[j].0 .. ranges[j].1`, summed as one segment of
+/// [`render_segment_sums_with`] (`7 + k` sums at `out[j * (7 + k)..]`). Each
+/// sample is that of a plain render with the same sampler, seed and index.
+/// The render loop of pilot-allocated sampling (`crate::adaptive_pilot`);
+/// runs on the current rayon pool in chunks of pixels, and the sums do not
+/// depend on the chunking or the thread count.
+#[allow(clippy::too_many_arguments)]
+pub fn render_range_sums_with<I: Integrator>(
+    scene: &Scene,
+    integrator: &I,
+    kind: SamplerKind,
+    seed: u64,
+    set: AovSet,
+    pixels: &[u32],
+    ranges: &[(u64, u64)],
+    cancel: Option<&AtomicBool>,
+) -> Result<Vec<i128>, RenderError> {
+    use rayon::prelude::*;
+    use std::sync::atomic::Ordering;
+    assert_eq!(pixels.len(), ranges.len(), "one sample range per pixel");
+    let channels = segment_channels(set);
+    let stride = 7 + channels.len();
+    let width = scene.camera.width;
+    // Pixels differ in their sample counts: small chunks keep the threads busy.
+    let chunk = (pixels.len() / (rayon::current_num_threads() * 16)).clamp(1, 64);
+    let chunks: Vec<Option<Vec<i128>>> = pixels
+        .par_chunks(chunk)
+        .zip(ranges.par_chunks(chunk))
+        .map(|(list, ranges)| {
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return None;
+            }
+            let mut out = vec![0i128; list.len() * stride];
+            for (j, (&i, &range)) in list.iter().zip(ranges).enumerate() {
+                let cell = &mut out[j * stride..][..stride];
+                sum_samples(scene, integrator, kind, seed, &channels, (i % width, i / width), range, cell);
             }
             Some(out)
         })

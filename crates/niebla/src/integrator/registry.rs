@@ -670,6 +670,35 @@ impl PreparedIntegrator {
             }
         }
     }
+
+    /// One range of sample indices per pixel, drawn by sampler `kind`
+    /// ([`crate::aov::render_range_sums_with`]); on the current rayon pool.
+    /// `photon`, `ppm` and `ppb` have no per-pixel samples (they panic here).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_range_sums(
+        &self,
+        scene: &Scene,
+        kind: crate::sampling::SamplerKind,
+        seed: u64,
+        set: crate::aov::AovSet,
+        pixels: &[u32],
+        ranges: &[(u64, u64)],
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Vec<i128>, RenderError> {
+        use crate::aov::render_range_sums_with as with;
+        self.check_motion(scene)?;
+        match self {
+            PreparedIntegrator::Emission(i) => with(scene, i, kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::Single(i) => with(scene, i, kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::VolPath(i) => with(scene, i.as_ref(), kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::Analytic(i) => with(scene, i, kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::Hegeman(i) => with(scene, i.as_ref(), kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::Zhou(i) => with(scene, i.as_ref(), kind, seed, set, pixels, ranges, cancel),
+            PreparedIntegrator::Photon(_) | PreparedIntegrator::Ppm(_) | PreparedIntegrator::Ppb(_) => {
+                panic!("photon, ppm and ppb have no per-pixel samples (the adaptive command refuses them)")
+            }
+        }
+    }
 }
 
 #[cfg(test)]
