@@ -123,7 +123,8 @@ class Niebla:
                "--threads", str(self.threads), "--quiet", "-o", out, *extra]
         t0 = time.perf_counter()
         p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        text = p.stdout.read()
+        with p.stdout:
+            text = p.stdout.read()
         _, status, ru = os.wait4(p.pid, 0)
         wall = time.perf_counter() - t0
         p.returncode = os.waitstatus_to_exitcode(status)
