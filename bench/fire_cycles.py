@@ -124,6 +124,7 @@ def main():
                          "render call, each net of its fixed per-call CPU cost")
     args = ap.parse_args()
     cpu = args.niebla_only or args.clock == "cpu"
+    args.out = os.path.abspath(args.out)  # the scene files name the VDB by this path
     os.makedirs(args.out, exist_ok=True)
 
     vdb = os.path.join(args.out, "fireball.vdb")
