@@ -7,6 +7,7 @@ reference, and their ratio. See bench/README.md.
     python3 bench/compare.py            # full run: 128x128, ~8-10 min on 2 cores
     python3 bench/compare.py --quick    # ~3 min: 96x96, smaller budgets
     python3 bench/compare.py --scenes --xml-scenes grid_smoke area_fog
+    nice -n 10 python3 bench/compare.py --quick --peers mitsuba cycles --threads 1 --clock cpu   # shared machine
 
 `--xml-scenes` adds Mitsuba 3 XML scenes from scenes/mitsuba/ read directly
 by both renderers (no converter on niebla's side: `niebla render NAME.xml`,
@@ -15,7 +16,7 @@ does not apply) and with the sampler it names (niebla follows the XML's
 `independent`); they appear as xml:NAME in the table.
 
 It re-runs itself with bench/.venv/bin/python (creating the venv with
-bench/setup.sh when it is missing).
+bench/setup.sh when it is missing; bench/peers.py).
 """
 
 from __future__ import annotations
@@ -24,38 +25,21 @@ import argparse
 import json
 import os
 import platform
-import re
 import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-VENV_PY = os.path.join(HERE, ".venv", "bin", "python")
-CYCLES_PY = os.path.join(HERE, ".venv-cycles", "bin", "python")
+sys.path.insert(0, HERE)
+import peers  # noqa: E402
 
-
-def _ensure_venv():
-    try:
-        import mitsuba  # noqa: F401
-        import numpy  # noqa: F401
-        return
-    except ImportError:
-        pass
-    # (The venv's python is a symlink to the system one: compare prefixes, not executables.)
-    if os.path.realpath(sys.prefix) != os.path.realpath(os.path.join(HERE, ".venv")):
-        if not os.path.exists(VENV_PY) or subprocess.run([VENV_PY, "-c", "import mitsuba, numpy"]).returncode:
-            subprocess.run(["bash", os.path.join(HERE, "setup.sh")], check=True)
-        os.execv(VENV_PY, [VENV_PY, os.path.abspath(__file__)] + sys.argv[1:])
-    sys.exit("mitsuba or numpy missing from bench/.venv: run bench/setup.sh")
-
-
-_ensure_venv()
+peers.ensure_venv(__file__)
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, HERE)
 import niebla2mitsuba  # noqa: E402
+from peers import Cycles  # noqa: E402
 from volumes import ensure_volumes  # noqa: E402
 
 SCENES = ["fog_spot", "fog_point", "smoke_plume", "dense_cloud", "milk_cube"]
@@ -70,6 +54,10 @@ EXTRA_SCENES = ["slab"]
 # every reference's own error stays a small fraction of the target.
 REF_WEIGHT = {"fog_spot": 3.0, "fog_point": 1.0, "smoke_plume": 0.5, "dense_cloud": 1.5, "milk_cube": 0.5, "slab": 1.0}
 THREADS = 2
+# "wall": each renderer's render time as below; "cpu": the CPU seconds (user +
+# system, all threads) of the render calls, net of fixed per-call costs
+# (--clock).
+CLOCK = "wall"
 
 
 # ---------------------------------------------------------------------------
@@ -110,39 +98,11 @@ def time_to_reach(points, target):
 # ---------------------------------------------------------------------------
 
 
-def read_exr(path: str) -> np.ndarray:
-    import mitsuba as mi
-
-    # niebla's EXR also holds the exact per-pixel sums (channels
-    # niebla.sum.*, read by `niebla merge`): take R, G, B by name.
-    bmp = mi.Bitmap(path)
-    names = [f.name for f in bmp.struct_()]
-    arr = np.array(bmp, dtype=np.float32).reshape(bmp.height(), bmp.width(), len(names))
-    return arr[..., [names.index(c) for c in ("R", "G", "B")]]
-
-
-class Niebla:
-    name = "niebla"
+class Niebla(peers.Niebla):
+    """peers.Niebla with this script's thread count and clock."""
 
     def __init__(self, binary: str, scene_path: str, workdir: str):
-        self.binary, self.scene_path, self.workdir = binary, scene_path, workdir
-
-    def render(self, spp: int, seed: int, tag: str):
-        """Returns (image, seconds, wall seconds). `seconds` is the time niebla
-        reports ("rendered ... in X s"): the render passes and their EXR
-        checkpoints, not process start-up or scene loading/baking."""
-        out = os.path.join(self.workdir, f"niebla_{tag}.exr")
-        cmd = [self.binary, "render", self.scene_path, "--spp", str(spp), "--seed", str(seed),
-               "--threads", str(THREADS), "--quiet", "-o", out]
-        t0 = time.perf_counter()
-        p = subprocess.run(cmd, capture_output=True, text=True)
-        wall = time.perf_counter() - t0
-        if p.returncode:
-            raise RuntimeError(f"{' '.join(cmd)} failed:\n{p.stderr}")
-        m = re.search(r"rendered \S+ at (\d+) spp with \S+ in ([0-9.]+) s", p.stdout)
-        if not m or int(m.group(1)) != spp:
-            raise RuntimeError(f"unexpected niebla output: {p.stdout!r}")
-        return read_exr(out), float(m.group(2)), wall
+        super().__init__(binary, scene_path, workdir, THREADS, CLOCK)
 
 
 class Mitsuba:
@@ -184,59 +144,15 @@ class Mitsuba:
         return acc / spp
 
     def render(self, spp: int, seed: int, tag: str):
-        """Returns (image, seconds, seconds): the time of mi.render (plus
-        dr.eval and a sync) after the warm-up render."""
-        t0 = time.perf_counter()
+        """Returns (image, seconds, wall seconds): the time of mi.render (plus
+        dr.eval and a sync) after the warm-up render; with CLOCK "cpu" the
+        first is this process's CPU seconds (user + system, Dr.Jit's threads
+        included) over the same span, stored in `last_cpu` either way."""
+        t0, c0 = time.perf_counter(), time.process_time()
         img = self._render(spp, seed)
-        t = time.perf_counter() - t0
+        t, self.last_cpu = time.perf_counter() - t0, time.process_time() - c0
         arr = np.array(img, dtype=np.float32)[..., :3]
-        return arr, t, t
-
-
-class Cycles:
-    """Blender Cycles 5.0 (PyPI `bpy`, CPU) in a worker process of its own
-    (bench/cycles_worker.py in bench/.venv-cycles), the scene built once by
-    bench/niebla2cycles.py. Times are those of the render call after a
-    warm-up render; `fixed_s` is the cost of a 1x1-pixel, 1-spp render (the
-    per-call scene synchronisation, mostly the volume octree of grid media),
-    so `net` times subtract it."""
-
-    name = "cycles"
-    third = "net_seconds"  # what the third value of render() is, in sweep rows
-
-    def __init__(self, scene_path: str, scene_dir: str, workdir: str):
-        self.workdir = workdir
-        self.proc = subprocess.Popen([CYCLES_PY, os.path.join(HERE, "cycles_worker.py"), scene_path, scene_dir,
-                                      str(THREADS)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     stderr=subprocess.DEVNULL, text=True)
-        first = json.loads(self.proc.stdout.readline() or '{"unsupported": "the worker died"}')
-        self.unsupported = first.get("unsupported")
-        if self.unsupported:
-            self.close()
-            return
-        self._call(1, 999999, "warmup")
-        self.fixed_s = min(self._call(1, 999998, "fixed", 1, 1) for _ in range(2))
-
-    def _call(self, spp, seed, tag, width=None, height=None):
-        req = {"spp": spp, "seed": seed, "out": os.path.join(self.workdir, f"cycles_{tag}.exr")}
-        if width:
-            req.update(width=width, height=height)
-        self.proc.stdin.write(json.dumps(req) + "\n")
-        self.proc.stdin.flush()
-        line = self.proc.stdout.readline()
-        if not line:
-            raise RuntimeError("the Cycles worker died")
-        return json.loads(line)["seconds"]
-
-    def render(self, spp: int, seed: int, tag: str):
-        """Returns (image, seconds, seconds net of the fixed per-call cost)."""
-        t = self._call(spp, seed, tag)
-        return read_exr(os.path.join(self.workdir, f"cycles_{tag}.exr")), t, max(t - self.fixed_s, 1e-6)
-
-    def close(self):
-        if self.proc.poll() is None:
-            self.proc.stdin.close()
-            self.proc.wait()
+        return arr, (self.last_cpu if CLOCK == "cpu" else t), t
 
 
 # ---------------------------------------------------------------------------
@@ -352,7 +268,8 @@ def agreement(n_ref, m_ref, n_noise, m_noise, block: int, n_halves, m_halves):
 def write_png(path: str, img: np.ndarray, exposure: float = 0.0):
     import mitsuba as mi
 
-    mi.util.write_bitmap(path, (img * 2.0**exposure).astype(np.float32), write_async=False)
+    with peers.bitmap_io():
+        mi.util.write_bitmap(path, (img * 2.0**exposure).astype(np.float32), write_async=False)
 
 
 def diff_png(path: str, lum_rel: np.ndarray, scale: float = 0.1):
@@ -363,7 +280,8 @@ def diff_png(path: str, lum_rel: np.ndarray, scale: float = 0.1):
     rgb = np.kron(rgb, np.ones((4, 4, 1)))
     import mitsuba as mi
 
-    mi.Bitmap(rgb.astype(np.float32)).convert(srgb_gamma=True, component_format=mi.Struct.Type.UInt8).write(path)
+    with peers.bitmap_io():
+        mi.Bitmap(rgb.astype(np.float32)).convert(srgb_gamma=True, component_format=mi.Struct.Type.UInt8).write(path)
 
 
 def sweep(renderer, reference_img, noise, target, cap_s, max_spp, seed, log, other_ref=None, other_noise=0.0):
@@ -424,6 +342,7 @@ def versions(binary: str, label: str | None) -> dict:
 
 
 def main():
+    global THREADS, CLOCK
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="96x96 and smaller budgets (~3 min)")
     ap.add_argument("--scale", type=float, default=None,
@@ -444,7 +363,13 @@ def main():
     ap.add_argument("--sweep-seconds", type=float, default=None,
                     help="time cap of each renderer's spp sweep per scene (default 40, quick 10)")
     ap.add_argument("--out", default=os.path.join(HERE, "out"))
+    ap.add_argument("--threads", type=int, default=THREADS, help=f"threads of every renderer (default {THREADS})")
+    ap.add_argument("--clock", default="wall", choices=["wall", "cpu"],
+                    help="wall: render times as reported (default); cpu: CPU seconds (user + system) of the render "
+                         "calls, net of fixed per-call costs (niebla: an 8-pixel-wide 1-spp render of the scene; "
+                         "Cycles: a 1x1-pixel render; Mitsuba: none), for a shared machine")
     args = ap.parse_args()
+    THREADS, CLOCK = args.threads, args.clock
 
     scale = args.scale or (0.375 if args.quick else 0.5)
     ref_s = args.ref_seconds or (12.0 if args.quick else 40.0)
@@ -459,8 +384,8 @@ def main():
     mi.set_variant("llvm_ad_rgb")
     mi.set_log_level(mi.LogLevel.Warn)
     dr.set_thread_count(THREADS)
-    if "cycles" in args.peers and subprocess.run([CYCLES_PY, "-c", "import bpy"], capture_output=True).returncode:
-        subprocess.run(["bash", os.path.join(HERE, "setup.sh"), "--cycles"], check=True)
+    if "cycles" in args.peers:
+        peers.ensure_cycles()
 
     if not os.path.exists(args.niebla):
         print("building niebla (cargo build --release -p niebla-cli)", flush=True)
@@ -471,12 +396,13 @@ def main():
     ensure_volumes()
     ver = versions(binary, args.niebla_label)
     if "cycles" in args.peers:
-        ver["cycles"] = subprocess.run([CYCLES_PY, "-c", "import bpy; print(bpy.app.version_string)"],
-                                       capture_output=True, text=True).stdout.strip().splitlines()[-1]
+        ver["cycles"] = peers.cycles_version()
     print("versions:", json.dumps(ver, indent=1), flush=True)
     print(f"threads: niebla --threads {THREADS}, Dr.Jit thread count {dr.thread_count()}, Cycles {THREADS} threads; "
           f"{'quick' if args.quick else 'full'} mode: resolution x{scale}, reference ~{ref_s:.0f} s "
-          f"per renderer, sweep cap {sweep_s:.0f} s", flush=True)
+          f"per renderer, sweep cap {sweep_s:.0f} s"
+          + ("; times in CPU seconds net of fixed per-call costs (budgets and caps too)" if CLOCK == "cpu" else ""),
+          flush=True)
 
     def log(s):
         print(s, flush=True)
@@ -497,14 +423,17 @@ def main():
         log(f"\n== {label} ({w}x{h}), load average {load0:.2f}")
 
         nb = Niebla(binary, path, sdir)
-        peers, peer_info = [], {}
+        if CLOCK == "cpu":
+            log(f"    niebla fixed CPU cost per render call (8-pixel-wide render, subtracted): "
+                f"{nb.measure_fixed_cpu():.3f} s")
+        runners, peer_info = [], {}
         for peer in args.peers:
             if peer == "mitsuba" and is_xml:
                 ms = Mitsuba(path)
                 peer_info["mitsuba"] = dict(xml_integ, warmup_s=ms.warmup_s)
                 log(f"    mitsuba (from the XML) {xml_integ['integrator']} max_depth {xml_integ['max_depth']}: "
                     f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
-                peers.append(ms)
+                runners.append(ms)
             elif is_xml:
                 log(f"    {peer}: not compared (an XML scene; only Mitsuba reads it)")
                 peer_info[peer] = {"unsupported": "XML scene"}
@@ -516,16 +445,17 @@ def main():
                                         "max_depth": mdict["integrator"]["max_depth"], "warmup_s": ms.warmup_s}
                 log(f"    mitsuba {mdict['integrator']['type']} max_depth {mdict['integrator']['max_depth']}: "
                     f"scene load {ms.load_s:.2f} s, warm-up render (JIT) {ms.warmup_s:.2f} s")
-                peers.append(ms)
+                runners.append(ms)
             else:
-                cy = Cycles(path, os.path.join(HERE, "scenes"), sdir)
+                cy = Cycles(path, os.path.join(HERE, "scenes"), sdir, THREADS, CLOCK)
                 if cy.unsupported:
                     log(f"    cycles: not compared ({cy.unsupported})")
                     peer_info["cycles"] = {"unsupported": cy.unsupported}
                     continue
-                peer_info["cycles"] = {"fixed_s": cy.fixed_s}
-                log(f"    cycles: fixed cost per render call (1x1 pixel, 1 spp) {cy.fixed_s:.2f} s")
-                peers.append(cy)
+                peer_info["cycles"] = {"fixed_s": cy.fixed_s, "fixed_cpu_s": cy.fixed_cpu}
+                log(f"    cycles: fixed cost per render call (1x1 pixel, 1 spp) {cy.fixed_s:.2f} s wall, "
+                    f"{cy.fixed_cpu:.2f} s CPU")
+                runners.append(cy)
 
         # Throughput probes (4 spp) size the references to the time budget.
         budget = ref_s * REF_WEIGHT.get(name, 1.0)
@@ -551,7 +481,7 @@ def main():
             "niebla_sweep": n_rows,
             "peers": peer_info,
         }
-        for pr in peers:
+        for pr in runners:
             tp = min(pr.render(4, 7, "probe")[1] for _ in range(2))
             spp_p = int(max(8, min(1 << 16, budget / (tp / 4)))) // 2 * 2
             p_ref, pa, pb, p_ref_t = reference(pr, spp_p, 2001, log)
@@ -587,7 +517,7 @@ def main():
                 pr.close()
         res["load_average"] = [load0, os.getloadavg()[0]]
         results.append(res)
-        del peers
+        del runners
 
     total = time.perf_counter() - t_start
     mark = {"interp": "", "first": "<=", "extrap": "~", "none": "?"}
@@ -599,7 +529,8 @@ def main():
         return "n/a" if x is None else f"{x:.2f}"
 
     print(f"\nTime to relative MSE {args.target:g} (all against the niebla reference, reference noise "
-          f"subtracted); {THREADS} threads each; total {total / 60:.1f} min\n")
+          f"subtracted); {THREADS} threads each; {'CPU seconds, ' if CLOCK == 'cpu' else ''}"
+          f"total {total / 60:.1f} min\n")
     hdr = f"{'scene':20s} {'res':>7s} {'niebla':>10s} {'niebla Ms/s':>11s}"
     for p in args.peers:
         hdr += f" | {p:>8s} {'ratio':>6s} {p + '*':>9s} {'ratio*':>6s}"
@@ -629,7 +560,7 @@ def main():
         for p, q in r["peers"].items():
             if "unsupported" in q:
                 print(f"{r['scene']}: {p} not compared: {q['unsupported']}")
-    summary = {"versions": ver, "quick": args.quick, "target": args.target, "threads": THREADS,
+    summary = {"versions": ver, "quick": args.quick, "target": args.target, "threads": THREADS, "clock": CLOCK,
                "total_seconds": total, "results": results}
     out_json = os.path.join(args.out, "results_quick.json" if args.quick else "results.json")
     with open(out_json, "w") as f:

@@ -1,5 +1,6 @@
-"""A Blender Cycles renderer driven over stdin/stdout by bench/compare.py
-(run with bench/.venv-cycles/bin/python, where `bpy` 5.0.1 is installed).
+"""A Blender Cycles renderer driven over stdin/stdout by bench/peers.py's
+`Cycles` (for bench/compare.py, fire_cycles.py and production_frame.py; run
+with bench/.venv-cycles/bin/python, where `bpy` 5.0.1 is installed).
 
     cycles_worker.py SCENE.json SCENE_DIR THREADS
 
@@ -7,7 +8,8 @@ builds the scene once (bench/niebla2cycles.py), prints one JSON line
 {"ready": true, "build_s": ...} (or {"unsupported": "why"}), then for each
 request line {"spp": N, "seed": S, "out": "x.exr", "width": W, "height": H}
 renders and answers {"seconds": T, "cpu_seconds": C}: the wall time of the
-render call alone and the CPU seconds of the process (all threads) during it
+render call alone and the CPU seconds (user + system, time.process_time,
+as getrusage(RUSAGE_SELF)) of the process (all threads) during it
 (scene building, Blender start and the EXR write excluded; the per-call volume
 octree build that Cycles does is included, and measured separately by
 requesting a 1x1-pixel, 1-spp render). width/height override the film size

@@ -5,18 +5,21 @@ at many samples), and how long does each take to reach a relative MSE of
 1e-2 on the fire-lit floor and on the smoke above the fire? niebla's `volpath`
 runs with and without volume light sampling; Cycles (PyPI bpy 5.0.1, CPU)
 renders the same VDB through a Principled Volume (bench/niebla2cycles.py),
-collecting emission along its paths. Both on THREADS = 2 threads, one after
-the other, in the same run.
+collecting emission along its paths. Both on `--threads` threads (default
+2), one after the other, in the same run.
 
     python3 bench/fire_cycles.py                 # 64x64, ~15 min on 2 cores
     python3 bench/fire_cycles.py --size 48 --cycles-ref-spp 256   # shorter
     python3 bench/fire_cycles.py --niebla-only --threads 1        # niebla alone, CPU seconds
+    nice -n 10 python3 bench/fire_cycles.py --threads 1 --clock cpu   # both, CPU seconds
 
 With `--niebla-only` Cycles is not run, and niebla's times are CPU seconds
 (user + system, from the operating system's accounting of the child
 process) net of a fixed cost per render call (scene loading, the VDB, the
 light distribution; the median CPU time of three 1-spp renders), so that
-other processes on a shared machine do not inflate them.
+other processes on a shared machine do not inflate them. `--clock cpu`
+times both renderers so: niebla as above, Cycles by the CPU seconds of its
+worker process during the render call, net of those of a 1x1-pixel render.
 
 Errors are measured against niebla's reference (volume light sampling on,
 `--ref-spp`), its own noise (from two independent halves) subtracted; the
@@ -31,29 +34,20 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-VENV_PY = os.path.join(HERE, ".venv", "bin", "python")
+sys.path.insert(0, HERE)
+import peers  # noqa: E402
 
-try:
-    import mitsuba  # noqa: F401  (reads the EXR files)
-except ImportError:
-    if os.path.realpath(sys.prefix) != os.path.realpath(os.path.join(HERE, ".venv")):
-        if not os.path.exists(VENV_PY):
-            subprocess.run(["bash", os.path.join(HERE, "setup.sh")], check=True)
-        os.execv(VENV_PY, [VENV_PY, os.path.abspath(__file__)] + sys.argv[1:])
-    raise
+peers.ensure_venv(__file__)
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, HERE)
 import compare  # noqa: E402
-from compare import CYCLES_PY, THREADS, Cycles, Niebla, rel_mse, time_to_reach  # noqa: E402
+from compare import THREADS, rel_mse, time_to_reach  # noqa: E402
 
 
 def masks(desc: dict) -> dict:
@@ -101,24 +95,14 @@ def region_noise(a, b, mask):
     return compare._rel_mse_den((a - b)[mask], (0.5 * (a + b))[mask]) / 4.0
 
 
-class CpuNiebla(Niebla):
-    """A niebla runner that also records each render call's CPU seconds."""
-
-    def render(self, spp: int, seed: int, tag: str):
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        out = super().render(spp, seed, tag)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        self.last_cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-        return out
-
-    def fixed_cpu(self) -> float:
-        """Median CPU seconds of three 1-spp renders: the per-call cost that
-        does not grow with the sample count (the 1 spp itself included)."""
-        times = []
-        for k in range(3):
-            self.render(1, 90000 + k, f"fixed_{k}")
-            times.append(self.last_cpu)
-        return float(np.median(times))
+def fixed_cpu(r: peers.Niebla) -> float:
+    """Median CPU seconds of three 1-spp renders by `r`: the per-call cost
+    that does not grow with the sample count (the 1 spp itself included)."""
+    times = []
+    for k in range(3):
+        r.render(1, 90000 + k, f"fixed_{k}")
+        times.append(r.last_cpu)
+    return float(np.median(times))
 
 
 def main():
@@ -133,9 +117,14 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "out", "fire_cycles"))
     ap.add_argument("--niebla-only", action="store_true",
                     help="skip Cycles; niebla's times in CPU seconds net of the per-call fixed cost")
-    ap.add_argument("--threads", type=int, default=THREADS, help=f"niebla's threads (default {THREADS})")
+    ap.add_argument("--threads", type=int, default=THREADS, help=f"threads of each renderer (default {THREADS})")
+    ap.add_argument("--clock", default="wall", choices=["wall", "cpu"],
+                    help="wall (default; --niebla-only implies cpu): niebla's reported render time and Cycles' "
+                         "render call; cpu: CPU seconds (user + system) of niebla's render process and of Cycles' "
+                         "render call, each net of its fixed per-call CPU cost")
     args = ap.parse_args()
-    compare.THREADS = args.threads
+    cpu = args.niebla_only or args.clock == "cpu"
+    args.out = os.path.abspath(args.out)  # the scene files name the VDB by this path
     os.makedirs(args.out, exist_ok=True)
 
     vdb = os.path.join(args.out, "fireball.vdb")
@@ -154,15 +143,16 @@ def main():
     if args.niebla_only:
         version = "not run"
     else:
-        version = subprocess.run([CYCLES_PY, "-c", "import bpy; print(bpy.app.version_string)"],
-                                 capture_output=True, text=True).stdout.strip().splitlines()[-1]
-    print(f"{args.size}x{args.size}, {args.threads} threads, Cycles {version}, load average "
+        peers.ensure_cycles()
+        version = peers.cycles_version()
+    print(f"{args.size}x{args.size}, {args.threads} threads, {'CPU seconds, ' if cpu else ''}Cycles {version}, "
+          f"load average "
           f"{os.getloadavg()[0]:.2f}; pixels: floor {m['floor'].sum()}, smoke {m['smoke'].sum()}, "
           f"fire {m['fire'].sum()}", flush=True)
 
-    nvls = CpuNiebla(args.niebla, paths[True], args.out)
+    nvls = peers.Niebla(args.niebla, paths[True], args.out, args.threads)
     nvls.name = "niebla"
-    nfree = CpuNiebla(args.niebla, paths[False], args.out)
+    nfree = peers.Niebla(args.niebla, paths[False], args.out, args.threads)
     nfree.name = "niebla-free"
     half = args.ref_spp // 2
     ra, ta, _ = nvls.render(half, 1000, "ref_a")
@@ -172,25 +162,32 @@ def main():
     print(f"niebla reference: {2 * half} spp in {ta + tb:.1f} s; its relative MSE (noise) "
           + ", ".join(f"{k} {v:.1e}" for k, v in noise.items()), flush=True)
 
-    if args.niebla_only:
-        cyc = None
-        fixed = {r.name: r.fixed_cpu() for r in (nvls, nfree)}
+    if cpu:
+        fixed = {r.name: fixed_cpu(r) for r in (nvls, nfree)}
         print("niebla fixed CPU cost per render call (subtracted): "
               + ", ".join(f"{k} {v:.2f} s" for k, v in fixed.items()), flush=True)
+    if args.niebla_only:
+        cyc = None
     else:
-        cyc = Cycles(paths[True], args.out, args.out)
+        cyc = peers.Cycles(paths[True], args.out, args.out, args.threads, "cpu" if cpu else "wall")
         if cyc.unsupported:
             sys.exit(f"Cycles: {cyc.unsupported}")
-        print(f"Cycles fixed cost per render call: {cyc.fixed_s:.2f} s (subtracted)", flush=True)
+        if cpu:
+            print(f"Cycles fixed cost per render call: {cyc.fixed_cpu:.2f} s CPU (subtracted), "
+                  f"{cyc.fixed_s:.2f} s wall", flush=True)
+        else:
+            print(f"Cycles fixed cost per render call: {cyc.fixed_s:.2f} s (subtracted)", flush=True)
 
     def sweep(r, max_spp, seed):
         rows, spp = [], 1
         while spp <= max_spp:
             img, t, net = r.render(spp, seed + spp, f"{r.name}_{spp}")
-            if args.niebla_only:
+            if r is cyc:
+                sec = net
+            elif cpu:
                 sec = max(r.last_cpu - fixed[r.name], 1e-3)
             else:
-                sec = net if r is cyc else t
+                sec = t
             e = {k: max(region_rel_mse(img, ref, v) - noise[k], 1e-12) for k, v in m.items()}
             rows.append((spp, sec, e, img))
             print(f"  {r.name:12s} {spp:5d} spp {sec:8.2f} s  rel MSE "
@@ -235,7 +232,7 @@ def main():
         print(f"  {k}: region mean Cycles / niebla - 1 = {np.round(rc / rn - 1, 4).tolist()}, "
               f"relative MSE between the references beyond their noise {excess:.1e}")
 
-    print(f"\ntime to relative MSE {args.target:g} (seconds; extrap = extrapolated as 1/time past the last render, "
+    print(f"\ntime to relative MSE {args.target:g} ({'CPU ' if cpu else ''}seconds; extrap = extrapolated as 1/time past the last render, "
           f"first = reached at 1 spp):")
     print("| region | niebla (volume light sampling) | niebla (free flight only) | Cycles | Cycles / niebla |")
     print("|---|---|---|---|---|")

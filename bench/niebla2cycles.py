@@ -376,6 +376,37 @@ def _grid_name(given, defaults, grids, what):
     return next((n for n in defaults if n in grids), None)
 
 
+def _grid_volume_object(bpy, scene, name, path, grids, names, xf, shape, what):
+    """A Volume object reading the VDB file `path` (full precision, no
+    clipping, object space), placed by the 4x4 matrix `xf` (niebla's
+    `to_world`; None for the identity), linked into `scene`. niebla clips the
+    grids to the container box `shape`; Cycles renders every active voxel:
+    so first checks that the box holds the active voxels of each grid in
+    `names` (their bounds from `grids`, as `vdb_grids` gives them), else
+    raises Unsupported naming `what` (e.g. "pyro grid")."""
+    if shape is not None:
+        bmin, bmax = np.asarray(shape["min"], float), np.asarray(shape["max"], float)
+        m = np.eye(4) if xf is None else xf
+        for g in names:
+            lo, hi = grids[g][1], grids[g][2]
+            if lo is None:
+                continue
+            for c in np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T:
+                w = (m @ np.array([*c, 1.0]))[:3]
+                if np.any(w < bmin - 1e-4) or np.any(w > bmax + 1e-4):
+                    raise Unsupported(f"{what} {g!r} reaches beyond its container box ({w} outside {bmin}..{bmax})")
+    vol = bpy.data.volumes.new(name)
+    vol.filepath = path
+    vol.render.precision = "FULL"
+    vol.render.clipping = 0.0
+    vol.render.space = "OBJECT"
+    obj = bpy.data.objects.new(name, vol)
+    if xf is not None:
+        obj.matrix_world = xf.T.tolist()
+    scene.collection.objects.link(obj)
+    return obj
+
+
 def _pyro_object(bpy, scene, name, m, shape, scene_dir):
     """A pyro medium as a Volume object reading the same VDB file, shaded by a
     Principled Volume with niebla's parameters (the pyro model follows that
@@ -393,27 +424,8 @@ def _pyro_object(bpy, scene, name, m, shape, scene_dir):
     flame = _grid_name(m.get("flame_attribute"), PYRO_FLAME_NAMES, grids, "flame") if strength > 0 else None
     temp = _grid_name(m.get("temperature_attribute"), PYRO_TEMPERATURE_NAMES, grids, "temperature") \
         if bb_intensity > 0 else None
-    # niebla clips the grids to the container box; Cycles renders the active
-    # voxels: the box must hold them all.
-    xf = niebla_transform(m.get("to_world"))
-    bmin, bmax = np.asarray(shape["min"], float), np.asarray(shape["max"], float)
-    for g in filter(None, (density, flame, temp)):
-        lo, hi = grids[g][1], grids[g][2]
-        if lo is None:
-            continue
-        for c in np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T:
-            w = (xf @ np.array([*c, 1.0]))[:3]
-            if np.any(w < bmin - 1e-4) or np.any(w > bmax + 1e-4):
-                raise Unsupported(f"pyro grid {g!r} reaches beyond its container box ({w} outside {bmin}..{bmax})")
-
-    vol = bpy.data.volumes.new(name)
-    vol.filepath = path
-    vol.render.precision = "FULL"
-    vol.render.clipping = 0.0
-    vol.render.space = "OBJECT"
-    obj = bpy.data.objects.new(name, vol)
-    obj.matrix_world = xf.T.tolist()
-    scene.collection.objects.link(obj)
+    obj = _grid_volume_object(bpy, scene, name, path, grids, list(filter(None, (density, flame, temp))),
+                              niebla_transform(m.get("to_world")), shape, "pyro grid")
 
     mat = bpy.data.materials.new(name + "_pyro")
     mat.use_nodes = True
@@ -495,22 +507,8 @@ def _vdb_grid_object(bpy, scene, name, m, d, shape, scene_dir):
     grids = vdb_grids(path)
     if grid not in grids:
         raise Unsupported(f"grid {grid!r} absent from {path}")
-    xf = niebla_transform(m.get("to_world"))
-    bmin, bmax = np.asarray(shape["min"], float), np.asarray(shape["max"], float)
-    lo, hi = grids[grid][1], grids[grid][2]
-    if lo is not None:
-        for c in np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T:
-            w = (xf @ np.array([*c, 1.0]))[:3]
-            if np.any(w < bmin - 1e-4) or np.any(w > bmax + 1e-4):
-                raise Unsupported(f"VDB grid {grid!r} reaches beyond its container box ({w} outside {bmin}..{bmax})")
-    vol = bpy.data.volumes.new(name)
-    vol.filepath = path
-    vol.render.precision = "FULL"
-    vol.render.clipping = 0.0
-    vol.render.space = "OBJECT"
-    obj = bpy.data.objects.new(name, vol)
-    obj.matrix_world = xf.T.tolist()
-    scene.collection.objects.link(obj)
+    obj = _grid_volume_object(bpy, scene, name, path, grids, [grid], niebla_transform(m.get("to_world")), shape,
+                              "VDB grid")
     obj.data.materials.append(_material_volume(bpy, name + "_volume", m, True))
 
 
@@ -566,13 +564,7 @@ def _shape(bpy, scene, shape, media, scene_dir, grid_objects):
         npy = d["file"] if os.path.isabs(d["file"]) else os.path.join(scene_dir, d["file"])
         vdb_path = os.path.splitext(npy)[0] + ".vdb"
         write_vdb(npy, d["bounds"], vdb_path)
-        vol = bpy.data.volumes.new(name)
-        vol.filepath = vdb_path
-        vol.render.precision = "FULL"
-        vol.render.clipping = 0.0
-        vol.render.space = "OBJECT"
-        obj = bpy.data.objects.new(name, vol)
-        scene.collection.objects.link(obj)
+        obj = _grid_volume_object(bpy, scene, name, vdb_path, {}, [], None, None, "grid")
         obj.data.materials.append(_material_volume(bpy, name + "_volume", m, True))
         return
     if surf is None:

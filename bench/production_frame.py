@@ -45,29 +45,22 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import subprocess
 import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-VENV_PY = os.path.join(HERE, ".venv", "bin", "python")
+sys.path.insert(0, HERE)
+import peers  # noqa: E402
 
-try:
-    import mitsuba  # noqa: F401  (reads the EXR files)
-except ImportError:
-    if os.path.realpath(sys.prefix) != os.path.realpath(os.path.join(HERE, ".venv")):
-        if not os.path.exists(VENV_PY):
-            subprocess.run(["bash", os.path.join(HERE, "setup.sh")], check=True)
-        os.execv(VENV_PY, [VENV_PY, os.path.abspath(__file__)] + sys.argv[1:])
-    raise
+peers.ensure_venv(__file__)
 
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, HERE)
 import compare  # noqa: E402
-from compare import Cycles, Mitsuba, read_exr, rel_mse, time_to_reach  # noqa: E402
+from compare import Mitsuba, rel_mse, time_to_reach  # noqa: E402
+from peers import read_exr  # noqa: E402
 from volumes import vdb_to_vol  # noqa: E402
 
 
@@ -108,33 +101,10 @@ def make_scene(vdb: str, box_min, box_max, width: int, height: int, max_depth: i
     }
 
 
-class MeasuredNiebla:
-    """niebla's `render` in a child process: the image, the render time it
-    reports, the child's CPU seconds and peak RSS (from wait4)."""
-
-    name = "niebla"
-
-    def __init__(self, binary, scene_path, workdir, threads):
-        self.binary, self.scene_path, self.workdir, self.threads = binary, scene_path, workdir, threads
-        self.peak_mib = 0.0
-
-    def run(self, scene_path, spp, seed, tag):
-        out = os.path.join(self.workdir, f"niebla_{tag}.exr")
-        log = os.path.join(self.workdir, f"niebla_{tag}.log")
-        cmd = [self.binary, "render", scene_path, "--spp", str(spp), "--seed", str(seed),
-               "--threads", str(self.threads), "--quiet", "-o", out]
-        with open(log, "w") as f:
-            p = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT)
-            _, status, ru = os.wait4(p.pid, 0)
-            p.returncode = os.waitstatus_to_exitcode(status)
-        text = open(log).read()
-        if p.returncode:
-            raise RuntimeError(f"{' '.join(cmd)} failed:\n{text}")
-        m = re.search(r"rendered \S+ at (\d+) spp with \S+ in ([0-9.]+) s", text)
-        if not m or int(m.group(1)) != spp:
-            raise RuntimeError(f"unexpected niebla output: {text!r}")
-        peak = ru.ru_maxrss / 1024.0
-        return out, float(m.group(2)), ru.ru_utime + ru.ru_stime, peak
+class MeasuredNiebla(peers.Niebla):
+    """peers.Niebla (`niebla render` in a child process; the render time it
+    reports, the child's CPU seconds and peak RSS from wait4) with the fixed
+    CPU cost taken from an 8x8-pixel copy of the scene."""
 
     def fixed(self, tiny_scene):
         """CPU seconds of an 8x8-pixel, 1-spp render (start-up, VDB load,
@@ -146,34 +116,15 @@ class MeasuredNiebla:
 
     def render(self, spp, seed, tag):
         """(image, wall render seconds, CPU seconds net of the fixed cost)."""
-        out, t, cpu, peak = self.run(self.scene_path, spp, seed, tag)
+        out, t, cpu, peak, _ = self.run(self.scene_path, spp, seed, tag)
         self.peak_mib = max(self.peak_mib, peak)
         return read_exr(out), t, max(cpu - self.fixed_cpu, 1e-3)
 
 
-class MeasuredCycles(Cycles):
-    """compare.Cycles with CPU seconds (the worker's process time during the
-    render call) net of the 1x1-pixel call's, and the worker's peak RSS."""
-
-    def __init__(self, *a, **k):
-        self.cpu_log = []
-        super().__init__(*a, **k)
-        if not self.unsupported:
-            # compare.Cycles made a warm-up call, then two 1x1-pixel calls.
-            self.fixed_cpu = min(self.cpu_log[-2:])
-
-    def _call(self, spp, seed, tag, width=None, height=None):
-        req = {"spp": spp, "seed": seed, "out": os.path.join(self.workdir, f"cycles_{tag}.exr")}
-        if width:
-            req.update(width=width, height=height)
-        self.proc.stdin.write(json.dumps(req) + "\n")
-        self.proc.stdin.flush()
-        line = self.proc.stdout.readline()
-        if not line:
-            raise RuntimeError("the Cycles worker died")
-        r = json.loads(line)
-        self.cpu_log.append(r.get("cpu_seconds", float("nan")))
-        return r["seconds"]
+class MeasuredCycles(peers.Cycles):
+    """peers.Cycles giving wall seconds net of the fixed cost and CPU seconds
+    (the worker's process time during the render call) net of the 1x1-pixel
+    call's."""
 
     def render(self, spp, seed, tag):
         """(image, wall seconds net of the fixed cost, CPU seconds net of the fixed CPU cost)."""
@@ -181,16 +132,16 @@ class MeasuredCycles(Cycles):
         return img, net, max(self.cpu_log[-1] - self.fixed_cpu, 1e-3)
 
     def peak(self):
-        return vm_status(self.proc.pid)["VmHWM"]
+        return self.peak_mib()
 
 
 class MeasuredMitsuba(Mitsuba):
     """compare.Mitsuba with the process's CPU seconds during mi.render."""
 
     def render(self, spp, seed, tag):
-        c0 = time.process_time()
+        """(image, wall seconds, CPU seconds of the render call)."""
         img, t, _ = super().render(spp, seed, tag)
-        return img, t, time.process_time() - c0
+        return img, t, self.last_cpu
 
 
 def sweep(r, ref, noise, target, max_spp, cap_s, seed, log):
@@ -229,7 +180,7 @@ def make_peer(peer, desc, scene, args, log):
     """(renderer, sweep seed, this process's RSS before Mitsuba loads in MiB
     or None); (None, ...) when Cycles cannot render the scene."""
     if peer == "cycles":
-        r = MeasuredCycles(scene, args.out, args.out)
+        r = MeasuredCycles(scene, args.out, args.out, args.threads)
         if r.unsupported:
             log(f"cycles: not compared ({r.unsupported})")
             return None, 0, None
