@@ -10,7 +10,7 @@ mod grid;
 mod homogeneous;
 mod pyro;
 
-pub use grid::{AlbedoField, AlbedoGrid, DensityGrid, GridEmission, GridField, GridMedium, GridMotion};
+pub use grid::{AlbedoField, AlbedoGrid, DensityGrid, DensityReader, GridEmission, GridField, GridMedium, GridMotion};
 pub use homogeneous::HomogeneousMedium;
 pub use pyro::{ColorRamp, PyroEmission, PyroTemperature, PYRO_STEFAN_BOLTZMANN};
 
