@@ -98,12 +98,12 @@ fn main() -> ExitCode {
             IntegratorSettings::Zhou(z) => z,
             _ => ZhouSettings::default(),
         };
-        if only.as_deref().map_or(true, |o| o == "hegeman") {
+        if matches!(only.as_deref(), None | Some("hegeman")) {
             let hegeman = HegemanIntegrator::new(&scene, hegeman_settings);
             let (cpu, hash) = time_frames(&scene, &hegeman, frames, threads);
             println!("{path} hegeman: {cpu:.4} CPU s/frame ({frames} frames, {threads} threads), hash {hash:016x}");
         }
-        if only.as_deref().map_or(true, |o| o == "zhou") {
+        if matches!(only.as_deref(), None | Some("zhou")) {
             let zhou = ZhouIntegrator::new(&scene, zhou_settings);
             let (cpu, hash) = time_frames(&scene, &zhou, frames, threads);
             println!("{path} zhou:    {cpu:.4} CPU s/frame ({frames} frames, {threads} threads), hash {hash:016x}");
