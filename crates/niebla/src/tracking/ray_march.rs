@@ -48,7 +48,8 @@ pub fn ray_march_optical_depth(sigma_t: impl Fn(f32) -> Rgb, t0: f32, t1: f32, s
 /// (the margin covers the rounding of a sample's position against the
 /// segments' ends), so the result has the same bits as marching every
 /// sample, without the lookups of empty space (Amanatides and Woo's DDA
-/// over the majorant grid finds the segments).
+/// over the majorant grid finds the segments). `[t0, t1]` is the range
+/// `r`'s segments cover (a [`super::GridAlongRay`]'s `t0`, `t1`).
 pub fn ray_march_occupied<R: DensityAlongRay>(r: &R, sigma_t: Rgb, t0: f32, t1: f32, step: MarchStep, u: f32) -> Rgb {
     let n = step.count_for(t1 - t0) as usize;
     let dt = (t1 - t0) / n as f32;
