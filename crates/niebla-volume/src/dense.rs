@@ -185,6 +185,7 @@ pub struct DenseGrid {
     mapping: BoxMapping,
     data: GridStorage,
     max_value: f32,
+    min_value: f32,
 }
 
 impl DenseGrid {
@@ -207,11 +208,16 @@ impl DenseGrid {
         bounds_max: [f32; 3],
     ) -> Result<Self, VolumeError> {
         let mapping = BoxMapping::new(dims, bounds_min, bounds_max, data.len())?;
-        let max_value = match &data {
-            GridStorage::F32(v) => v.iter().copied().fold(f32::NEG_INFINITY, f32::max),
-            GridStorage::F16(v) => v.iter().map(|x| x.to_f32()).fold(f32::NEG_INFINITY, f32::max),
+        let (max_value, min_value) = match &data {
+            GridStorage::F32(v) => {
+                (v.iter().copied().fold(f32::NEG_INFINITY, f32::max), v.iter().copied().fold(f32::INFINITY, f32::min))
+            }
+            GridStorage::F16(v) => (
+                v.iter().map(|x| x.to_f32()).fold(f32::NEG_INFINITY, f32::max),
+                v.iter().map(|x| x.to_f32()).fold(f32::INFINITY, f32::min),
+            ),
         };
-        Ok(Self { mapping, data, max_value })
+        Ok(Self { mapping, data, max_value, min_value })
     }
 
     /// The same grid stored as half floats (values rounded to nearest).
@@ -263,11 +269,36 @@ impl DenseGrid {
         self.max_value
     }
 
+    /// Smallest stored value (no interpolated value is below it; NaN
+    /// values are ignored, as by [`DenseGrid::max_value`]).
+    pub fn min_value(&self) -> f32 {
+        self.min_value
+    }
+
     /// The value stored for cell `(x, y, z)`; panics out of range.
     pub fn voxel(&self, x: usize, y: usize, z: usize) -> f32 {
         let [nx, ny, nz] = self.dims();
         assert!(x < nx && y < ny && z < nz, "voxel ({x}, {y}, {z}) outside {:?}", self.dims());
         self.data.get(self.mapping.index(x, y, z))
+    }
+
+    /// The grid's f32 values with its mapping unpacked for repeated
+    /// lookups ([`DenseF32Lookup`]); `None` for half-float storage.
+    pub fn f32_lookup(&self) -> Option<DenseF32Lookup<'_>> {
+        let GridStorage::F32(data) = &self.data else { return None };
+        let m = &self.mapping;
+        let strides = [1, m.dims[0], m.dims[0] * m.dims[1]];
+        Some(DenseF32Lookup {
+            data,
+            bounds_min: m.bounds_min,
+            bounds_max: m.bounds_max,
+            scale: m.scale,
+            last: m.dims.map(|n| (n - 1) as f32),
+            top: m.dims.map(|n| n.saturating_sub(2)),
+            step: std::array::from_fn(|a| if m.dims[a] > 1 { strides[a] } else { 0 }),
+            row: strides[1],
+            slab: strides[2],
+        })
     }
 
     /// Trilinearly interpolated value at local-space point `p`: cell values
@@ -282,6 +313,56 @@ impl DenseGrid {
             GridStorage::F32(v) => trilinear(v, &s),
             GridStorage::F16(v) => trilinear(v, &s),
         }
+    }
+}
+
+/// A dense f32 grid's trilinear lookup with everything that does not depend
+/// on the point computed once: for the many lookups of a ray march. It gives
+/// the same bits as [`DenseGrid::lookup`] (the same operations in the same
+/// order), without the storage match and with the cell index truncated as
+/// `u32` (the clamped coordinate is in `[0, n - 1]`).
+#[derive(Clone, Copy, Debug)]
+pub struct DenseF32Lookup<'a> {
+    data: &'a [f32],
+    bounds_min: [f32; 3],
+    bounds_max: [f32; 3],
+    scale: [f32; 3],
+    /// `n - 1` per axis (largest continuous cell coordinate).
+    last: [f32; 3],
+    /// `n - 2` per axis (largest lower stencil cell; 0 for one cell).
+    top: [usize; 3],
+    /// Index step to the upper neighbour per axis (0 for one cell).
+    step: [usize; 3],
+    /// Index stride of y and of z.
+    row: usize,
+    slab: usize,
+}
+
+impl DenseF32Lookup<'_> {
+    /// Trilinearly interpolated value at local-space point `p`, as
+    /// [`DenseGrid::lookup`] (0 outside the closed box or for NaN).
+    #[inline(always)]
+    pub fn lookup(&self, p: [f32; 3]) -> f32 {
+        let mut cell = [0usize; 3];
+        let mut frac = [0f32; 3];
+        for a in 0..3 {
+            if !(p[a] >= self.bounds_min[a] && p[a] <= self.bounds_max[a]) {
+                return 0.0;
+            }
+            let u = ((p[a] - self.bounds_min[a]) * self.scale[a] - 0.5).clamp(0.0, self.last[a]);
+            let i = (u as u32 as usize).min(self.top[a]);
+            cell[a] = i;
+            frac[a] = u - i as f32;
+        }
+        let b = cell[0] + self.row * cell[1] + self.slab * cell[2];
+        let [sx, sy, sz] = self.step;
+        let [fx, fy, fz] = frac;
+        let v = &self.data[b..=b + sx + sy + sz];
+        let c00 = lerp(v[0], v[sx], fx);
+        let c10 = lerp(v[sy], v[sy + sx], fx);
+        let c01 = lerp(v[sz], v[sz + sx], fx);
+        let c11 = lerp(v[sz + sy], v[sz + sy + sx], fx);
+        lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz)
     }
 }
 
@@ -387,6 +468,67 @@ mod tests {
             assert!((a - b).abs() <= a.abs() * 2f32.powi(-11) + 1e-6, "{a} vs {b} at {p:?}");
         }
         assert_eq!(h.to_f32().max_value(), f16::from_f32(g.max_value()).to_f32());
+    }
+
+    /// The unpacked f32 lookup gives the same bits as the grid's own at
+    /// random points in, on and around the box (single-cell axes included),
+    /// and along lines crossing it.
+    #[test]
+    fn f32_lookup_matches_lookup_bit_for_bit() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut uniform = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let dims = [[7, 5, 3], [1, 4, 6], [5, 1, 1], [33, 17, 9]];
+        for (k, dims) in dims.into_iter().enumerate() {
+            let count = dims[0] * dims[1] * dims[2];
+            let data = (0..count).map(|i| ((i * 37 + k) % 11) as f32 * 0.3 - 0.7).collect();
+            let g = DenseGrid::new(dims, data, [-1.0, 0.5, -2.0], [2.0, 1.25, 3.0]).unwrap();
+            let fast = g.f32_lookup().expect("f32 storage");
+            let (lo, hi) = g.bounds();
+            for _ in 0..20_000 {
+                // Points in a box 20% larger than the grid's, some on its faces.
+                let mut p: [f32; 3] = std::array::from_fn(|a| lo[a] + (hi[a] - lo[a]) * (1.4 * uniform() - 0.2));
+                if uniform() < 0.1 {
+                    let a = (uniform() * 3.0) as usize % 3;
+                    p[a] = if uniform() < 0.5 { lo[a] } else { hi[a] };
+                }
+                assert_eq!(fast.lookup(p).to_bits(), g.lookup(p).to_bits(), "{dims:?} at {p:?}");
+            }
+            for _ in 0..200 {
+                let o: [f32; 3] = std::array::from_fn(|a| lo[a] + (hi[a] - lo[a]) * (1.4 * uniform() - 0.2));
+                let d: [f32; 3] = std::array::from_fn(|_| uniform() - 0.5);
+                for i in 0..100 {
+                    let t = i as f32 * 0.037;
+                    let p = std::array::from_fn(|a| o[a] + d[a] * t);
+                    assert_eq!(fast.lookup(p).to_bits(), g.lookup(p).to_bits(), "{dims:?} at {p:?}");
+                }
+            }
+            assert_eq!(fast.lookup([f32::NAN, 1.0, 0.0]), 0.0);
+        }
+        assert!(g_half().f32_lookup().is_none());
+    }
+
+    fn g_half() -> DenseGrid {
+        ramp_grid().to_f16()
+    }
+
+    #[test]
+    fn min_value_is_the_smallest_stored_value() {
+        let g = ramp_grid();
+        let [nx, ny, nz] = g.dims();
+        let mut min = f32::INFINITY;
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    min = min.min(g.voxel(x, y, z));
+                }
+            }
+        }
+        assert_eq!(g.min_value(), min);
+        let negative = DenseGrid::new([2, 1, 1], vec![0.5, -0.25], [0.0; 3], [1.0; 3]).unwrap();
+        assert_eq!(negative.min_value(), -0.25);
     }
 
     #[test]

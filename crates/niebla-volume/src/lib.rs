@@ -146,7 +146,7 @@ mod sparse_vec3;
 
 pub use affine::Affine;
 pub use dda::Segment;
-pub use dense::{DenseGrid, GridStorage};
+pub use dense::{DenseF32Lookup, DenseGrid, GridStorage};
 pub use error::VolumeError;
 pub use io::npy::{parse_npy, read_npy};
 pub use io::vdb::{VdbFile, VdbGridInfo, VdbValueKind};

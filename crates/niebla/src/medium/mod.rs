@@ -11,7 +11,8 @@ mod homogeneous;
 mod pyro;
 
 pub use grid::{
-    AlbedoField, AlbedoGrid, DensityGrid, GridEmission, GridField, GridMedium, GridMotion, LazyMinorant, MinorantRecipe,
+    AlbedoField, AlbedoGrid, DensityGrid, DensityReader, GridEmission, GridField, GridMedium, GridMotion, LazyMinorant,
+    MinorantRecipe,
 };
 pub use homogeneous::HomogeneousMedium;
 pub use pyro::{ColorRamp, PyroEmission, PyroTemperature, PYRO_STEFAN_BOLTZMANN};

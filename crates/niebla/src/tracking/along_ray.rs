@@ -5,7 +5,7 @@
 
 use std::ops::ControlFlow;
 
-use niebla_volume::{DenseGrid, DensityBoundGrid, MajorantGrid, SparseAccessor, SparseGrid};
+use niebla_volume::{DenseF32Lookup, DenseGrid, DensityBoundGrid, MajorantGrid, SparseAccessor, SparseGrid};
 
 use crate::math::Vec3;
 use crate::medium::GridMotion;
@@ -32,6 +32,20 @@ pub trait DensityAlongRay {
     /// (no medium: every tracker skips them) may be left out; `f` may stop
     /// the walk.
     fn segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, f: F) -> ControlFlow<()>;
+    /// Whether [`DensityAlongRay::density`] is exactly 0 wherever no
+    /// segment with `d_max > 0` covers `t` (the density is never negative,
+    /// so a zero majorant means zero): a ray march may then skip those
+    /// samples without changing its sum. `false` when not known.
+    #[inline]
+    fn zero_outside_segments(&self) -> bool {
+        false
+    }
+    /// The segments of [`DensityAlongRay::segments`] with `d_max > 0`
+    /// (bit-identical), others possibly left out; `f` may stop the walk.
+    #[inline]
+    fn positive_segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
+        self.segments(|s| if s.d_max > 0.0 { f(s) } else { ControlFlow::Continue(()) })
+    }
 }
 
 /// Density 1 over `[t0, t1]`: a homogeneous medium.
@@ -58,12 +72,43 @@ impl DensityAlongRay for UnitDensity {
 pub trait GridLookup {
     /// Value at grid-space point `p`.
     fn lookup_grid(&self, p: Vec3) -> f32;
+    /// Whether no value is negative, so that a point whose majorant cell is
+    /// 0 reads exactly 0 (a ray march may then skip it). `false` when not
+    /// known.
+    #[inline]
+    fn nonnegative(&self) -> bool {
+        false
+    }
 }
 
 impl GridLookup for DenseGrid {
     #[inline]
     fn lookup_grid(&self, p: Vec3) -> f32 {
         self.lookup(p.to_array())
+    }
+    #[inline]
+    fn nonnegative(&self) -> bool {
+        self.min_value() >= 0.0
+    }
+}
+
+/// A dense f32 grid's unpacked lookup (the same values as the grid's own);
+/// the caller tells whether the grid is non-negative.
+pub struct DenseF32Along<'a> {
+    /// The lookup.
+    pub lookup: DenseF32Lookup<'a>,
+    /// The grid's smallest value is >= 0.
+    pub nonnegative: bool,
+}
+
+impl GridLookup for DenseF32Along<'_> {
+    #[inline(always)]
+    fn lookup_grid(&self, p: Vec3) -> f32 {
+        self.lookup.lookup(p.to_array())
+    }
+    #[inline]
+    fn nonnegative(&self) -> bool {
+        self.nonnegative
     }
 }
 
@@ -114,6 +159,25 @@ impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
             None => self.grid.lookup_grid(p),
             Some((m, time)) => self.grid.lookup_grid(m.source_point(p, time)),
         }
+    }
+
+    #[inline]
+    fn zero_outside_segments(&self) -> bool {
+        self.grid.nonnegative()
+    }
+
+    #[inline]
+    fn positive_segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
+        // Without the minima: empty blocks are crossed in one step.
+        let (o, d) = (self.o.to_array(), self.d.to_array());
+        let minorant = self.minorant;
+        self.majorant.walk_nonzero(o, d, self.t0, self.t1, |cell, s| {
+            if s.max_density <= 0.0 {
+                return ControlFlow::Continue(());
+            }
+            let d_min = minorant.map_or(0.0, |m| m.value(cell[0], cell[1], cell[2]));
+            f(DensitySegment { t0: s.t0, t1: s.t1, d_min: d_min.min(s.max_density), d_max: s.max_density })
+        })
     }
 
     #[inline]

@@ -10,7 +10,7 @@
 use crate::math::Vec3;
 use crate::medium::{DensityGrid, GridMedium};
 
-use super::along_ray::{GridAlongRay, GridLookup};
+use super::along_ray::{DenseF32Along, GridAlongRay, GridLookup};
 
 /// Work done on a grid seen along a ray, generic over the voxel storage.
 pub trait GridRayVisitor {
@@ -42,9 +42,14 @@ pub fn with_grid_along_ray<V: GridRayVisitor>(
     let minorant = if with_minorant { g.minorant() } else { None };
     let motion = g.motion.as_ref().filter(|_| time != 0.0).map(|m| (m, time));
     match &g.density {
-        DensityGrid::Dense(grid) => {
-            visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1, motion })
-        }
+        DensityGrid::Dense(grid) => match grid.f32_lookup() {
+            // f32 storage: the lookup unpacked once per ray (same values).
+            Some(lookup) => {
+                let grid = DenseF32Along { lookup, nonnegative: grid.min_value() >= 0.0 };
+                visitor.visit(&GridAlongRay { grid: &grid, majorant, minorant, o, d, t0, t1, motion })
+            }
+            None => visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1, motion }),
+        },
         DensityGrid::Sparse(grid) => {
             // One cached accessor per ray: consecutive lookups along the ray
             // mostly stay in one leaf and skip the tree descent.

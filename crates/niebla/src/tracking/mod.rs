@@ -127,7 +127,11 @@ fn run_tracker<R: DensityAlongRay>(
     match method {
         TransmittanceMethod::RayMarch(step) => {
             let u = sampler.next_1d();
-            ray_march_optical_depth(|t| sigma_t * r.density(t), t0, t1, step, u).exp_neg()
+            if r.zero_outside_segments() {
+                ray_march::ray_march_occupied(r, sigma_t, t0, t1, step, u).exp_neg()
+            } else {
+                ray_march_optical_depth(|t| sigma_t * r.density(t), t0, t1, step, u).exp_neg()
+            }
         }
         TransmittanceMethod::Delta => delta_tracking(r, sigma_t, sampler),
         TransmittanceMethod::Analytic | TransmittanceMethod::Ratio => ratio_tracking(r, sigma_t, sampler),

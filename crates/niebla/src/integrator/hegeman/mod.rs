@@ -598,12 +598,13 @@ impl HegemanIntegrator {
         let wo = -ray.d;
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
+        let density = g.density_reader();
         // Steps of zero density add nothing: only those near occupied
         // majorant cells are visited (the same bits as visiting all).
         let _ = steps.occupied(g, ray, |range| {
             for k in range {
                 let x = ray.at(steps.t(k));
-                let d = g.density_at(x);
+                let d = density.at(x);
                 if d <= 0.0 {
                     continue;
                 }

@@ -529,6 +529,7 @@ impl ZhouIntegrator {
         let nl = self.lights.len();
         let mut tr = Rgb::ONE;
         let mut l = Rgb::ZERO;
+        let density = g.density_reader();
         // With full compensation, steps of zero density add nothing: only
         // those near occupied majorant cells are visited (the same bits as
         // visiting all). The other modes attenuate or shine with `D~`,
@@ -538,10 +539,10 @@ impl ZhouIntegrator {
                 let x = ray.at(steps.t(k));
                 let (d_att, d_src) = match self.settings.compensation {
                     Compensation::Full => {
-                        let d = g.density_at(x);
+                        let d = density.at(x);
                         (d, d)
                     }
-                    Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), g.density_at(x)),
+                    Compensation::SourceOnly => (lattice.interpolate(&model.smooth, x), density.at(x)),
                     Compensation::Off => {
                         let d = lattice.interpolate(&model.smooth, x);
                         (d, d)
