@@ -138,6 +138,21 @@ fn asymmetry(path: &str, x: f32) -> Check {
 
 /// Applies `check` to a color: to the value itself for a scalar, to each
 /// channel (path `name[i]`) for an RGB triple.
+/// A conductor's complex index `eta + i k` (niebla's `conductor` and
+/// `roughconductor`): both non-negative, and not both 0 in any channel (the
+/// Fresnel term divides by the index). `eta` 0 with `k` > 0 is a purely
+/// imaginary index, a reflectance of 1 at every angle (Mitsuba's default
+/// conductor, material "none").
+fn conductor_index(path: &str, eta: &ColorDesc, k: &ColorDesc) -> Check {
+    color(&format!("{path}.eta"), eta, non_negative)?;
+    color(&format!("{path}.k"), k, non_negative)?;
+    let (e, kk) = (eta.channels(), k.channels());
+    if (0..3).any(|c| e[c] == 0.0 && kk[c] == 0.0) {
+        return fail(format!("{path}.k"), "`eta` and `k` are both 0 in a channel: expected `eta` > 0 or `k` > 0");
+    }
+    Ok(())
+}
+
 fn color(path: &str, c: &ColorDesc, check: fn(&str, f32) -> Check) -> Check {
     match c {
         ColorDesc::Gray(v) => check(path, *v),
@@ -694,10 +709,7 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
             positive(&format!("{base}.bsdf.ext_ior"), *ext_ior)
         }
         BsdfDesc::Conductor(ConductorDesc::Material(_)) => Ok(()),
-        BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
-            color(&format!("{base}.bsdf.eta"), eta, positive)?;
-            color(&format!("{base}.bsdf.k"), k, non_negative)
-        }
+        BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => conductor_index(&format!("{base}.bsdf"), eta, k),
         BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => color(&format!("{base}.bsdf.reflectance"), r, below_one),
         other => validate_surface(&format!("{base}.bsdf"), other),
     }
@@ -744,10 +756,7 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
             alpha(&d.microfacet)?;
             match &d.conductor {
                 ConductorDesc::Material(_) => {}
-                ConductorDesc::Index { eta, k } => {
-                    color(&format!("{base}.eta"), eta, non_negative)?;
-                    color(&format!("{base}.k"), k, non_negative)?;
-                }
+                ConductorDesc::Index { eta, k } => conductor_index(base, eta, k)?,
                 ConductorDesc::Reflectance(r) => color(&format!("{base}.reflectance"), r, below_one)?,
             }
             validate_reflectance(&format!("{base}.specular_reflectance"), &d.specular_reflectance)
@@ -799,10 +808,7 @@ fn validate_surface(base: &str, bsdf: &BsdfDesc) -> Check {
                         validate_reflectance(&format!("{path}.reflectance"), reflectance)?
                     }
                     BsdfDesc::Conductor(ConductorDesc::Material(_)) => {}
-                    BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => {
-                        color(&format!("{path}.eta"), eta, positive)?;
-                        color(&format!("{path}.k"), k, non_negative)?;
-                    }
+                    BsdfDesc::Conductor(ConductorDesc::Index { eta, k }) => conductor_index(&path, eta, k)?,
                     BsdfDesc::Conductor(ConductorDesc::Reflectance(r)) => {
                         color(&format!("{path}.reflectance"), r, below_one)?
                     }

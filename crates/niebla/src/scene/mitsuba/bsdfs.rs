@@ -148,24 +148,21 @@ fn copy_color(p: &Props, name: &str, out: &mut Map<String, Value>) -> Result<(),
     Ok(())
 }
 
-/// Conductor keys: `material`, or `eta` and `k`. A `roughconductor` may
-/// give none of them, or `eta` or `k` alone, or `material` "none": Mitsuba 3's
-/// defaults are then `eta` 0 and `k` 1, a Fresnel reflectance of exactly 1
-/// (its `roughconductor.cpp`: material defaults to "none", which reads `eta`
-/// and `k` with those defaults), which niebla's `roughconductor` JSON takes
-/// for absent keys as well. The smooth `conductor` needs one of them.
+/// Conductor keys: `material`, or `eta` and `k`. Without `material` (or
+/// with `material` "none"), Mitsuba 3 reads `eta` and `k` with the defaults
+/// 0 and 1 (its `conductor.cpp` and `roughconductor.cpp`), a Fresnel
+/// reflectance of exactly 1 at every angle (a purely imaginary index).
+/// niebla's `roughconductor` JSON takes absent keys with the same defaults;
+/// for the smooth `conductor` (whose JSON needs both) the importer writes
+/// both, a missing one at its default.
 fn conductor_index(p: &Props, out: &mut Map<String, Value>, rough: bool) -> Result<(), SceneError> {
     let material = p.string("material")?;
     let (eta, k) = (p.color("eta")?, p.color("k")?);
     match (material, eta, k) {
-        (Some(m), None, None) => {
+        (Some(m), None, None) if m != "none" => {
             out.insert("material".into(), json!(m));
         }
-        (None, Some(e), Some(k)) => {
-            out.insert("eta".into(), color_json(e));
-            out.insert("k".into(), color_json(k));
-        }
-        (None, e, k) if rough => {
+        (None | Some("none"), e, k) if rough => {
             if let Some(e) = e {
                 out.insert("eta".into(), color_json(e));
             }
@@ -173,14 +170,11 @@ fn conductor_index(p: &Props, out: &mut Map<String, Value>, rough: bool) -> Resu
                 out.insert("k".into(), color_json(k));
             }
         }
-        (None, None, None) => {
-            return Err(p.error(
-                "no `material` and no `eta`/`k`: Mitsuba's default is a perfect mirror (material \"none\"), which \
-                 niebla's smooth conductors do not have",
-            ))
+        (None | Some("none"), e, k) => {
+            out.insert("eta".into(), color_json(e.unwrap_or([0.0; 3])));
+            out.insert("k".into(), color_json(k.unwrap_or([1.0; 3])));
         }
-        _ if rough => return Err(p.error("give `material`, or `eta` and `k`, not both")),
-        _ => return Err(p.error("give `material`, or both `eta` and `k`")),
+        _ => return Err(p.error("give `material`, or `eta` and `k`, not both")),
     }
     Ok(())
 }

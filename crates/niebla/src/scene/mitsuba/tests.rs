@@ -630,7 +630,8 @@ fn texture_errors_name_file_line_and_attribute() {
 /// "none", or `eta` or `k` alone) is Mitsuba's default, `eta` 0 and `k` 1
 /// (Fresnel 1): it converts to a JSON rough conductor with those keys left
 /// out, which niebla's parser reads with the same defaults; `material` with
-/// `eta` is refused (as Mitsuba does); the smooth `conductor` still needs one.
+/// `eta` is refused (as Mitsuba does). The smooth `conductor` without an
+/// index is the same mirror, written with both keys (its JSON needs both).
 #[test]
 fn roughconductor_without_an_index_is_mitsubas_perfect_mirror() {
     use crate::scene::desc::{BsdfDesc, ColorDesc, ConductorDesc};
@@ -654,6 +655,35 @@ fn roughconductor_without_an_index_is_mitsubas_perfect_mirror() {
     let both = err(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/>
         <float name="eta" value="0.5"/></bsdf></shape>"#);
     assert!(both.contains("not both"), "{both}");
-    let smooth = err(r#"<shape type="sphere"><bsdf type="conductor"/></shape>"#);
-    assert!(smooth.contains("perfect mirror"), "{smooth}");
+    let smooth = |inner: &str| {
+        let s =
+            import(&format!("<shape type=\"sphere\"><bsdf type=\"conductor\">{inner}</bsdf></shape>")).unwrap().scene;
+        let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
+        match &desc.shapes[0].bsdf {
+            BsdfDesc::Conductor(d) => *d,
+            other => panic!("{other:?}"),
+        }
+    };
+    assert_eq!(smooth(""), mirror);
+    assert_eq!(smooth(r#"<string name="material" value="none"/>"#), mirror);
+    assert_eq!(
+        smooth(r#"<float name="k" value="2"/>"#),
+        ConductorDesc::Index { eta: ColorDesc::Gray(0.0), k: ColorDesc::Gray(2.0) }
+    );
+    let both = err(r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/>
+        <float name="k" value="2"/></bsdf></shape>"#);
+    assert!(both.contains("not both"), "{both}");
+    // A zero index (eta and k both 0) would divide by zero in the Fresnel
+    // term: the JSON check refuses it for both conductors, naming the field.
+    for t in ["conductor", "roughconductor"] {
+        let s = import(&format!(
+            "<shape type=\"sphere\"><bsdf type=\"{t}\"><float name=\"eta\" value=\"0\"/>\
+             <float name=\"k\" value=\"0\"/></bsdf></shape>"
+        ))
+        .unwrap()
+        .scene;
+        let e = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap_err();
+        assert_eq!(e.path, "shapes[0].bsdf.k", "{e:?}");
+        assert!(e.message.contains("both 0"), "{e:?}");
+    }
 }
