@@ -85,7 +85,7 @@ impl RoughDielectric {
         tint * (value / wi.z.abs())
     }
 
-    /// Density (1/sr) of [`RoughDielectric::sample_local`] returning `wi`.
+    /// Density (1/sr) of `RoughDielectric::sample_local` returning `wi`.
     #[inline]
     pub fn pdf_local(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z == 0.0 || wi.z == 0.0 {

@@ -126,7 +126,7 @@ impl RoughPlastic {
         specular + base * scale
     }
 
-    /// Density (1/sr) of [`RoughPlastic::sample_local`] returning `wi`: the
+    /// Density (1/sr) of `RoughPlastic::sample_local` returning `wi`: the
     /// mixture of the visible-normal reflection `D(h) G1(wo, h) / (4 cos_o)`
     /// and the cosine-weighted hemisphere.
     #[inline]

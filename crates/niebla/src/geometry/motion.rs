@@ -322,7 +322,7 @@ impl MovingShape {
     }
 
     /// The shape at `time` (frames), for all but meshes (`None`), whose
-    /// instances are placed by [`MovingShape::mesh_pose`] instead.
+    /// instances are placed by `MovingShape::mesh_pose` instead.
     #[inline]
     pub fn still_at(&self, time: f32) -> Option<Shape> {
         Some(match &self.motion {

@@ -144,7 +144,7 @@ impl AnalyticIntegrator {
 
     /// Airlight of a point light at `position` over `[t_a, t_b]` of `ray`
     /// (Sun et al. 2005), per channel. Isotropic media: one closed form;
-    /// other phase functions: [`PHASE_PIECES`] pieces with the phase held at
+    /// other phase functions: `PHASE_PIECES` pieces with the phase held at
     /// each piece's midpoint.
     pub fn point_airlight(
         &self,

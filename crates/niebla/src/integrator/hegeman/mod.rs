@@ -157,7 +157,7 @@ pub struct HegemanSettings {
     /// View-ray march step in lattice cells (> 0).
     pub step_cells: f32,
     /// How opaque surfaces inside a grid medium receive the model's
-    /// multiply scattered light ([`HegemanIntegrator::surface_scattered`];
+    /// multiply scattered light (`HegemanIntegrator::surface_scattered`;
     /// ours, not in Hegeman et al. 2005); default [`SurfaceScattering::Cone`].
     /// `Line` lights the fog's floor right on average but over-fills the
     /// smoke plume's shadow (all scattered light reaching the receiver, as

@@ -257,7 +257,7 @@ impl BeamMap {
     /// the beam parameter inside the piece (each beam reported at most
     /// once). Where `sin theta < min_sin` a [`Crossing::Tube`]: the
     /// non-empty interval of the piece inside the tube of the radius
-    /// around the ray (see [`tube_interval`]; a long beam may report one
+    /// around the ray (see `tube_interval`; a long beam may report one
     /// interval per piece, they do not overlap).
     pub fn for_each_crossing(&self, ray: &Ray, t_end: f32, min_sin: f32, mut f: impl FnMut(Crossing)) {
         if self.nodes.is_empty() {

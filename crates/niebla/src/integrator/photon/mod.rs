@@ -10,7 +10,7 @@
 //!   ray-segment (beam) queries.
 //! - [`PhotonIntegrator`]: camera rays through media and specular surfaces.
 //!   Each medium segment gets emission and single scattering from
-//!   [`SingleIntegrator`] (shadow rays, equiangular/distance MIS), plus
+//!   [`SingleIntegrator`](crate::integrator::single::SingleIntegrator) (shadow rays, equiangular/distance MIS), plus
 //!   multiple scattering from the volume map: ray marched point queries
 //!   `sum p(wo, wi_k) Phi_k / (4/3 pi r^3)` at stratified points times the
 //!   transmittance, or one beam query `sum T(t_k) p Phi_k / (pi r_k^2)`. At

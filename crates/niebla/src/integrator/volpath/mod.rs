@@ -58,7 +58,7 @@ pub struct VolPathIntegrator {
     /// of drawing the direction toward a point or spot light inside a
     /// medium instead of from the phase function or diffuse BSDF (one-sample
     /// MIS of the two; see `LightGuide`). 0 turns guiding off; it only acts
-    /// in scenes with such a light. Values above [`MAX_GUIDE_FRACTION`] act
+    /// in scenes with such a light. Values above `MAX_GUIDE_FRACTION` act
     /// as it: phase/BSDF sampling must keep a share, or directions the guide
     /// never draws would be lost.
     pub guide_fraction: f32,
