@@ -90,10 +90,13 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
             continue;
         }
         let se = (sa[i][1].powi(2) + sb[i][1].powi(2)).sqrt();
-        // Multiple scattering adds at most about albedo * tau = 0.8% here.
-        // Bound: P(|t_31| > 5) is about 2e-5 per pixel, 1e-3 over 48 pixels.
-        let z = (y - x - 0.004 * x) / (se + 1e-9);
-        assert!(z.abs() < 5.0, "pixel {i}: single {x:.5e} vs volpath {y:.5e} +- {se:.1e}");
+        // Multiple scattering adds between 0 and about albedo * tau = 0.8%
+        // here (measured 0.3% on the brightest pixels, where forced
+        // collisions bring volpath's standard error to 2e-4 of the value).
+        // Bound: P(t_31 < -5) is about 1e-5 per pixel, 5e-4 over 48 pixels.
+        let below = (y - x) / (se + 1e-9);
+        let above = (y - x - 0.008 * x) / (se + 1e-9);
+        assert!(below > -5.0 && above < 5.0, "pixel {i}: single {x:.5e} vs volpath {y:.5e} +- {se:.1e}");
         checked += 1;
     }
     assert!(checked > 20);

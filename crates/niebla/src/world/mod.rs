@@ -124,6 +124,13 @@ impl Scene {
         Some(Hit { surface: self.objects[i as usize].shape.surface_at(ray, &h), object: i, local: h, time: ray.time })
     }
 
+    /// Ray parameter of the nearest hit with `t` in `(t_min, t_max)`, the
+    /// same as [`Scene::intersect`]'s, without the hit record.
+    #[inline]
+    pub fn hit_distance(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+        self.trees().all.closest(&self.objects, ray, t_min, t_max).map(|(_, h)| h.t)
+    }
+
     /// Nearest hit among the surfaces shadow rays cross (index-matched medium
     /// boundaries and thin dielectric panes) alone.
     #[inline]

@@ -22,10 +22,12 @@
 //! rays), `equiangular_nee` (equiangular sampling on medium segments and its
 //! MIS), `guiding` and `light_guide` (directions toward lamps inside media),
 //! `channels` (channel grouping), `volume_nee` (light sampling of emissive
-//! media, MIS-weighted against the collision estimator of their emission).
+//! media, MIS-weighted against the collision estimator of their emission),
+//! `forced` (forced collisions where leaving the medium gathers nothing).
 
 mod channels;
 mod equiangular_nee;
+mod forced;
 mod guiding;
 mod layout;
 mod light_guide;
@@ -80,6 +82,8 @@ struct SceneConstants {
     guide: LightGuide,
     /// The emissive media as lights, when sampled and some medium emits.
     volume_lights: Option<Arc<VolumeLights>>,
+    /// The medium whose free flights are forced to collide (`forced`).
+    forced: Option<MediumId>,
 }
 
 impl SceneConstants {
@@ -91,6 +95,7 @@ impl SceneConstants {
             lights: LightChoice::new(scene),
             guide: LightGuide::new(scene),
             volume_lights,
+            forced: forced::forced_collision_medium(scene),
         }
     }
 }
@@ -138,6 +143,9 @@ struct LightSampling<'a> {
     guiding: Option<Guiding<'a>>,
     /// The emissive media as lights, if sampled.
     volume: Option<&'a VolumeLights>,
+    /// The medium in which free flight is forced to collide: there, because
+    /// every light is directional, an escaping path reaches no light.
+    forced: Option<MediumId>,
 }
 
 impl Integrator for VolPathIntegrator {
@@ -182,7 +190,7 @@ impl VolPathIntegrator {
         medium: Option<MediumId>,
         sampler: &mut PixelSampler,
     ) -> S {
-        let SceneConstants { groups: (groups, count), lights, ref guide, ref volume_lights } = *constants;
+        let SceneConstants { groups: (groups, count), lights, ref guide, ref volume_lights, forced } = *constants;
         let volume = volume_lights.as_deref();
         let guiding = (self.guide_fraction > 0.0 && lights.points > 0 && guide.is_active())
             .then_some(Guiding { guide, fraction: self.guide_fraction.min(MAX_GUIDE_FRACTION) });
@@ -192,7 +200,7 @@ impl VolPathIntegrator {
         let first_dimension = sampler.dimension();
         for &group in &groups[..count] {
             sampler.rewind_for_another_estimate(first_dimension);
-            l.merge(self.trace(scene, ray, medium, group, LightSampling { lights, guiding, volume }, sampler));
+            l.merge(self.trace(scene, ray, medium, group, LightSampling { lights, guiding, volume, forced }, sampler));
         }
         l
     }

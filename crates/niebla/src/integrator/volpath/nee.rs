@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 use crate::bsdf::Bsdf;
 use crate::color::Rgb;
 use crate::light::Light;
-use crate::math::Vec3;
+use crate::math::{Ray, Vec3};
 use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
@@ -153,6 +153,11 @@ pub(super) struct NeeVertex<'a> {
     pub(super) guiding: Option<Guiding<'a>>,
     /// The vertex's block of the Sobol dimension layout.
     pub(super) block: Block,
+    /// The vertex lies in the forced-collision medium (`forced`): inside
+    /// the scene's lone convex, homogeneous boundary, so a shadow ray
+    /// crosses that medium to the boundary and then vacuum, and nothing
+    /// else can block it.
+    pub(super) lone: bool,
 }
 
 /// Next-event estimation (pbrt-v4's `SampleLd`): every light or one chosen
@@ -198,7 +203,7 @@ fn sample_ld_light(
     light_index: usize,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding, block } = *vertex;
+    let NeeVertex { p, wo, scatter, medium, medium_behind, beta, r_p, segment, guiding, block, lone } = *vertex;
     // Every light of `lights.all()` takes the same slot: each light's
     // estimate is unbiased alone, and they are added.
     block.enter(sampler, layout::LIGHT_POINT);
@@ -225,17 +230,20 @@ fn sample_ld_light(
         Some(n) => (p + n * surface_epsilon(p), medium),
         None => (p, medium),
     };
-    let Some((t_ray, mut r_l, mut r_u, _)) = shadow_transmittance(
-        scene,
-        origin,
-        medium,
-        ls.wi,
-        ls.distance,
-        scene.light_object(light_index),
-        group,
-        hero,
-        sampler,
-    ) else {
+    let exit = if lone { lone_exit_transmittance(scene, origin, medium, ls.wi, ls.distance) } else { None };
+    let Some((t_ray, mut r_l, mut r_u, _)) = exit.or_else(|| {
+        shadow_transmittance(
+            scene,
+            origin,
+            medium,
+            ls.wi,
+            ls.distance,
+            scene.light_object(light_index),
+            group,
+            hero,
+            sampler,
+        )
+    }) else {
         return Rgb::ZERO;
     };
     let light_pdf = pmf * ls.pdf;
@@ -252,6 +260,37 @@ fn sample_ld_light(
         let scatter_pdf = guiding.map_or(scatter_pdf, |g| g.mix(p, ls.wi, scatter_pdf));
         r_u *= r_p * scatter_pdf;
         beta * f_hat * t_ray * ls.li / group.average(r_l + r_u)
+    }
+}
+
+/// [`shadow_transmittance`] from a point inside the scene's lone convex
+/// boundary around the homogeneous `medium` (see [`NeeVertex::lone`]): the
+/// exact transmittance to the boundary, found by one distance query, then
+/// vacuum. The same numbers as the general walk, without its hit records;
+/// `None` (use the walk) when the boundary is not found before `distance`.
+#[inline]
+fn lone_exit_transmittance(
+    scene: &Scene,
+    p: Vec3,
+    medium: Option<MediumId>,
+    wi: Vec3,
+    distance: f32,
+) -> Option<(Rgb, Rgb, Rgb, Option<MediumId>)> {
+    let homogeneous = scene.medium(medium?).as_homogeneous()?;
+    let t = scene.hit_distance(&Ray::new(p, wi), 0.0, distance)?;
+    let tr = homogeneous_transmittance(homogeneous.sigma_t(), t);
+    Some((tr, Rgb::ONE, tr, None))
+}
+
+/// `exp(-sigma_t t)` per channel (0 where the product is NaN), one
+/// exponential when the channels are equal.
+#[inline]
+fn homogeneous_transmittance(sigma_t: Rgb, t: f32) -> Rgb {
+    let tau = (sigma_t * t).map(|x| if x.is_nan() { 0.0 } else { x });
+    if tau[0] == tau[1] && tau[1] == tau[2] {
+        Rgb::splat((-tau[0]).exp())
+    } else {
+        tau.exp_neg()
     }
 }
 
@@ -283,7 +322,7 @@ pub(super) fn shadow_transmittance(
             if let Some(homogeneous) = m.as_homogeneous() {
                 // Exact transmittance: the light-sampling path pdf is unchanged,
                 // the unidirectional one (free flight passing) gains T per channel.
-                let tr = (homogeneous.sigma_t() * s.t_end).map(|x| if x.is_nan() { 0.0 } else { x }).exp_neg();
+                let tr = homogeneous_transmittance(homogeneous.sigma_t(), s.t_end);
                 t_ray *= tr;
                 r_u *= tr;
             } else {

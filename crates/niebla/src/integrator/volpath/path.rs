@@ -9,11 +9,12 @@ use crate::math::Ray;
 use crate::math::Vec3;
 use crate::medium::MediumId;
 use crate::sampling::PixelSampler;
-use crate::tracking::{pass_through_weight, sample_t_maj};
+use crate::tracking::{pass_through_weight, sample_t_maj, MajorantCollision};
 use crate::world::{PathRay, Scene};
 
 use super::channels::Channels;
 use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment};
+use super::forced::ForcedCollision;
 use super::guiding::{sample_bsdf, sample_phase};
 use super::layout::{self, Block, SegmentCounter};
 use super::nee::{sample_ld, NeeVertex, Scatter};
@@ -43,7 +44,7 @@ impl VolPathIntegrator {
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> S {
-        let LightSampling { lights, guiding, volume } = light_sampling;
+        let LightSampling { lights, guiding, volume, forced: forced_medium } = light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -68,8 +69,17 @@ impl VolPathIntegrator {
         loop {
             let (ray, medium) = (path.ray, path.medium);
             let mut block = None;
-            let hit = path.intersect(scene);
-            let t_end = hit.map_or(f32::INFINITY, |h| h.surface.t);
+            // In the forced-collision medium (the scene's lone boundary) the
+            // path scatters before the boundary: its distance is enough, the
+            // hit record is found only if the path passes after all.
+            let lone = medium.is_some() && medium == forced_medium;
+            let mut hit = None;
+            let t_end = if lone {
+                scene.hit_distance(&ray, path.t_min, f32::INFINITY).unwrap_or(f32::INFINITY)
+            } else {
+                hit = path.intersect(scene);
+                hit.map_or(f32::INFINITY, |h| h.surface.t)
+            };
 
             // Free flight through the medium up to the surface.
             if let Some(id) = medium {
@@ -88,7 +98,20 @@ impl VolPathIntegrator {
                 let mut terminated = false;
                 let wo = -ray.d;
                 block.enter(sampler, layout::FREE_FLIGHT);
-                let t_maj = sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| {
+                // Where leaving the medium gathers nothing, the collision is
+                // forced within the segment (its first number, as free
+                // flight's distance) and the weights take the probability.
+                let forced = match m.as_homogeneous() {
+                    Some(h) if lone => ForcedCollision::sample(h, &ray, t_end, hero, group, sampler.next_1d()),
+                    _ => None,
+                };
+                if let Some(f) = &forced {
+                    let (beta_factor, r_u_factor) = f.weights(hero);
+                    beta *= beta_factor;
+                    r_u *= r_u_factor;
+                }
+                let forced_here = forced.is_some();
+                let mut collide = |c: MajorantCollision, sampler: &mut PixelSampler| {
                     // Medium emission, a collision estimator at every tentative collision.
                     if depth < self.max_depth && !c.point.l_ve.is_black() {
                         let pdf = c.sigma_maj[hero] * c.t_maj[hero];
@@ -111,7 +134,9 @@ impl VolPathIntegrator {
                             l.add(beta_e * c.point.l_ve / denominator, || PathClass::of(first, depth));
                         }
                     }
-                    if c.is_real(hero, sampler.next_1d()) {
+                    // A forced collision in a homogeneous medium (majorant
+                    // sigma_t) is real for sure: no number for the event.
+                    if forced_here || c.is_real(hero, sampler.next_1d()) {
                         // Real collision, scattering weighted by the albedo.
                         if depth >= self.max_depth {
                             terminated = true;
@@ -144,6 +169,7 @@ impl VolPathIntegrator {
                             segment: Some(segment),
                             guiding,
                             block: Block::vertex(depth),
+                            lone,
                         };
                         let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                         l.add(v, || PathClass::of(first, depth));
@@ -185,7 +211,18 @@ impl VolPathIntegrator {
                     r_u *= w.throughput;
                     r_l *= w.majorant;
                     !beta.is_black() && group.average(r_u) > 0.0
-                });
+                };
+                let t_maj = match forced {
+                    // A forced collision is real: the callback scattered or
+                    // ended the path (it never asks to go on).
+                    Some(f) => {
+                        if collide(f.collision, sampler) {
+                            terminated = true;
+                        }
+                        Rgb::ONE
+                    }
+                    None => sample_t_maj(m, &ray, t_end, hero, sampler, &mut collide),
+                };
                 if terminated || beta.is_black() || !(group.average(r_u) > 0.0) || !beta.is_finite() {
                     return l;
                 }
@@ -211,6 +248,9 @@ impl VolPathIntegrator {
                 }
             }
 
+            if lone {
+                hit = path.intersect(scene);
+            }
             // Escaped: environment lights, MIS against light sampling.
             let Some(hit) = hit else {
                 for light in scene.lights.iter().filter(|l| l.is_infinite()) {
@@ -321,6 +361,7 @@ impl VolPathIntegrator {
                     segment: None,
                     guiding: surface_guiding,
                     block: Block::vertex(depth),
+                    lone: false,
                 };
                 let v = sample_ld(scene, &vertex, group, hero, lights, sampler);
                 l.add(v, || PathClass::of(first, depth));
