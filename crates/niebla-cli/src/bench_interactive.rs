@@ -314,6 +314,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             ("hegeman (mc_fluence)", true, Calibration::McFluence, SurfaceScattering::Cone),
             ("hegeman (single only)", false, Calibration::None, SurfaceScattering::Off),
             ("hegeman (march shadows)", true, Calibration::None, SurfaceScattering::Cone),
+            ("hegeman (lattice lights)", true, Calibration::None, SurfaceScattering::Cone),
         ] {
             let base = hegeman_settings(built.settings.integrator);
             let settings = HegemanSettings {
@@ -322,6 +323,8 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
                 surface_scattering: surface,
                 surface_shadows: if name.contains("march shadows") {
                     SurfaceShadows::March
+                } else if name.contains("lattice lights") {
+                    SurfaceShadows::Lattice
                 } else {
                     base.surface_shadows
                 },
@@ -345,6 +348,7 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             ("zhou", base),
             ("zhou (single only)", ZhouSettings { multiple_scattering: false, ..base }),
             ("zhou (march shadows)", ZhouSettings { surface_shadows: SurfaceShadows::March, ..base }),
+            ("zhou (lattice lights)", ZhouSettings { surface_shadows: SurfaceShadows::Lattice, ..base }),
             ("zhou (local lights rbf)", ZhouSettings { local_lights: LocalLights::Rbf, ..base }),
             ("zhou (no compensation)", ZhouSettings { compensation: Compensation::Off, ..base }),
             ("zhou (source only)", ZhouSettings { compensation: Compensation::SourceOnly, ..base }),

@@ -28,14 +28,17 @@ use super::hegeman::line_integrals::{LightSource, LineIntegralLattice};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SurfaceShadows {
     /// The transmittance from the precomputed line-integral lattice toward
-    /// the light ([`lattice_transmittance`]; the default): no march per
-    /// surface point, shadow edges blurred over one lattice cell.
+    /// the light ([`lattice_transmittance`]): no march per surface point,
+    /// shadow edges blurred over one lattice cell; environment and area
+    /// lights are marched.
     Lattice,
     /// As `Lattice`, and constant and map environments too: a sampled
     /// direction takes the transmittance toward the diagonal of its octant
     /// ([`octant_transmittance`]) from the lattices of the eight diagonals
-    /// (`hegeman`'s environment directions). Coarse: the medium's shadow
-    /// of the sky is the mean of eight directions' shadows.
+    /// (`hegeman`'s environment directions; the default). Coarse: the
+    /// medium's shadow of the sky is the mean of eight directions' shadows
+    /// (on the smoke scene 1.5-4% more relative MSE against volpath than
+    /// the march, for a fifth less CPU per frame).
     LatticeEnvironment,
     /// A jittered 32-step ray march of the density per shadow ray (the
     /// exact density, a noisy estimate).

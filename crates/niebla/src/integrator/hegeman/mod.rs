@@ -46,8 +46,11 @@
 //! grid media only (surfaces do not shadow the medium). The blur uses a
 //! Henyey-Greenstein lobe with the phase function's mean cosine; the sharp
 //! term uses the true phase function. Homogeneous media segments use the
-//! `analytic` integrator (single scattering only). Surfaces are lit directly
-//! with ray-marched shadow rays.
+//! `analytic` integrator (single scattering only). Surfaces are lit directly,
+//! their shadow rays' transmittance read from the line-integral lattices
+//! (point, spot and directional lights on their own line, environments
+//! through their octant directions; [`super::surface_shadows`]) or
+//! ray-marched (`surface_shadows: "march"`, and area lights).
 
 pub mod blur;
 pub mod calibration;
@@ -165,9 +168,10 @@ pub struct HegemanSettings {
     /// smoke plume's shadow (all scattered light reaching the receiver, as
     /// in a laterally unbounded medium); `Off` is direct light only.
     pub surface_scattering: SurfaceScattering,
-    /// Where the direct light's shadows on those surfaces come from for
-    /// point, spot and directional lights: the light's line-integral lattice
-    /// (default) or a ray march per shadow ray ([`SurfaceShadows`]).
+    /// Where the direct light's shadows on those surfaces come from: the
+    /// lights' line-integral lattices, the environment's through its eight
+    /// directions (default), or a ray march per shadow ray ([`SurfaceShadows`]).
+    /// Ours, not in Hegeman et al. 2005.
     pub surface_shadows: SurfaceShadows,
 }
 
@@ -180,7 +184,7 @@ impl Default for HegemanSettings {
             resolution: 48,
             step_cells: 1.0,
             surface_scattering: SurfaceScattering::Cone,
-            surface_shadows: SurfaceShadows::Lattice,
+            surface_shadows: SurfaceShadows::LatticeEnvironment,
         }
     }
 }

@@ -33,8 +33,9 @@ struct HegemanFields {
     /// from before the cone model: `true` is "line", `false` "off".
     #[serde(default)]
     surface_scattering: Option<Value>,
-    /// Shadows of the medium on surfaces from point, spot and directional
-    /// lights: "lattice" (default, the model's line integrals) or "march".
+    /// Shadows of the medium on surfaces: "lattice_environment" (default:
+    /// the model's line integrals toward the lights and the environment's
+    /// octant directions), "lattice" (the lights only) or "march".
     #[serde(default)]
     surface_shadows: Option<String>,
 }
@@ -94,7 +95,10 @@ pub(crate) fn parse_surface_shadows(name: Option<&str>, default: SurfaceShadows)
     match name {
         None => Ok(default),
         Some(name) => SurfaceShadows::from_name(name).ok_or_else(|| {
-            Located::new("surface_shadows", format!("expected \"lattice\" or \"march\", found \"{name}\""))
+            Located::new(
+                "surface_shadows",
+                format!("expected \"lattice_environment\", \"lattice\" or \"march\", found \"{name}\""),
+            )
         }),
     }
 }

@@ -165,9 +165,10 @@ pub struct ZhouSettings {
     /// Where the direct light's shadows on opaque surfaces inside grid
     /// media come from for point, spot and directional lights
     /// ([`SurfaceShadows`]; ours, not in Zhou et al. 2008): line-integral
-    /// lattices of the full density toward each light (default; the
-    /// RBF density's transmittance would blur the shadows) or a ray march
-    /// per shadow ray.
+    /// lattices of the full density toward each light and the environment's
+    /// eight octant directions (default; the RBF density's transmittance
+    /// would blur the shadows), toward the lights only, or a ray march per
+    /// shadow ray.
     pub surface_shadows: SurfaceShadows,
 }
 
@@ -184,7 +185,7 @@ impl Default for ZhouSettings {
             step_cells: 1.0,
             cache: true,
             local_lights: LocalLights::Hegeman,
-            surface_shadows: SurfaceShadows::Lattice,
+            surface_shadows: SurfaceShadows::LatticeEnvironment,
         }
     }
 }

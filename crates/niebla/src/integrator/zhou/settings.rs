@@ -75,8 +75,9 @@ struct ZhouFields {
     /// `"hegeman"` (default) or `"rbf"`: point and spot lights.
     #[serde(default)]
     local_lights: Option<LocalLightsField>,
-    /// Shadows of the medium on surfaces from point, spot and directional
-    /// lights: "lattice" (default, line integrals toward each light) or "march".
+    /// Shadows of the medium on surfaces: "lattice_environment" (default:
+    /// line integrals toward each light and the environment's octant
+    /// directions), "lattice" (the lights only) or "march".
     #[serde(default)]
     surface_shadows: Option<String>,
 }
