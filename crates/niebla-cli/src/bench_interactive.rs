@@ -20,6 +20,7 @@ use clap::Args;
 use niebla::film::{read_checkpoint_full, Image, SplitReference};
 use niebla::integrator::hegeman::{Calibration, SurfaceScattering};
 use niebla::integrator::zhou::{Compensation, LocalLights};
+use niebla::integrator::SurfaceShadows;
 use niebla::integrator::{
     HegemanIntegrator, HegemanSettings, Integrator, IntegratorSettings, VolPathIntegrator, ZhouIntegrator, ZhouSettings,
 };
@@ -312,12 +313,22 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
             ("hegeman (mc_tables)", true, Calibration::McTables, SurfaceScattering::Cone),
             ("hegeman (mc_fluence)", true, Calibration::McFluence, SurfaceScattering::Cone),
             ("hegeman (single only)", false, Calibration::None, SurfaceScattering::Off),
+            ("hegeman (march shadows)", true, Calibration::None, SurfaceScattering::Cone),
+            ("hegeman (lattice lights)", true, Calibration::None, SurfaceScattering::Cone),
         ] {
+            let base = hegeman_settings(built.settings.integrator);
             let settings = HegemanSettings {
                 multiple_scattering: multiple,
                 calibration,
                 surface_scattering: surface,
-                ..hegeman_settings(built.settings.integrator)
+                surface_shadows: if name.contains("march shadows") {
+                    SurfaceShadows::March
+                } else if name.contains("lattice lights") {
+                    SurfaceShadows::Lattice
+                } else {
+                    base.surface_shadows
+                },
+                ..base
             };
             let hegeman = HegemanIntegrator::new(&scene, settings);
             let (error, corrected, ratio) = measure(frame(&small, &hegeman, args.spp, 7, threads));
@@ -336,6 +347,8 @@ pub fn run(args: &InteractiveBenchArgs) -> Result<(), CliError> {
         let variants = [
             ("zhou", base),
             ("zhou (single only)", ZhouSettings { multiple_scattering: false, ..base }),
+            ("zhou (march shadows)", ZhouSettings { surface_shadows: SurfaceShadows::March, ..base }),
+            ("zhou (lattice lights)", ZhouSettings { surface_shadows: SurfaceShadows::Lattice, ..base }),
             ("zhou (local lights rbf)", ZhouSettings { local_lights: LocalLights::Rbf, ..base }),
             ("zhou (no compensation)", ZhouSettings { compensation: Compensation::Off, ..base }),
             ("zhou (source only)", ZhouSettings { compensation: Compensation::SourceOnly, ..base }),

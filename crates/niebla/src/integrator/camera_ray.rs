@@ -152,23 +152,11 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
     l
 }
 
-/// The walk of the emission and single-scattering style integrators:
-/// `segment(medium, id, ray, t_end, sampler)` integrates one medium segment
-/// and opaque surfaces are lit directly (one sample per light, shadow rays by
-/// `method`). Draws in order (no dimension layout).
-pub(crate) fn trace_camera_ray(
-    scene: &Scene,
-    ray: Ray,
-    medium: Option<MediumId>,
-    method: TransmittanceMethod,
-    sampler: &mut PixelSampler,
-    segment: impl FnMut(&Medium, MediumId, &Ray, f32, &mut PixelSampler) -> SegmentRadiance,
-) -> Rgb {
-    trace_camera_ray_with::<false>(scene, ray, medium, method, None, sampler, segment)
-}
-
-/// [`trace_camera_ray`] with the camera-ray dimension layout
-/// (`super::camera_layout`) for Sobol samplers.
+/// The walk of the emission and single-scattering style integrators with
+/// the camera-ray dimension layout (`super::camera_layout`) for Sobol
+/// samplers: `segment(medium, id, ray, t_end, sampler)` integrates one
+/// medium segment and opaque surfaces are lit directly (one sample per
+/// light, shadow rays by `method`).
 pub(crate) fn trace_laid_out_camera_ray(
     scene: &Scene,
     ray: Ray,
@@ -180,7 +168,8 @@ pub(crate) fn trace_laid_out_camera_ray(
     trace_camera_ray_with::<true>(scene, ray, medium, method, None, sampler, segment)
 }
 
-/// [`trace_camera_ray`] whose opaque surfaces are also lit by one point
+/// The walk of [`trace_laid_out_camera_ray`] (in draw order unless
+/// `LAID_OUT`) whose opaque surfaces are also lit by one point
 /// drawn from `volume_lights` (the emission inside media), when given, with
 /// the camera-ray dimension layout when `LAID_OUT`.
 pub(crate) fn trace_camera_ray_with<const LAID_OUT: bool>(

@@ -61,6 +61,69 @@ pub fn direct_surface_radiance(
     l
 }
 
+/// [`direct_surface_radiance`] whose shadow rays take the transmittance of
+/// a medium segment from `lookup` where it gives one: `lookup(light, id,
+/// ray, t_end)` for light index `light` of the scene and the segment
+/// `[0, t_end]` of `ray` (unit direction toward the sampled light point)
+/// in medium `id`; `None` falls back to `method`. Surfaces block and
+/// thin panes weigh the shadow ray as in [`Scene::transmittance_ignoring`].
+/// The sampler's draws per light are those of [`direct_surface_radiance`]
+/// plus `method`'s for the segments that fall back.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn direct_surface_radiance_with<F>(
+    scene: &Scene,
+    surface: &SurfaceHit,
+    wo: Vec3,
+    bsdf: &crate::bsdf::Bsdf,
+    medium: Option<MediumId>,
+    method: TransmittanceMethod,
+    sampler: &mut PixelSampler,
+    mut lookup: F,
+) -> Rgb
+where
+    F: FnMut(usize, MediumId, &crate::math::Ray, f32) -> Option<Rgb>,
+{
+    let p = surface.p;
+    let frame = ShadingFrame::new(surface, wo);
+    let ng = frame.ng;
+    let mut l = Rgb::ZERO;
+    for (index, light) in scene.lights.iter().enumerate() {
+        camera_layout::enter(sampler, camera_layout::SURFACE_LIGHT_POINT);
+        let u = sampler.next_2d();
+        let Some(ls) = light.sample_li(p, Some(ng), u, sampler.time()) else {
+            continue;
+        };
+        if ls.pdf == 0.0 || ls.li.is_black() {
+            continue;
+        }
+        let Some(f_cos) = frame.response(bsdf, wo, ls.wi) else {
+            continue;
+        };
+        let origin = offset_origin(p, ng);
+        let mut tr = Rgb::ONE;
+        let ignore = scene.light_object(index);
+        let reached = walk_shadow_ray(scene, origin, sampler.time(), medium, ls.wi, ls.distance, ignore, |s| {
+            if let Some(id) = s.medium {
+                tr *= match lookup(index, id, s.ray, s.t_end) {
+                    Some(t) => t,
+                    None => segment_transmittance(scene.medium(id), s.ray, 0.0, s.t_end, method, sampler),
+                };
+            }
+            if let Some(pane) = s.pane {
+                tr *= pane.weight;
+            }
+            if tr.is_black() {
+                return ControlFlow::Break(());
+            }
+            ControlFlow::Continue(())
+        });
+        if reached {
+            l += f_cos * ls.li * tr / ls.pdf;
+        }
+    }
+    l
+}
+
 /// In-scattered radiance `integral p(wo, wi) L_d(wi) dwi` at medium point `p`
 /// (without the sigma_s factor), from one sample of every light, with shadow
 /// rays through `medium` and the media beyond. Units: radiance (W/(sr m^2)).

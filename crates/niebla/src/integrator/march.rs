@@ -86,7 +86,12 @@ impl JitteredSteps {
         let mut next = 0usize;
         // Empty cells are left out by the walk (a step per empty 4^3 block).
         g.majorant.walk_nonzero(o.to_array(), d.to_array(), self.a - self.dt, b + self.dt, |_, s| {
-            if s.max_density <= 0.0 || next >= self.n {
+            // Past the last step: later cells can add no step (the
+            // ranges only grow), so the walk stops.
+            if next >= self.n {
+                return ControlFlow::Break(());
+            }
+            if s.max_density <= 0.0 {
                 return ControlFlow::Continue(());
             }
             let lo = (index(s.t0).floor() - 1.0).max(0.0) as usize;

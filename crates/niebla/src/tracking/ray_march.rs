@@ -58,8 +58,10 @@ pub fn ray_march_occupied<R: DensityAlongRay>(r: &R, sigma_t: Rgb, t0: f32, t1: 
     let index = |t: f32| (t - t0) / dt - u;
     let mut next = 0usize;
     let _ = r.positive_segments(|s| {
+        // Every sample is visited or known empty: the later segments can
+        // only add samples at `next` or beyond, so the walk stops here.
         if next >= n {
-            return ControlFlow::Continue(());
+            return ControlFlow::Break(());
         }
         let lo = ((index(s.t0).floor() - 1.0).max(0.0) as usize).max(next);
         let hi = ((index(s.t1).ceil() + 2.0).max(0.0) as usize).min(n);

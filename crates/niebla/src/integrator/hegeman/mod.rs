@@ -46,8 +46,11 @@
 //! grid media only (surfaces do not shadow the medium). The blur uses a
 //! Henyey-Greenstein lobe with the phase function's mean cosine; the sharp
 //! term uses the true phase function. Homogeneous media segments use the
-//! `analytic` integrator (single scattering only). Surfaces are lit directly
-//! with ray-marched shadow rays.
+//! `analytic` integrator (single scattering only). Surfaces are lit directly,
+//! their shadow rays' transmittance read from the line-integral lattices
+//! (point, spot and directional lights on their own line, environments
+//! through their octant directions; [`super::surface_shadows`]) or
+//! ray-marched (`surface_shadows: "march"`, and area lights).
 
 pub mod blur;
 pub mod calibration;
@@ -70,6 +73,8 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::{Hit, Scene};
 
+use super::direct::direct_surface_radiance_with;
+use super::surface_shadows::{lattice_transmittance, octant_diagonal, octant_transmittance, SurfaceShadows};
 use super::{
     direct_surface_radiance, walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps,
     SegmentRadiance,
@@ -163,6 +168,11 @@ pub struct HegemanSettings {
     /// smoke plume's shadow (all scattered light reaching the receiver, as
     /// in a laterally unbounded medium); `Off` is direct light only.
     pub surface_scattering: SurfaceScattering,
+    /// Where the direct light's shadows on those surfaces come from: the
+    /// lights' line-integral lattices, the environment's through its eight
+    /// directions (default), or a ray march per shadow ray ([`SurfaceShadows`]).
+    /// Ours, not in Hegeman et al. 2005.
+    pub surface_shadows: SurfaceShadows,
 }
 
 impl Default for HegemanSettings {
@@ -174,6 +184,7 @@ impl Default for HegemanSettings {
             resolution: 48,
             step_cells: 1.0,
             surface_scattering: SurfaceScattering::Cone,
+            surface_shadows: SurfaceShadows::LatticeEnvironment,
         }
     }
 }
@@ -188,6 +199,8 @@ struct ModelLight {
     /// One of the directions standing in for a constant environment: folded
     /// into the per-node ambient term.
     ambient: bool,
+    /// Index of the scene light this stands for (in `scene.lights`).
+    scene_light: usize,
 }
 
 /// Angular distribution of a point source's intensity.
@@ -276,6 +289,10 @@ pub struct HegemanIntegrator {
     /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
     /// frames ([`HegemanIntegrator::set_drag_march`]).
     march_scale: f32,
+    /// Per scene light, the index in `lights` (and in each model's
+    /// `volumes`) of its lattice for surface shadows: point, spot and
+    /// directional lights that the model holds; `None` for the others.
+    shadow_slots: Vec<ShadowSlot>,
     /// Seconds spent in the precomputation.
     pub precompute_seconds: f64,
 }
@@ -348,6 +365,7 @@ impl HegemanIntegrator {
             })
             .collect();
         HegemanIntegrator {
+            shadow_slots: shadow_slots(scene, &lights),
             settings,
             lights,
             models,
@@ -397,6 +415,7 @@ impl HegemanIntegrator {
             model.update_factors(g, &lights, self.settings.multiple_scattering);
             model.update_cone(g, &lights, &self.settings, true);
         }
+        self.shadow_slots = shadow_slots(scene, &lights);
         self.lights = lights;
         self.precompute_seconds = start.elapsed().as_secs_f64();
     }
@@ -496,6 +515,30 @@ impl HegemanIntegrator {
             l += e * s;
         }
         l
+    }
+
+    /// Transmittance of the segment `[0, t_end]` of a shadow ray toward
+    /// scene light `light` inside medium `id` from the model's
+    /// line-integral lattice toward that light
+    /// ([`lattice_transmittance`]); `None` (march it) when the medium has
+    /// no model or the light no lattice of its own (area and environment
+    /// lights, whose shadow rays go elsewhere than the model's points).
+    #[inline]
+    fn shadow_transmittance(&self, scene: &Scene, light: usize, id: MediumId, ray: &Ray, t_end: f32) -> Option<Rgb> {
+        let Some(Some(model)) = self.models.get(id.0 as usize) else { return None };
+        if self.settings.surface_shadows == SurfaceShadows::Lattice
+            && matches!(self.shadow_slots.get(light), Some(ShadowSlot::Octants(_)))
+        {
+            return None;
+        }
+        let Medium::Grid(g) = scene.medium(id) else { return None };
+        match *self.shadow_slots.get(light)? {
+            ShadowSlot::Line(slot) => Some(lattice_transmittance(g, model.volumes.get(slot)?, ray, t_end)),
+            ShadowSlot::Octants(first) if t_end == f32::INFINITY => {
+                Some(octant_transmittance(g, model.volumes.get(first..first + 8)?, ray.o, ray.d))
+            }
+            _ => None,
+        }
     }
 
     /// Radiance leaving an opaque surface toward `wo` from the model's
@@ -781,6 +824,51 @@ impl GridModel {
     }
 }
 
+/// Which of the model's lattices shadow surfaces from a scene light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ShadowSlot {
+    /// None: shadow rays are marched.
+    None,
+    /// The model light standing for a point, spot or directional light, on
+    /// the same line.
+    Line(usize),
+    /// The first of the eight environment directions standing for a
+    /// constant or map environment, in octant order.
+    Octants(usize),
+}
+
+/// Per scene light, the model lights whose line-integral lattices shadow
+/// surfaces from it ([`HegemanIntegrator::shadow_slots`]).
+fn shadow_slots(scene: &Scene, lights: &[ModelLight]) -> Vec<ShadowSlot> {
+    scene
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(index, light)| match super::surface_shadows::lattice_source(light) {
+            Some(source) => lights
+                .iter()
+                .position(|l| l.scene_light == index && !l.ambient && l.source == source)
+                .map_or(ShadowSlot::None, ShadowSlot::Line),
+            None if light.is_infinite() => {
+                let first = lights.iter().position(|l| l.scene_light == index && l.ambient);
+                match first {
+                    Some(first)
+                        if lights.len() >= first + 8
+                            && (0..8).all(|k| {
+                                lights[first + k].scene_light == index
+                                    && lights[first + k].source == LightSource::Direction(octant_diagonal(k))
+                            }) =>
+                    {
+                        ShadowSlot::Octants(first)
+                    }
+                    _ => ShadowSlot::None,
+                }
+            }
+            None => ShadowSlot::None,
+        })
+        .collect()
+}
+
 /// Points per side of the grid that stands in for a rectangular area light.
 pub const AREA_PATCHES: usize = 2;
 
@@ -814,25 +902,28 @@ fn local_model_lights(scene: &Scene) -> Vec<ModelLight> {
 
 fn model_lights(scene: &Scene) -> Vec<ModelLight> {
     let mut lights = Vec::new();
-    for light in &scene.lights {
+    for (scene_light, light) in scene.lights.iter().enumerate() {
         match light {
             Light::Point(l) => lights.push(ModelLight {
                 source: LightSource::Point(l.position),
                 power: l.intensity,
                 emission: Emission::Isotropic,
                 ambient: false,
+                scene_light,
             }),
             Light::Spot(l) => lights.push(ModelLight {
                 source: LightSource::Point(l.position),
                 power: l.intensity,
                 emission: Emission::Spot(*l),
                 ambient: false,
+                scene_light,
             }),
             Light::Directional(l) => lights.push(ModelLight {
                 source: LightSource::Direction(-l.direction),
                 power: l.irradiance,
                 emission: Emission::Isotropic,
                 ambient: false,
+                scene_light,
             }),
             Light::Constant(c) => {
                 let share = 4.0 * std::f32::consts::PI / ENVIRONMENT_DIRECTIONS as f32;
@@ -844,6 +935,7 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                         power: c.radiance * share,
                         emission: Emission::Isotropic,
                         ambient: true,
+                        scene_light,
                     });
                 }
             }
@@ -867,6 +959,7 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                         power,
                         emission: Emission::Isotropic,
                         ambient: true,
+                        scene_light,
                     });
                 }
             }
@@ -878,6 +971,7 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                     power: area.radiance * (std::f32::consts::PI * sphere.radius * sphere.radius),
                     emission: Emission::Isotropic,
                     ambient: false,
+                    scene_light,
                 }),
                 // A rectangle as AREA_PATCHES x AREA_PATCHES Lambertian
                 // points at its cell centres, each of intensity L A_cell cos.
@@ -893,6 +987,7 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                                 power: area.radiance * share,
                                 emission: Emission::Lambert { normal: rect.normal, two_sided: area.two_sided },
                                 ambient: false,
+                                scene_light,
                             });
                         }
                     }
@@ -912,6 +1007,7 @@ fn model_lights(scene: &Scene) -> Vec<ModelLight> {
                                 power: area.radiance * share,
                                 emission: Emission::Lambert { normal: disk.normal, two_sided: area.two_sided },
                                 ambient: false,
+                                scene_light,
                             });
                         }
                     }
@@ -961,8 +1057,20 @@ impl CameraRayVisitor for HegemanWalk<'_> {
     ) -> Rgb {
         let bsdf = &scene.surface_bsdf(hit);
         let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
-        let mut l = direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler);
         let h = self.integrator;
+        let mut l = match h.settings.surface_shadows {
+            SurfaceShadows::March => direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler),
+            SurfaceShadows::Lattice | SurfaceShadows::LatticeEnvironment => direct_surface_radiance_with(
+                scene,
+                &hit.surface,
+                wo,
+                bsdf,
+                medium,
+                surfaces,
+                sampler,
+                |light, id, ray, t| h.shadow_transmittance(scene, light, id, ray, t),
+            ),
+        };
         let lit = h.settings.surface_scattering != SurfaceScattering::Off && h.settings.multiple_scattering;
         if let (Some(id), true) = (medium, lit) {
             if let Some(Medium::Grid(g)) = scene.media.get(id.0 as usize) {

@@ -6,6 +6,7 @@ use serde_json::Value;
 
 use super::{Calibration, HegemanSettings, SurfaceScattering};
 use crate::integrator::common_settings::{positive, within};
+use crate::integrator::surface_shadows::SurfaceShadows;
 use crate::params::{describe, rest, Located, Object};
 
 /// The fields of a `hegeman` object; every one is optional.
@@ -32,6 +33,11 @@ struct HegemanFields {
     /// from before the cone model: `true` is "line", `false` "off".
     #[serde(default)]
     surface_scattering: Option<Value>,
+    /// Shadows of the medium on surfaces: "lattice_environment" (default:
+    /// the model's line integrals toward the lights and the environment's
+    /// octant directions), "lattice" (the lights only) or "march".
+    #[serde(default)]
+    surface_shadows: Option<String>,
 }
 
 /// `hegeman`'s settings from its object (the `type` taken out).
@@ -68,6 +74,7 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
             ));
         }
     };
+    let surface_shadows = parse_surface_shadows(fields.surface_shadows.as_deref(), defaults.surface_shadows)?;
     let settings = HegemanSettings {
         calibration,
         calibration_photons: fields.calibration_photons.unwrap_or(defaults.calibration_photons),
@@ -75,6 +82,7 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
         resolution: fields.resolution.unwrap_or(defaults.resolution),
         step_cells: fields.step_cells.unwrap_or(defaults.step_cells),
         surface_scattering,
+        surface_shadows,
     };
     within("resolution", settings.resolution, 2, 512)?;
     within("calibration_photons", settings.calibration_photons, 1000, 1 << 24)?;
@@ -82,17 +90,31 @@ pub(crate) fn parse(object: Object) -> Result<HegemanSettings, Located> {
     Ok(settings)
 }
 
+/// The `surface_shadows` field of a `hegeman` or `zhou` object (`default` when absent).
+pub(crate) fn parse_surface_shadows(name: Option<&str>, default: SurfaceShadows) -> Result<SurfaceShadows, Located> {
+    match name {
+        None => Ok(default),
+        Some(name) => SurfaceShadows::from_name(name).ok_or_else(|| {
+            Located::new(
+                "surface_shadows",
+                format!("expected \"lattice_environment\", \"lattice\" or \"march\", found \"{name}\""),
+            )
+        }),
+    }
+}
+
 /// The stable key of `hegeman`'s settings.
 pub(crate) fn key(s: &HegemanSettings) -> String {
     format!(
         "hegeman(multiple_scattering={}, resolution={}, step_cells={:?}, calibration={}, calibration_photons={}, \
-         surface_scattering={})",
+         surface_scattering={}, surface_shadows={})",
         s.multiple_scattering,
         s.resolution,
         s.step_cells,
         s.calibration.name(),
         s.calibration_photons,
-        s.surface_scattering.name()
+        s.surface_scattering.name(),
+        s.surface_shadows.name()
     )
 }
 

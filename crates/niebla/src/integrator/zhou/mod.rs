@@ -77,8 +77,13 @@ use crate::sampling::PixelSampler;
 use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
+use super::direct::direct_surface_radiance_with;
 use super::hegeman::{Calibration, HegemanIntegrator, HegemanSettings, SurfaceScattering};
-use super::{trace_camera_ray, AnalyticIntegrator, Integrator, JitteredSteps, SegmentRadiance};
+use super::surface_shadows::{ShadowLattices, SurfaceShadows};
+use super::{
+    direct_surface_radiance, walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps,
+    SegmentRadiance,
+};
 use fit::{FitReport, FitSettings};
 use lattice::Lattice;
 use lighting::{CentreDepth, ModelLight, ZonalDepthTable};
@@ -157,6 +162,14 @@ pub struct ZhouSettings {
     pub cache: bool,
     /// Point and spot lights.
     pub local_lights: LocalLights,
+    /// Where the direct light's shadows on opaque surfaces inside grid
+    /// media come from for point, spot and directional lights
+    /// ([`SurfaceShadows`]; ours, not in Zhou et al. 2008): line-integral
+    /// lattices of the full density toward each light and the environment's
+    /// eight octant directions (default; the RBF density's transmittance
+    /// would blur the shadows), toward the lights only, or a ray march per
+    /// shadow ray.
+    pub surface_shadows: SurfaceShadows,
 }
 
 impl Default for ZhouSettings {
@@ -172,6 +185,7 @@ impl Default for ZhouSettings {
             step_cells: 1.0,
             cache: true,
             local_lights: LocalLights::Hegeman,
+            surface_shadows: SurfaceShadows::LatticeEnvironment,
         }
     }
 }
@@ -240,6 +254,9 @@ pub struct ZhouIntegrator {
     analytic: AnalyticIntegrator,
     /// The light model of point and spot lights ([`LocalLights::Hegeman`]).
     local: Option<HegemanIntegrator>,
+    /// Line integrals toward the point, spot and directional lights for
+    /// the shadows on surfaces ([`SurfaceShadows::Lattice`]; empty otherwise).
+    shadows: ShadowLattices,
     /// Multiplies every grid model's view-ray march step: 1 (the
     /// settings' step), or [`super::DRAG_STEP_FACTOR`] for a viewer's drag
     /// frames ([`ZhouIntegrator::set_drag_march`]).
@@ -283,6 +300,11 @@ impl ZhouIntegrator {
                 local.has_lights().then_some(local)
             }
         };
+        let shadows = match settings.surface_shadows {
+            SurfaceShadows::Lattice => ShadowLattices::new(scene, settings.resolution.max(4) as usize, false),
+            SurfaceShadows::LatticeEnvironment => ShadowLattices::new(scene, settings.resolution.max(4) as usize, true),
+            SurfaceShadows::March => ShadowLattices::default(),
+        };
         let local_seconds = start.elapsed().as_secs_f64();
         let mut fit_seconds = 0.0;
         let mut lighting_seconds = 0.0;
@@ -310,6 +332,7 @@ impl ZhouIntegrator {
             models,
             analytic: AnalyticIntegrator::new(),
             local,
+            shadows,
             march_scale: 1.0,
             fit_seconds,
             lighting_seconds: lighting_seconds + local_seconds,
@@ -428,6 +451,9 @@ impl ZhouIntegrator {
             local.update_media(scene, changed_media);
             local.update_lights(scene);
         }
+        if self.settings.surface_shadows != SurfaceShadows::March {
+            self.shadows.update_lights(scene);
+        }
         let done = self.relight(scene, |_| true, preview, cancel);
         self.lighting_seconds = start.elapsed().as_secs_f64();
         done
@@ -506,6 +532,7 @@ impl ZhouIntegrator {
             })
             .sum::<usize>()
             + self.local.as_ref().map_or(0, HegemanIntegrator::memory_bytes)
+            + self.shadows.memory_bytes()
     }
 
     /// March a grid segment with the interpolated source, compositing front
@@ -831,15 +858,66 @@ impl GridModel {
     }
 }
 
+/// The camera-ray walk of [`ZhouIntegrator`]: grid segments by the model,
+/// surfaces lit directly with the shadows of [`ZhouSettings::surface_shadows`].
+struct ZhouWalk<'a> {
+    integrator: &'a ZhouIntegrator,
+}
+
+impl CameraRayVisitor for ZhouWalk<'_> {
+    #[inline]
+    fn segment(
+        &mut self,
+        scene: &Scene,
+        m: &Medium,
+        id: MediumId,
+        ray: &Ray,
+        t_end: f32,
+        sampler: &mut PixelSampler,
+    ) -> SegmentRadiance {
+        let z = self.integrator;
+        match m {
+            Medium::Grid(g) => match &z.models[id.0 as usize] {
+                Some(model) => z.grid_segment(g, id, model, ray, t_end, sampler),
+                None => z.analytic.segment(scene, id, ray, t_end, sampler),
+            },
+            Medium::Homogeneous(_) => z.analytic.segment(scene, id, ray, t_end, sampler),
+        }
+    }
+
+    #[inline]
+    fn opaque_surface(
+        &mut self,
+        scene: &Scene,
+        hit: &crate::world::Hit,
+        wo: Vec3,
+        medium: Option<MediumId>,
+        sampler: &mut PixelSampler,
+    ) -> Rgb {
+        let bsdf = &scene.surface_bsdf(hit);
+        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
+        let shadows = &self.integrator.shadows;
+        match self.integrator.settings.surface_shadows {
+            SurfaceShadows::March => direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler),
+            SurfaceShadows::Lattice | SurfaceShadows::LatticeEnvironment => direct_surface_radiance_with(
+                scene,
+                &hit.surface,
+                wo,
+                bsdf,
+                medium,
+                surfaces,
+                sampler,
+                |light, id, ray, t| {
+                    let Medium::Grid(g) = scene.medium(id) else { return None };
+                    shadows.transmittance(g, id.0 as usize, light, ray, t)
+                },
+            ),
+        }
+    }
+}
+
 impl Integrator for ZhouIntegrator {
     fn radiance(&self, scene: &Scene, ray: Ray, medium: Option<MediumId>, sampler: &mut PixelSampler) -> Rgb {
-        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
-        trace_camera_ray(scene, ray, medium, surfaces, sampler, |m, id, ray, t_end, sampler| match m {
-            Medium::Grid(g) => match &self.models[id.0 as usize] {
-                Some(model) => self.grid_segment(g, id, model, ray, t_end, sampler),
-                None => self.analytic.segment(scene, id, ray, t_end, sampler),
-            },
-            Medium::Homogeneous(_) => self.analytic.segment(scene, id, ray, t_end, sampler),
-        })
+        walk_camera_ray(scene, ray, medium, sampler, &mut ZhouWalk { integrator: self })
     }
 }

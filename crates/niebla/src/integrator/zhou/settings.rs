@@ -75,6 +75,11 @@ struct ZhouFields {
     /// `"hegeman"` (default) or `"rbf"`: point and spot lights.
     #[serde(default)]
     local_lights: Option<LocalLightsField>,
+    /// Shadows of the medium on surfaces: "lattice_environment" (default:
+    /// line integrals toward each light and the environment's octant
+    /// directions), "lattice" (the lights only) or "march".
+    #[serde(default)]
+    surface_shadows: Option<String>,
 }
 
 /// `zhou`'s settings from its object (the `type` taken out).
@@ -101,6 +106,10 @@ pub(crate) fn parse(object: Object) -> Result<ZhouSettings, Located> {
             Some(LocalLightsField::Rbf) => LocalLights::Rbf,
             Some(LocalLightsField::Hegeman) => LocalLights::Hegeman,
         },
+        surface_shadows: crate::integrator::hegeman::settings::parse_surface_shadows(
+            f.surface_shadows.as_deref(),
+            d.surface_shadows,
+        )?,
     };
     within("rbf_count", settings.rbf_count, 1, 20_000)?;
     within("fit_iterations", settings.fit_iterations, 0, 10_000)?;
@@ -114,7 +123,7 @@ pub(crate) fn parse(object: Object) -> Result<ZhouSettings, Located> {
 pub(crate) fn key(s: &ZhouSettings) -> String {
     format!(
         "zhou(rbf_count={}, fit_iterations={}, resolution={}, sh_order={}, multiple_scattering={}, \
-         compensation={}, transmittance={}, step_cells={:?}, cache={}, local_lights={})",
+         compensation={}, transmittance={}, step_cells={:?}, cache={}, local_lights={}, surface_shadows={})",
         s.rbf_count,
         s.fit_iterations,
         s.resolution,
@@ -124,6 +133,7 @@ pub(crate) fn key(s: &ZhouSettings) -> String {
         if s.exact_transmittance { "exact" } else { "sh" },
         s.step_cells,
         s.cache,
-        s.local_lights.name()
+        s.local_lights.name(),
+        s.surface_shadows.name()
     )
 }
