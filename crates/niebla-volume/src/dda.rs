@@ -474,10 +474,13 @@ mod tests {
         assert_eq!((flow, calls), (ControlFlow::Break(()), 1));
     }
 
+    /// A ray's origin and direction.
+    type Ray = ([f32; 3], [f32; 3]);
+
     /// A 13 x 10 x 9 grid (partial blocks on every axis) with empty
     /// blocks, uniform blocks and mixed ones, and rays through it from
     /// random points in random directions (a small LCG, fixed seed).
-    fn mixed_grid_and_rays() -> (MajorantGrid, Vec<([f32; 3], [f32; 3])>) {
+    fn mixed_grid_and_rays() -> (MajorantGrid, Vec<Ray>) {
         let res = [13, 10, 9];
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = move || {
