@@ -52,7 +52,7 @@ impl MajorantGrid {
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
     {
-        self.walk_impl::<false, false, F>(o, d, t_min, t_max, 0.0, f)
+        self.walk_impl::<false, F>(o, d, t_min, t_max, f)
     }
 
     /// Like [`MajorantGrid::walk_cells`], but cells whose value is exactly
@@ -85,67 +85,18 @@ impl MajorantGrid {
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
     {
-        self.walk_impl::<true, false, F>(o, d, t_min, t_max, 0.0, f)
-    }
-
-    /// Like [`MajorantGrid::walk_nonzero`], but a block of 4^3 cells may be
-    /// reported whole, as one segment from where the ray is to where it
-    /// leaves the block, with the largest value of the block's cells: when
-    /// the block's spread (largest minus smallest cell value) times the
-    /// longest chord a ray with direction `d` can have through a block is
-    /// at most `spread_limit` (density times ray parameter). A block of
-    /// equal cells is always taken whole (spread 0); a negative
-    /// `spread_limit` gives exactly the segments of `walk_nonzero`.
-    ///
-    /// The value of a segment still bounds the grid's values over it (the
-    /// block's maximum bounds every cell in it), so trackers stay unbiased;
-    /// the segments are contiguous where `walk_nonzero`'s are and cover at
-    /// least their union. With a tracker's extinction per unit density
-    /// `sigma`, `spread_limit = k / sigma` lets a whole block add at most `k`
-    /// expected null collisions over what its cells would give, in
-    /// exchange for one step instead of one per cell crossed.
-    ///
-    /// ```
-    /// use std::ops::ControlFlow;
-    /// use niebla_volume::MajorantGrid;
-    /// // Cells 0-3 (one block) hold 1, 1, 2, 1; cells 4-7 are empty.
-    /// let mut v = vec![1.0, 1.0, 2.0, 1.0];
-    /// v.extend([0.0; 4]);
-    /// let m = MajorantGrid::new([8, 1, 1], [0.0; 3], [8.0, 1.0, 1.0], v).unwrap();
-    /// let mut segs = Vec::new();
-    /// let _ = m.walk_coarse([-1.0, 0.5, 0.5], [1.0, 0.0, 0.0], 0.0, 100.0, 4.0, |s| {
-    ///     segs.push((s.t0, s.t1, s.max_density));
-    ///     ControlFlow::Continue(())
-    /// });
-    /// assert_eq!(segs, [(1.0, 5.0, 2.0)]);
-    /// ```
-    #[inline(never)]
-    pub fn walk_coarse<F>(
-        &self,
-        o: [f32; 3],
-        d: [f32; 3],
-        t_min: f32,
-        t_max: f32,
-        spread_limit: f32,
-        mut f: F,
-    ) -> ControlFlow<()>
-    where
-        F: FnMut(Segment) -> ControlFlow<()>,
-    {
-        self.walk_impl::<true, true, _>(o, d, t_min, t_max, spread_limit, |_, s| f(s))
+        self.walk_impl::<true, F>(o, d, t_min, t_max, f)
     }
 
     /// The DDA of [`MajorantGrid::walk_cells`]; with `SKIP_ZEROS`, that of
-    /// [`MajorantGrid::walk_nonzero`]; with both `SKIP_ZEROS` and `COARSE`,
-    /// that of [`MajorantGrid::walk_coarse`] (`spread_limit` is read only then).
+    /// [`MajorantGrid::walk_nonzero`].
     #[inline(always)]
-    fn walk_impl<const SKIP_ZEROS: bool, const COARSE: bool, F>(
+    fn walk_impl<const SKIP_ZEROS: bool, F>(
         &self,
         o: [f32; 3],
         d: [f32; 3],
         t_min: f32,
         t_max: f32,
-        spread_limit: f32,
         mut f: F,
     ) -> ControlFlow<()>
     where
@@ -186,22 +137,6 @@ impl MajorantGrid {
             let plane = if k >= self.res[a] { self.bounds_max[a] } else { self.bounds_min[a] + k as f32 * width[a] };
             (plane - o[a]) * inv_d[a]
         };
-        // Coarse walk: a block is taken whole when its spread is at most
-        // `spread_limit` over the longest chord through a block (the ray
-        // leaves a block along axis `a` within `ZERO_BLOCK width[a] / |d[a]|`).
-        let coarse_spread = if COARSE {
-            let chord = (0..3)
-                .filter(|&a| d[a] != 0.0)
-                .map(|a| ZERO_BLOCK as f32 * width[a] * inv_d[a].abs())
-                .fold(f32::INFINITY, f32::min);
-            spread_limit / chord
-        } else {
-            -1.0
-        };
-        // The residue (mod ZERO_BLOCK) of the first cell of a block the ray
-        // enters along each axis, for noticing a block change after a step.
-        let block_entry: [usize; 3] = std::array::from_fn(|a| if d[a] < 0.0 { ZERO_BLOCK - 1 } else { 0 });
-        let mut check_block = COARSE;
         // Starting cell and the t of the next boundary plane along each axis.
         let mut cell = [0usize; 3];
         let mut next = [f32::INFINITY; 3];
@@ -249,27 +184,12 @@ impl MajorantGrid {
         let values = &self.values[..];
         let mut t = t0;
         loop {
-            // A block taken whole (its largest value, 0 for an empty block).
-            let whole = if COARSE {
-                if check_block {
-                    check_block = false;
-                    let b = self.block_bounds[self.zero_block_index(cell)];
-                    (b.spread <= coarse_spread || (b.max == 0.0 && b.spread == 0.0)).then_some(b.max)
-                } else {
-                    None
-                }
-            } else if SKIP_ZEROS && values[index] == 0.0 && self.zero_blocks[self.zero_block_index(cell)] {
-                Some(0.0)
-            } else {
-                None
-            };
-            if let Some(block_max) = whole {
-                // The cell's block is all zero (or taken whole, reported as
-                // one segment up to the exit): go to the cell where the ray
+            if SKIP_ZEROS && values[index] == 0.0 && self.zero_blocks[self.zero_block_index(cell)] {
+                // The cell's block is all zero: go to the cell where the ray
                 // leaves it. The cell walk takes plane crossings in
-                // increasing t, ties in axis order, and no crossing inside
-                // the block is reported, so only the state after the
-                // block's first exit crossing matters.
+                // increasing t, ties in axis order, and every crossing
+                // inside the block is between zero cells, so only the state
+                // after the block's first exit crossing matters.
                 let exit_plane: [usize; 3] = std::array::from_fn(|a| {
                     let first = cell[a] / ZERO_BLOCK * ZERO_BLOCK;
                     if d[a] > 0.0 {
@@ -290,18 +210,12 @@ impl MajorantGrid {
                 let t_exit = exit_t[axis];
                 // The walk ends at t1 before leaving the block.
                 if t_exit >= t1 {
-                    if COARSE && block_max != 0.0 && t1 > t {
-                        f(cell, Segment { t0: t, t1, max_density: block_max })?;
-                    }
                     return ControlFlow::Continue(());
                 }
                 // The cell walk keeps the first of equal crossings as the
                 // next segment's start; equal values with different bits
                 // are +0 and -0, so an exit at t = 0 takes the cell steps.
                 if t_exit != 0.0 {
-                    if COARSE && block_max != 0.0 && t_exit > t {
-                        f(cell, Segment { t0: t, t1: t_exit, max_density: block_max })?;
-                    }
                     next = [next_x, next_y, next_z];
                     // Crossings of the other axes that come first: before
                     // t_exit, or at it for an axis earlier in the tie order.
@@ -338,7 +252,6 @@ impl MajorantGrid {
                     if t_exit > t {
                         t = t_exit;
                     }
-                    check_block = COARSE;
                     continue;
                 }
             }
@@ -366,9 +279,6 @@ impl MajorantGrid {
             cell[axis] = cell[axis].wrapping_add(step[axis]);
             plane_k[axis] = plane_k[axis].wrapping_add(step[axis]);
             index = index.wrapping_add(index_step[axis]);
-            if COARSE {
-                check_block = cell[axis] % ZERO_BLOCK == block_entry[axis];
-            }
             let crossed = crossing_plane(axis, plane_k[axis]);
             match axis {
                 0 => next_x = crossed,
@@ -472,118 +382,5 @@ mod tests {
             ControlFlow::Break(())
         });
         assert_eq!((flow, calls), (ControlFlow::Break(()), 1));
-    }
-
-    /// A ray's origin and direction.
-    type Ray = ([f32; 3], [f32; 3]);
-
-    /// A 13 x 10 x 9 grid (partial blocks on every axis) with empty
-    /// blocks, uniform blocks and mixed ones, and rays through it from
-    /// random points in random directions (a small LCG, fixed seed).
-    fn mixed_grid_and_rays() -> (MajorantGrid, Vec<Ray>) {
-        let res = [13, 10, 9];
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
-        let mut values = Vec::new();
-        for z in 0..res[2] {
-            for y in 0..res[1] {
-                for x in 0..res[0] {
-                    let block = (x / 4 + 3 * (y / 4) + 5 * (z / 4)) % 4;
-                    values.push(match block {
-                        0 => 0.0,
-                        1 => 1.5,
-                        _ => {
-                            if next() < 0.3 {
-                                0.0
-                            } else {
-                                4.0 * next()
-                            }
-                        }
-                    });
-                }
-            }
-        }
-        let m = MajorantGrid::new(res, [-1.0, 0.0, 2.0], [12.0, 5.0, 11.0], values).unwrap();
-        let rays = (0..400)
-            .map(|k| {
-                let o = [-3.0 + 18.0 * next(), -2.0 + 9.0 * next(), 0.0 + 13.0 * next()];
-                let mut d = [next() - 0.5, next() - 0.5, next() - 0.5];
-                if k % 7 == 0 {
-                    d[k % 3] = 0.0;
-                }
-                (o, d)
-            })
-            .collect();
-        (m, rays)
-    }
-
-    fn collect_nonzero(m: &MajorantGrid, o: [f32; 3], d: [f32; 3]) -> Vec<Segment> {
-        let mut out = Vec::new();
-        let _ = m.walk_nonzero(o, d, -50.0, 50.0, |_, s| {
-            out.push(s);
-            ControlFlow::Continue(())
-        });
-        out
-    }
-
-    fn collect_coarse(m: &MajorantGrid, o: [f32; 3], d: [f32; 3], limit: f32) -> Vec<Segment> {
-        let mut out = Vec::new();
-        let _ = m.walk_coarse(o, d, -50.0, 50.0, limit, |s| {
-            out.push(s);
-            ControlFlow::Continue(())
-        });
-        out
-    }
-
-    #[test]
-    fn coarse_walk_with_a_negative_limit_is_the_nonzero_walk() {
-        let (m, rays) = mixed_grid_and_rays();
-        for (o, d) in rays {
-            let fine = collect_nonzero(&m, o, d);
-            let coarse = collect_coarse(&m, o, d, -1.0);
-            assert_eq!(fine.len(), coarse.len(), "{o:?} {d:?}");
-            for (a, b) in fine.iter().zip(&coarse) {
-                assert_eq!(
-                    (a.t0.to_bits(), a.t1.to_bits(), a.max_density.to_bits()),
-                    (b.t0.to_bits(), b.t1.to_bits(), b.max_density.to_bits())
-                );
-            }
-        }
-    }
-
-    /// Whole blocks bound every cell they cover, and the coarse segments
-    /// are ordered, disjoint and cover every non-zero cell segment.
-    #[test]
-    fn coarse_walk_segments_bound_and_cover_the_cell_segments() {
-        let (m, rays) = mixed_grid_and_rays();
-        let mut whole = 0;
-        for limit in [0.0f32, 0.5, 3.0, 1e30] {
-            for &(o, d) in &rays {
-                let fine = collect_nonzero(&m, o, d);
-                let coarse = collect_coarse(&m, o, d, limit);
-                for w in coarse.windows(2) {
-                    assert!(w[0].t0 < w[0].t1 && w[0].t1 <= w[1].t0, "{o:?} {d:?}: {w:?}");
-                }
-                for f in &fine {
-                    // The pieces of coarse segments overlapping the cell's
-                    // segment cover it, each with a value at least the cell's.
-                    let mut covered = f.t0;
-                    for c in coarse.iter().filter(|c| c.t1 > f.t0 && c.t0 < f.t1) {
-                        assert!(c.max_density >= f.max_density, "{o:?} {d:?}: {c:?} over {f:?}");
-                        assert!(c.t0 <= covered, "{o:?} {d:?}: gap before {c:?} in {f:?}");
-                        covered = covered.max(c.t1);
-                    }
-                    assert!(covered >= f.t1, "{o:?} {d:?}: {f:?} not covered");
-                }
-                if coarse.iter().any(|c| !fine.contains(c)) {
-                    whole += 1;
-                }
-            }
-        }
-        // The test exercises whole blocks (uniform ones at any limit, mixed ones at large limits).
-        assert!(whole > 200, "only {whole} rays took a block whole");
     }
 }

@@ -39,23 +39,6 @@ pub struct DensityBoundGrid {
     /// exactly zero. Derived from `values` by [`DensityBoundGrid::with_zero_blocks`];
     /// [`MajorantGrid::walk_nonzero`] jumps over such blocks.
     pub(crate) zero_blocks: Vec<bool>,
-    /// Per block of [`ZERO_BLOCK`]^3 cells (same order as `zero_blocks`):
-    /// the largest cell value and the spread, largest minus smallest cell
-    /// value (both infinite when a cell is NaN). Derived from `values`
-    /// by [`DensityBoundGrid::with_zero_blocks`]; read by
-    /// [`MajorantGrid::walk_coarse`], which may report a whole block as
-    /// one segment with the block's largest value.
-    pub(crate) block_bounds: Vec<BlockBound>,
-}
-
-/// The largest cell value of a block of cells and the spread of its cell
-/// values (see `DensityBoundGrid::block_bounds`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct BlockBound {
-    /// Largest cell value in the block.
-    pub max: f32,
-    /// Largest minus smallest cell value in the block (>= 0).
-    pub spread: f32,
 }
 
 /// Cells per axis of the blocks in which a majorant grid records runs of
@@ -164,38 +147,24 @@ impl DensityBoundGrid {
 
     /// A grid from its parts, with its zero-block flags.
     pub(crate) fn from_parts(res: [usize; 3], bounds_min: [f32; 3], bounds_max: [f32; 3], values: Vec<f32>) -> Self {
-        DensityBoundGrid { res, bounds_min, bounds_max, values, zero_blocks: Vec::new(), block_bounds: Vec::new() }
-            .with_zero_blocks()
+        DensityBoundGrid { res, bounds_min, bounds_max, values, zero_blocks: Vec::new() }.with_zero_blocks()
     }
 
-    /// `self` with `zero_blocks` and `block_bounds` recomputed from
-    /// `values` (call after changing `values`).
+    /// `self` with `zero_blocks` recomputed from `values` (call after
+    /// changing `values`).
     pub(crate) fn with_zero_blocks(mut self) -> Self {
         let blocks = self.res.map(|r| r.div_ceil(ZERO_BLOCK));
-        let n = blocks[0] * blocks[1] * blocks[2];
-        let mut zero = vec![true; n];
-        let mut lo = vec![f32::INFINITY; n];
-        let mut hi = vec![f32::NEG_INFINITY; n];
+        let mut zero = vec![true; blocks[0] * blocks[1] * blocks[2]];
         for z in 0..self.res[2] {
             for y in 0..self.res[1] {
                 for x in 0..self.res[0] {
-                    let v = self.values[self.cell_index([x, y, z])];
-                    let b = [x, y, z].map(|c| c / ZERO_BLOCK);
-                    let i = (b[2] * blocks[1] + b[1]) * blocks[0] + b[0];
-                    if v != 0.0 {
-                        zero[i] = false;
-                    }
-                    if v.is_nan() {
-                        // No bound: the block is never taken whole.
-                        (lo[i], hi[i]) = (f32::NEG_INFINITY, f32::INFINITY);
-                    } else {
-                        lo[i] = lo[i].min(v);
-                        hi[i] = hi[i].max(v);
+                    if self.values[self.cell_index([x, y, z])] != 0.0 {
+                        let b = [x, y, z].map(|c| c / ZERO_BLOCK);
+                        zero[(b[2] * blocks[1] + b[1]) * blocks[0] + b[0]] = false;
                     }
                 }
             }
         }
-        self.block_bounds = lo.iter().zip(&hi).map(|(&lo, &hi)| BlockBound { max: hi, spread: hi - lo }).collect();
         self.zero_blocks = zero;
         self
     }

@@ -40,17 +40,7 @@ fn run<G: GridLookup>(
     d: Vec3,
     key: u64,
 ) -> [Rgb; 3] {
-    let r = GridAlongRay {
-        grid,
-        majorant,
-        minorant: Some(minorant),
-        o,
-        d,
-        t0: 0.0,
-        t1: 1.0,
-        motion: None,
-        coarse_spread: -1.0,
-    };
+    let r = GridAlongRay { grid, majorant, minorant: Some(minorant), o, d, t0: 0.0, t1: 1.0, motion: None };
     let sigma_t = Rgb::new(3.5, 5.0, 8.0);
     let mut s = PixelSampler::from_key(key);
     [

@@ -303,34 +303,9 @@ pub struct GridMedium {
     /// Spatially varying single-scattering albedo; `None`: `sigma_s /
     /// sigma_t` everywhere.
     pub albedo: Option<AlbedoField>,
-    /// Two-level majorant walk: the expected number of null collisions
-    /// (at the largest channel's extinction) that taking a block of 4^3
-    /// majorant cells whole, with the block's largest majorant, may add over
-    /// stepping through its cells ([`niebla_volume::MajorantGrid::walk_coarse`]);
-    /// `None` (the default): cell by cell. Off by default because on the
-    /// production frame (a 512^3 sparse cloud) the extra null collisions,
-    /// each a sparse lookup that misses the CPU caches, cost more than the
-    /// DDA steps saved (bench/README.md, "Production frame"); it suits media
-    /// whose lookups are cheap relative to the walk.
-    pub coarse_walk: Option<f32>,
 }
 
 impl GridMedium {
-    /// A moderate [`GridMedium::coarse_walk`] setting: a block taken whole
-    /// may add up to one expected null collision over its cells.
-    pub const DEFAULT_COARSE_WALK: f32 = 1.0;
-
-    /// The spread limit (density times ray parameter) of
-    /// [`niebla_volume::MajorantGrid::walk_coarse`] for this medium, or a
-    /// negative value for the cell-by-cell walk.
-    #[inline]
-    pub fn coarse_spread_limit(&self) -> f32 {
-        match self.coarse_walk {
-            Some(k) if k >= 0.0 => k / self.sigma_t().max_channel().max(f32::MIN_POSITIVE),
-            _ => -1.0,
-        }
-    }
-
     /// A grid medium; computes its world bounds from the majorant grid's box.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -356,7 +331,6 @@ impl GridMedium {
             world_bounds,
             motion: None,
             albedo: None,
-            coarse_walk: None,
         }
     }
 

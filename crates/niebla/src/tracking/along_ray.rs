@@ -149,10 +149,6 @@ pub struct GridAlongRay<'a, G: GridLookup> {
     /// The medium's motion and the ray's time (frames), if it moves and the
     /// time is not 0; `majorant` then bounds the moving density.
     pub motion: Option<(&'a GridMotion, f32)>,
-    /// Without `minorant`: the spread limit of the two-level walk
-    /// ([`MajorantGrid::walk_coarse`]) that [`DensityAlongRay::segments`]
-    /// uses; negative: cell by cell.
-    pub coarse_spread: f32,
 }
 
 impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
@@ -191,12 +187,6 @@ impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
             // Without minima, a zero-majorant cell is a segment with
             // `d_min == d_max == 0`: leave those out (runs of empty cells
             // cost a step per 4^3 block, and no tracker's result changes).
-            None if self.coarse_spread >= 0.0 => {
-                // Blocks of cells may be reported whole (a looser bound, fewer steps).
-                self.majorant.walk_coarse(o, d, self.t0, self.t1, self.coarse_spread, |s| {
-                    f(DensitySegment { t0: s.t0, t1: s.t1, d_min: 0.0f32.min(s.max_density), d_max: s.max_density })
-                })
-            }
             None => self.majorant.walk_nonzero(o, d, self.t0, self.t1, |_, s| {
                 f(DensitySegment { t0: s.t0, t1: s.t1, d_min: 0.0f32.min(s.max_density), d_max: s.max_density })
             }),

@@ -41,31 +41,20 @@ pub fn with_grid_along_ray<V: GridRayVisitor>(
     let majorant = g.tracking_majorant();
     let minorant = if with_minorant { g.minorant() } else { None };
     let motion = g.motion.as_ref().filter(|_| time != 0.0).map(|m| (m, time));
-    let coarse_spread = g.coarse_spread_limit();
     match &g.density {
         DensityGrid::Dense(grid) => match grid.f32_lookup() {
             // f32 storage: the lookup unpacked once per ray (same values).
             Some(lookup) => {
                 let grid = DenseF32Along { lookup, nonnegative: grid.min_value() >= 0.0 };
-                visitor.visit(&GridAlongRay { grid: &grid, majorant, minorant, o, d, t0, t1, motion, coarse_spread })
+                visitor.visit(&GridAlongRay { grid: &grid, majorant, minorant, o, d, t0, t1, motion })
             }
-            None => visitor.visit(&GridAlongRay {
-                grid: grid.as_ref(),
-                majorant,
-                minorant,
-                o,
-                d,
-                t0,
-                t1,
-                motion,
-                coarse_spread,
-            }),
+            None => visitor.visit(&GridAlongRay { grid: grid.as_ref(), majorant, minorant, o, d, t0, t1, motion }),
         },
         DensityGrid::Sparse(grid) => {
             // One cached accessor per ray: consecutive lookups along the ray
             // mostly stay in one leaf and skip the tree descent.
             let accessor = grid.accessor();
-            visitor.visit(&GridAlongRay { grid: &accessor, majorant, minorant, o, d, t0, t1, motion, coarse_spread })
+            visitor.visit(&GridAlongRay { grid: &accessor, majorant, minorant, o, d, t0, t1, motion })
         }
     }
 }
