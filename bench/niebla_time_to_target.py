@@ -12,15 +12,22 @@ ZIP).
 REF_A and REF_B are two independent renders of SCENE (different --seed);
 their mean is the reference and its own error (rel_mse(a, b) / 4) is
 subtracted, as bench/production_frame.py does. Each binary renders SCENE at
-each spp (seed 77 + spp); CPU seconds (user + system, wait4) are net of the
-smaller of two 1-spp renders of the scene at 8x8 pixels (start-up, grid
-load, majorant grid); the time to 1e-2 is interpolated on log-log axes
-between the sweep points that bracket it.
+each spp (seed 77 + spp) with --no-checkpoints; its CPU seconds are the
+process CPU time niebla reports at the end of rendering, before it writes
+the (ZIP-compressed) EXR, as Cycles' and Mitsuba's render-call times leave
+out saving the image. They are net of the smaller of two 1-spp renders of
+the scene at 8x8 pixels (start-up, grid load, majorant grid); the time to
+1e-2 is interpolated on log-log axes between the sweep points that bracket
+it. --with-writes times the whole process instead (user + system, wait4,
+checkpoint writes between passes and the final write included): the
+convention before 2026-12-03 15:00 UTC, and the only one for binaries
+without --no-checkpoints.
 """
 import argparse
 import json
 import math
 import os
+import re
 import struct
 import subprocess
 import tempfile
@@ -91,6 +98,8 @@ def main():
     ap.add_argument("--spp", default="4,8,16")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--target", type=float, default=1e-2)
+    ap.add_argument("--with-writes", action="store_true",
+                    help="time the whole process (checkpoint and final EXR writes included)")
     a = ap.parse_args()
     bins = dict(s.split("=", 1) for s in a.bin)
     ra, rb = read_exr(a.ref_a), read_exr(a.ref_b)
@@ -105,11 +114,17 @@ def main():
     def run(binary, scene, spp, seed):
         out = os.path.join(work, "out.exr")
         cmd = [binary, "render", scene, "--spp", str(spp), "--seed", str(seed), "--threads", str(a.threads),
-               "--quiet", "-o", out]
-        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL)
+               "--quiet", "-o", out] + ([] if a.with_writes else ["--no-checkpoints"])
+        p = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+        with p.stdout:
+            text = p.stdout.read()
         _, status, ru = os.wait4(p.pid, 0)
         assert os.waitstatus_to_exitcode(status) == 0, " ".join(cmd)
-        return out, ru.ru_utime + ru.ru_stime
+        if a.with_writes:
+            return out, ru.ru_utime + ru.ru_stime
+        m = re.search(r"process CPU ([0-9.]+) s before the final write", text)
+        assert m, f"{' '.join(cmd)}: no CPU time in {text!r} (use --with-writes for older binaries)"
+        return out, float(m.group(1))
 
     fixed = {n: min(run(b, tiny, 1, 9 + k)[1] for k in range(2)) for n, b in bins.items()}
     print("fixed CPU s: " + ", ".join(f"{n} {c:.2f}" for n, c in fixed.items()), flush=True)

@@ -104,7 +104,8 @@ class Niebla:
     (wait4) net of `fixed_cpu`, the CPU seconds of an 8-pixel-wide 1-spp
     render of the same scene (start-up, loading, baking), measured by
     `measure_fixed_cpu()`. After each call `last_cpu` holds the child's gross
-    CPU seconds and `peak_mib` the largest peak resident set so far (MiB)."""
+    CPU seconds, `last_output` its printed output, and `peak_mib` the
+    largest peak resident set so far (MiB)."""
 
     name = "niebla"
 
@@ -133,6 +134,7 @@ class Niebla:
         m = re.search(r"rendered \S+ at (\d+) spp with \S+ in ([0-9.]+) s", text)
         if not m or int(m.group(1)) != spp:
             raise RuntimeError(f"unexpected niebla output: {text!r}")
+        self.last_output = text
         return out, float(m.group(2)), ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0, wall
 
     def measure_fixed_cpu(self, repeats: int = 2) -> float:

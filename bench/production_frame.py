@@ -28,7 +28,14 @@ Times, two ways:
   the same fixed cost measured in CPU seconds (niebla: an 8x8-pixel render
   of the same scene, i.e. start-up, VDB load and majorant grid; Cycles: the
   1x1-pixel render; Mitsuba: none subtracted). On a machine shared with
-  other work, CPU seconds are the figures to read.
+  other work, CPU seconds are the figures to read. None of them includes
+  writing the image: niebla renders with --no-checkpoints (no EXR
+  checkpoints between passes) and its CPU seconds are the process CPU time
+  it reports before writing its final EXR, as Cycles' render call does not
+  save the image. --niebla-with-writes times niebla's whole process
+  instead (wait4; checkpoints and final ZIP-compressed EXR included, the
+  convention before 2026-12-03 15:00 UTC and the only one for binaries
+  without --no-checkpoints).
 Memory: niebla's peak RSS is that of each render process (wait4's
 ru_maxrss, the largest over the sweep), Cycles' the worker process's VmHWM
 after its last render (Blender itself included), Mitsuba's the VmHWM of this
@@ -45,6 +52,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -104,7 +112,21 @@ def make_scene(vdb: str, box_min, box_max, width: int, height: int, max_depth: i
 class MeasuredNiebla(peers.Niebla):
     """peers.Niebla (`niebla render` in a child process; the render time it
     reports, the child's CPU seconds and peak RSS from wait4) with the fixed
-    CPU cost taken from an 8x8-pixel copy of the scene."""
+    CPU cost taken from an 8x8-pixel copy of the scene. With
+    `without_writes`, renders run with --no-checkpoints and the CPU seconds
+    are those niebla reports before writing its final EXR."""
+
+    without_writes = True
+
+    def run(self, scene_path, spp, seed, tag, extra=()):
+        if not self.without_writes:
+            return super().run(scene_path, spp, seed, tag, extra)
+        out, t, _, peak, wall = super().run(scene_path, spp, seed, tag, (*extra, "--no-checkpoints"))
+        text = self.last_output
+        m = re.search(r"process CPU ([0-9.]+) s before the final write", text)
+        if not m:
+            raise RuntimeError(f"no CPU time in niebla's output {text!r} (use --niebla-with-writes)")
+        return out, t, float(m.group(1)), peak, wall
 
     def fixed(self, tiny_scene):
         """CPU seconds of an 8x8-pixel, 1-spp render (start-up, VDB load,
@@ -253,6 +275,8 @@ def main():
                     help="one render of --probe-spp spp per renderer: peak memory and throughput, no error")
     ap.add_argument("--probe-spp", type=int, default=1, help="samples per pixel of the --memory-only renders")
     ap.add_argument("--niebla", default=os.path.join(ROOT, "target", "release", "niebla"))
+    ap.add_argument("--niebla-with-writes", action="store_true",
+                    help="niebla's CPU seconds of the whole process (EXR checkpoints and final write included)")
     ap.add_argument("--out", default=os.path.join(HERE, "out", "production_frame"))
     args = ap.parse_args()
     compare.THREADS = args.threads
@@ -312,6 +336,7 @@ def main():
         f"{os.getloadavg()[0]:.2f}, {os.cpu_count()} cores")
 
     nb = MeasuredNiebla(os.path.abspath(args.niebla), scene, args.out, args.threads)
+    nb.without_writes = not args.niebla_with_writes
     log(f"niebla fixed CPU cost per call (8x8 render): {nb.fixed(tiny_path):.2f} s")
     if args.memory_only:
         memory_only(nb, desc, scene, args, pixels, log)

@@ -91,6 +91,12 @@ pub struct RenderArgs {
     /// the result is bit-identical to a render that was never stopped.
     #[arg(long, value_name = "CHECKPOINT.exr")]
     pub resume: Option<PathBuf>,
+    /// Write the outputs once, at the end, not also as checkpoints between
+    /// passes (at most a second apart otherwise): for benchmarks that time a
+    /// render's CPU seconds without the image compression. A render stopped
+    /// early then leaves no image.
+    #[arg(long)]
+    pub no_checkpoints: bool,
     /// Layers written beside the beauty, comma-separated (added to the
     /// scene's `film.aovs`): alpha, direct, indirect, emission, surface,
     /// albedo, normal, depth, variance, or all. EXR outputs hold them as
@@ -237,7 +243,7 @@ pub fn run(args: &RenderArgs) -> Result<(), CliError> {
     }
     let outputs = output_paths(args.output.as_deref(), &loaded.stem)?;
     let bar = if args.quiet.quiet { ProgressBar::hidden() } else { ProgressBar::new(1) };
-    if let Some(line) = render_loaded(args, loaded, &outputs, bar, true)? {
+    if let Some(line) = render_loaded(args, loaded, &outputs, bar, !args.no_checkpoints)? {
         println!("{line}");
     }
     Ok(())
@@ -443,6 +449,9 @@ pub fn render_loaded(
     // Rendering time, checkpoints included; the final write is not (as a
     // renderer's own timing of a render excludes saving the result).
     let seconds = start.elapsed().as_secs_f64();
+    // The process's CPU seconds so far (loading included, the final write
+    // not): what a benchmark compares with a peer's render-call CPU time.
+    let cpu_seconds = crate::bench_photons_time::process_cpu_seconds().ok();
     if let Some(e) = write_error {
         bar.finish_and_clear();
         return Err(e);
@@ -456,12 +465,13 @@ pub fn render_loaded(
     bar.finish_and_clear();
     let names: Vec<String> = outputs.iter().map(|p| p.display().to_string()).collect();
     Ok(Some(format!(
-        "rendered {}x{} at {} spp with {} in {:.2} s ({:.2} M samples/s) -> {}",
+        "rendered {}x{} at {} spp with {} in {:.2} s{} ({:.2} M samples/s) -> {}",
         scene.camera.width,
         scene.camera.height,
         spp_done,
         integrator.name(),
         seconds,
+        cpu_seconds.map_or(String::new(), |c| format!(", process CPU {c:.3} s before the final write")),
         (pixels * spp_done) as f64 / seconds / 1e6,
         names.join(", ")
     )))
