@@ -123,6 +123,28 @@ fn killed_render_resumes_to_the_uninterrupted_image() {
     assert_eq!(names, ["fog.json", "killed.exr", "other.json", "straight.exr"]);
 }
 
+/// `--no-checkpoints` (the benchmarks' way of timing a render without its
+/// image writes) gives the same bits as a render that checkpoints, writes
+/// the one output file and nothing beside it, and reports the process CPU
+/// seconds before the final write.
+#[test]
+fn render_without_checkpoints_gives_the_same_image() {
+    let dir = temp_dir("cli_no_checkpoints");
+    std::fs::write(dir.join("fog.json"), SCENE).unwrap();
+    let line =
+        run_ok(&dir, &["render", "fog.json", "-o", "once.exr", "--spp", "16", "--no-checkpoints", "--threads", "2"]);
+    assert!(line.contains("at 16 spp") && line.contains(", process CPU "), "{line}");
+    run_ok(&dir, &["render", "fog.json", "-o", "checkpointed.exr", "--spp", "16", "--quiet", "--threads", "1"]);
+    let (a, a_info) = read_checkpoint(&dir.join("once.exr")).unwrap();
+    let (b, b_info) = read_checkpoint(&dir.join("checkpointed.exr")).unwrap();
+    assert_eq!(a_info, b_info);
+    assert!(bits(&a) == bits(&b), "the image without checkpoints differs");
+    let mut files: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    files.sort();
+    assert_eq!(files, ["checkpointed.exr", "fog.json", "once.exr"]);
+}
+
 #[test]
 fn memory_limit_refuses_large_images_and_grids_before_rendering() {
     let dir = temp_dir("cli_max_memory");
