@@ -35,7 +35,7 @@ pub(crate) use march::{negligible_distance, JitteredSteps};
 pub use precompute_memory::{precompute_memory, PrecomputeMemory};
 pub use registry::{IntegratorSettings, PreparedIntegrator};
 pub use single::{SingleIntegrator, SingleSampling};
-pub use volpath::{VolPathIntegrator, DEFAULT_GUIDE_FRACTION};
+pub use volpath::{VolPathIntegrator, DEFAULT_EMITTER_GUIDE_FRACTION, DEFAULT_GUIDE_FRACTION};
 pub use volume_lights::{majorant_at, VolumeLightSample, VolumeLights};
 pub use zhou::{ZhouIntegrator, ZhouSettings};
 
