@@ -189,15 +189,15 @@ mod tests {
         let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
-}
 
-/// More boxes than [`MAX_GUIDE_BOXES`] become their common bounding box.
-#[test]
-fn many_boxes_merge_into_one() {
-    let unit = |x: f32| GuideBox::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0)).unwrap();
-    let g = EmitterGuide::new((0..5).map(|k| unit(2.0 * k as f32)));
-    assert_eq!(g.count, 1);
-    assert_eq!(g.boxes[0], GuideBox::new(Vec3::ZERO, Vec3::new(9.0, 1.0, 1.0)));
-    let h = EmitterGuide::new((0..3).map(|k| unit(2.0 * k as f32)));
-    assert_eq!(h.count, 3);
+    /// More boxes than [`MAX_GUIDE_BOXES`] become their common bounding box.
+    #[test]
+    fn many_boxes_merge_into_one() {
+        let unit = |x: f32| GuideBox::new(Vec3::new(x, 0.0, 0.0), Vec3::new(x + 1.0, 1.0, 1.0)).unwrap();
+        let g = EmitterGuide::new((0..5).map(|k| unit(2.0 * k as f32)));
+        assert_eq!(g.count, 1);
+        assert_eq!(g.boxes[0], GuideBox::new(Vec3::ZERO, Vec3::new(9.0, 1.0, 1.0)));
+        let h = EmitterGuide::new((0..3).map(|k| unit(2.0 * k as f32)));
+        assert_eq!(h.count, 3);
+    }
 }

@@ -117,7 +117,7 @@ pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
 /// [`VolPathIntegrator::emitter_guide_fraction`] of [`VolPathIntegrator::new`].
 ///
 /// Measured on the fire showcase (64x64, the floor's per-pixel relative
-/// variance times CPU time): 0.3, 0.5, 0.7 and 0.9 were 2.7x, 3.3-4.0x,
+/// variance times CPU time): 0.3, 0.5, 0.7 and 0.9 were 2.7x, 3.2-4.0x,
 /// 3.9x and 3.0x as efficient as no guiding; 0.5 keeps half of the
 /// directions for the BSDF, which bounds the loss (2x) where the light
 /// comes from elsewhere.
