@@ -1,5 +1,7 @@
 //! `niebla bench emission`: efficiency of `volpath` with and without light
-//! sampling of emissive media (`volume_light_sampling`) on a fire scene.
+//! sampling of emissive media (`volume_light_sampling`), and with light
+//! sampling but without guiding surface vertices toward the emitters
+//! (`emitter_guiding`), on a fire scene.
 //!
 //! Pixels are split by whether the camera ray through their center crosses
 //! the box of an emissive medium ("fire": the emitter seen directly, or
@@ -86,6 +88,14 @@ fn masked_relative_mse(image: &Image, reference: &Image, mask: &[bool], class: b
     sum / n.max(1) as f64
 }
 
+/// `volpath`'s default for emissive media: `(volume_light_sampling, emitter_guiding)`.
+const DEFAULT: (bool, bool) = (true, true);
+
+/// The settings measured, with their labels: the default, volume light
+/// sampling without emitter guiding, and free flight alone.
+const SETTINGS: [((bool, bool), &str); 3] =
+    [(DEFAULT, "light sampling + guiding"), ((true, false), "light sampling"), ((false, false), "free flight")];
+
 /// `niebla bench emission`.
 pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
     let default = PathBuf::from("scenes/fire.json");
@@ -102,7 +112,11 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
     scene.camera.width = args.width;
     scene.camera.height = ((args.width as f64 * aspect).round() as u32).max(1);
     let threads = args.threads.threads;
-    let settings = |on: bool| IntegratorSettings::VolPath { max_depth: args.max_depth, volume_light_sampling: on };
+    let settings = |(volume_light_sampling, emitter_guiding): (bool, bool)| IntegratorSettings::VolPath {
+        max_depth: args.max_depth,
+        volume_light_sampling,
+        emitter_guiding,
+    };
     let mask = fire_mask(&scene);
     let fire_pixels = mask.iter().filter(|&&m| m).count();
     println!(
@@ -118,8 +132,8 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
     // settings measured share no noise with it). Its own relative MSE, a
     // quarter of the halves' (each half is twice as noisy as their mean, and
     // their difference adds both), is subtracted from the figures below.
-    let (a, ta) = timed(&scene, &settings(true), args.reference_spp, 900_001, threads)?;
-    let (b, tb) = timed(&scene, &settings(true), args.reference_spp, 900_002, threads)?;
+    let (a, ta) = timed(&scene, &settings(DEFAULT), args.reference_spp, 900_001, threads)?;
+    let (b, tb) = timed(&scene, &settings(DEFAULT), args.reference_spp, 900_002, threads)?;
     let pixels = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (*x + *y) * 0.5).collect();
     let reference = Image { width: a.width, height: a.height, pixels };
     let noise = [masked_relative_mse(&a, &b, &mask, false) / 4.0, masked_relative_mse(&a, &b, &mask, true) / 4.0];
@@ -127,8 +141,8 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
         "reference: 2 x {} spp with volume light sampling ({ta:.1} s + {tb:.1} s); its own relative MSE: lit {:.2e}, fire {:.2e}",
         args.reference_spp, noise[0], noise[1],
     );
-    let mut products = [[0.0f64; 2]; 2];
-    for (k, on) in [true, false].into_iter().enumerate() {
+    let mut products = [[0.0f64; 2]; 3];
+    for (k, (on, label)) in SETTINGS.into_iter().enumerate() {
         let mut lit_curve = Vec::new();
         let mut fire_curve = Vec::new();
         let mut spp = 1;
@@ -136,9 +150,7 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
             let (image, seconds) = timed(&scene, &settings(on), spp, 7 + spp as u64, threads)?;
             let lit = (masked_relative_mse(&image, &reference, &mask, false) - noise[0]).max(0.0);
             let fire = (masked_relative_mse(&image, &reference, &mask, true) - noise[1]).max(0.0);
-            println!(
-                "volume_light_sampling={on:<5} {spp:>5} spp {seconds:>8.3} s  rel MSE lit {lit:.3e}  fire {fire:.3e}"
-            );
+            println!("{label:<24} {spp:>5} spp {seconds:>8.3} s  rel MSE lit {lit:.3e}  fire {fire:.3e}");
             lit_curve.push((seconds, lit));
             fire_curve.push((seconds, fire));
             products[k] = [lit * seconds, fire * seconds];
@@ -148,7 +160,7 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
             time_to_reach(c, args.target).map_or_else(|| "not reached".to_string(), |t| format!("{t:.3} s"))
         };
         println!(
-            "volume_light_sampling={on}: rel MSE x time at {} spp: lit {:.3e} s, fire {:.3e} s; time to {:.0e}: lit {}, fire {}",
+            "{label}: rel MSE x time at {} spp: lit {:.3e} s, fire {:.3e} s; time to {:.0e}: lit {}, fire {}",
             spp / 2,
             products[k][0],
             products[k][1],
@@ -157,10 +169,13 @@ pub fn run(args: &EmissionBenchArgs) -> Result<(), CliError> {
             reach(&fire_curve)
         );
     }
-    println!(
-        "equal-time relative MSE, without / with volume light sampling: lit {:.2}x, fire {:.2}x",
-        products[1][0] / products[0][0],
-        products[1][1] / products[0][1]
-    );
+    for (k, (_, label)) in SETTINGS.into_iter().enumerate().skip(1) {
+        println!(
+            "equal-time relative MSE, {label} / {}: lit {:.2}x, fire {:.2}x",
+            SETTINGS[0].1,
+            products[k][0] / products[0][0],
+            products[k][1] / products[0][1]
+        );
+    }
     Ok(())
 }

@@ -124,8 +124,12 @@ struct CachedReference {
 /// render at max depth 256 with finite pixels (size and scene are checked
 /// against each scene later).
 fn read_references(paths: &[PathBuf]) -> Result<Vec<CachedReference>, CliError> {
-    let expected =
-        niebla::integrator::IntegratorSettings::VolPath { max_depth: 256, volume_light_sampling: true }.key();
+    let expected = niebla::integrator::IntegratorSettings::VolPath {
+        max_depth: 256,
+        volume_light_sampling: true,
+        emitter_guiding: true,
+    }
+    .key();
     let mut out = Vec::new();
     for path in paths {
         let bad =

@@ -170,8 +170,11 @@ fn tracing_and_queries(scene: &Scene, photons: u32) {
 /// relative MSE estimated from the halves (their relative MSE is twice each
 /// half's, four times the mean's).
 fn reference(scene: &Scene, args: &PhotonBenchArgs) -> Result<(Image, f64), CliError> {
-    let volpath =
-        IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH, volume_light_sampling: true };
+    let volpath = IntegratorSettings::VolPath {
+        max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
+        volume_light_sampling: true,
+        emitter_guiding: true,
+    };
     let (_, probe_s) = timed(scene, &volpath, 16, 100, args.threads.threads)?;
     let half = (args.reference_seconds / 2.0 / probe_s.max(1e-6) * 16.0).clamp(16.0, 1e8);
     let half = 1u32 << (half.log2().floor() as u32).min(30);
@@ -264,8 +267,11 @@ fn repeated_means(
 /// is extrapolated as error ~ 1 / time and marked `~`.
 fn convergence(scene: &Scene, scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> Result<(), CliError> {
     let (reference, noise) = reference(scene, args)?;
-    let volpath =
-        IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH, volume_light_sampling: true };
+    let volpath = IntegratorSettings::VolPath {
+        max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
+        volume_light_sampling: true,
+        emitter_guiding: true,
+    };
     println!(
         "{:<12} {:>7} {:>10} {:>12} {:>12} {:>10}",
         "integrator", "spp", "time s", "rel MSE", "- ref noise", "mean/ref"

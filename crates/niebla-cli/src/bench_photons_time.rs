@@ -204,8 +204,11 @@ fn cached_reference(
         return Ok((read.image, noise));
     }
     let half = (spp / 2).max(1);
-    let volpath =
-        IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH, volume_light_sampling: true };
+    let volpath = IntegratorSettings::VolPath {
+        max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
+        volume_light_sampling: true,
+        emitter_guiding: true,
+    };
     let cpu0 = process_cpu_seconds()?;
     let render_half = |seed: u64| -> Result<Image, CliError> {
         let options = RenderOptions { spp: half, seed, first_sample: 0, threads, sampler: Default::default() };
@@ -283,8 +286,11 @@ fn sweep(
 /// beam queries), and `ppb` once per `--tube-sin` value (or with the scene's
 /// or default settings).
 fn methods(scene_integrator: &IntegratorSettings, args: &PhotonBenchArgs) -> Vec<(String, IntegratorSettings)> {
-    let volpath =
-        IntegratorSettings::VolPath { max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH, volume_light_sampling: true };
+    let volpath = IntegratorSettings::VolPath {
+        max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
+        volume_light_sampling: true,
+        emitter_guiding: true,
+    };
     let mut rows = vec![
         ("volpath".to_string(), volpath),
         ("ppm".to_string(), photon_settings(scene_integrator, args, Some(VolumeQuery::March))),

@@ -239,7 +239,11 @@ fn scene_files_describe_area_lights_and_environment_maps() {
     // The rectangle light faces down (rotate_x 90 turns +z to -y): the floor sees it.
     let image = niebla::render::render(
         s,
-        &niebla::integrator::IntegratorSettings::VolPath { max_depth: 4, volume_light_sampling: true },
+        &niebla::integrator::IntegratorSettings::VolPath {
+            max_depth: 4,
+            volume_light_sampling: true,
+            emitter_guiding: true,
+        },
         &niebla::render::RenderOptions {
             spp: 4,
             seed: 0,

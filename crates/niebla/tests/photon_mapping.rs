@@ -61,7 +61,7 @@ const RAMP: &str = r#"{"type": "grid", "sigma_t": 2, "albedo": 0.8, "phase": {"t
                 "data": [0.25, 0.75, 1.25, 1.75]}}"#;
 
 fn volpath() -> IntegratorSettings {
-    IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true }
+    IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true, emitter_guiding: true }
 }
 
 fn ppm(photons: u32, radius: f32, surface_radius: f32, query: VolumeQuery) -> IntegratorSettings {

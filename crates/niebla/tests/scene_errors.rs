@@ -602,7 +602,7 @@ fn volpath_integrator_parses() {
     let desc = parse_scene_str(&text, FILE).unwrap();
     assert_eq!(
         desc.render.integrator.settings,
-        IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }
+        IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true, emitter_guiding: true }
     );
 }
 

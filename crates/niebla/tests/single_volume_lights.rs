@@ -140,8 +140,13 @@ fn single_with_volume_lights_equals_volpath_limited_to_one_scattering_event() {
                     "bsdf": {"type": "diffuse", "reflectance": 0.5}}]}"#,
     );
     let n = if slow() { 64 } else { 16 };
-    let reference =
-        batches(&scene, &IntegratorSettings::VolPath { max_depth: 2, volume_light_sampling: false }, 64, n, 5011);
+    let reference = batches(
+        &scene,
+        &IntegratorSettings::VolPath { max_depth: 2, volume_light_sampling: false, emitter_guiding: true },
+        64,
+        n,
+        5011,
+    );
     for sampling in [SingleSampling::Mis, SingleSampling::March] {
         let images = batches(&scene, &single(sampling, true), 8, n, 11);
         let mut lit = 0;

@@ -79,7 +79,12 @@ fn volpath_equals_single_in_the_thin_medium_limit() {
     // degrees of freedom (with 8 batches, Student's t with 7 degrees of
     // freedom put one of the 48 checked pixels past 4.5 "SE" by chance).
     let (a, sa) = batch_stats(&s, single, 16, 32);
-    let (b, sb) = batch_stats(&s, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true }, 1024, 32);
+    let (b, sb) = batch_stats(
+        &s,
+        IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true, emitter_guiding: true },
+        1024,
+        32,
+    );
     let mut checked = 0;
     let brightest = a.pixels.iter().map(|p| p.g()).fold(0.0f32, f32::max) as f64;
     for i in 0..64 {
@@ -137,7 +142,7 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
     });
     let sigma_s = Rgb::new(0.4, 2.0, 4.0);
     let sigma_a = sigma_s * 0.1;
-    let settings = IntegratorSettings::VolPath { max_depth: 256, volume_light_sampling: true };
+    let settings = IntegratorSettings::VolPath { max_depth: 256, volume_light_sampling: true, emitter_guiding: true };
     // Relative MSE per channel at 16 spp (4 independent renders) against a 2048-spp reference.
     let rel_mse_with = |s: &Scene, sampler: SamplerKind| -> [f64; 3] {
         let options = RenderOptions { spp: 2048, seed: 1, first_sample: 0, threads: None, sampler };

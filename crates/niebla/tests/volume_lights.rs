@@ -25,7 +25,7 @@ fn load(text: &str) -> Scene {
 }
 
 fn volpath(volume_light_sampling: bool) -> IntegratorSettings {
-    IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling }
+    IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling, emitter_guiding: true }
 }
 
 /// Per-pixel means over `batches` renders and the renders themselves.

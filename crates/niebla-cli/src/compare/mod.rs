@@ -166,6 +166,7 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
                 _ => IntegratorSettings::VolPath {
                     max_depth: IntegratorSettings::DEFAULT_MAX_DEPTH,
                     volume_light_sampling: true,
+                    emitter_guiding: true,
                 },
             };
             let budget = match (args.reference_spp, args.reference_time) {

@@ -57,6 +57,10 @@ pub enum IntegratorSettings {
         /// Whether next-event estimation samples emissive media as lights
         /// (`volume_light_sampling`, default true).
         volume_light_sampling: bool,
+        /// Whether surface vertices mix BSDF sampling with directions toward
+        /// the emitting region when emissive media are sampled as lights
+        /// (`emitter_guiding`, default true; the mean is the same either way).
+        emitter_guiding: bool,
     },
     /// Closed-form single scattering (Sun et al. 2005) in homogeneous media
     /// from point and spot lights; surfaces lit directly.
@@ -123,9 +127,10 @@ pub const INTEGRATORS: &[IntegratorEntry] = &[
         summary: "Volumetric path tracing (multiple scattering, unbiased)",
         interactive: false,
         parse: |o| {
-            volpath::settings::parse(o).map(|(max_depth, volume_light_sampling)| IntegratorSettings::VolPath {
-                max_depth,
-                volume_light_sampling,
+            volpath::settings::parse(o).map(|p| IntegratorSettings::VolPath {
+                max_depth: p.max_depth,
+                volume_light_sampling: p.volume_light_sampling,
+                emitter_guiding: p.emitter_guiding,
             })
         },
     },
@@ -192,7 +197,7 @@ pub fn entry(name: &str) -> Option<&'static IntegratorEntry> {
 /// use niebla::integrator::{registry, IntegratorSettings};
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
 /// let settings = registry::parse(object.as_object().unwrap()).unwrap();
-/// assert_eq!(settings, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true });
+/// assert_eq!(settings, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true, emitter_guiding: true });
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 0});
 /// let e = registry::parse(object.as_object().unwrap()).unwrap_err();
 /// assert_eq!((e.path.as_str(), e.message.as_str()), ("max_depth", "must be at least 1, got 0"));
@@ -227,9 +232,9 @@ pub fn parse(object: &Object) -> Result<IntegratorSettings, Located> {
 /// let object = serde_json::json!({"type": "volpath", "max_depth": 64});
 /// let object = object.as_object().unwrap();
 /// let same = registry::parse_with_overrides(object, Some("volpath"), &[]).unwrap();
-/// assert_eq!(same, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true });
+/// assert_eq!(same, IntegratorSettings::VolPath { max_depth: 64, volume_light_sampling: true, emitter_guiding: true });
 /// let deeper = registry::parse_with_overrides(object, None, &[("max_depth", 8.into())]).unwrap();
-/// assert_eq!(deeper, IntegratorSettings::VolPath { max_depth: 8, volume_light_sampling: true });
+/// assert_eq!(deeper, IntegratorSettings::VolPath { max_depth: 8, volume_light_sampling: true, emitter_guiding: true });
 /// let other = registry::parse_with_overrides(object, Some("single"), &[]).unwrap();
 /// assert_eq!(Some(other), registry::defaults("single"));
 /// ```
@@ -257,7 +262,7 @@ pub fn parse_with_overrides(
 ///
 /// ```
 /// use niebla::integrator::{registry, IntegratorSettings};
-/// assert_eq!(registry::defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true }));
+/// assert_eq!(registry::defaults("volpath"), Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true, emitter_guiding: true }));
 /// ```
 pub fn defaults(name: &str) -> Option<IntegratorSettings> {
     entry(name).map(|e| (e.parse)(Object::new()).expect("every integrator has valid defaults"))
@@ -304,8 +309,8 @@ impl IntegratorSettings {
             IntegratorSettings::Single { step, sampling, transmittance, volume_lights } => {
                 single::settings::key(*step, *sampling, *transmittance, *volume_lights)
             }
-            IntegratorSettings::VolPath { max_depth, volume_light_sampling } => {
-                volpath::settings::key(*max_depth, *volume_light_sampling)
+            IntegratorSettings::VolPath { max_depth, volume_light_sampling, emitter_guiding } => {
+                volpath::settings::key(*max_depth, *volume_light_sampling, *emitter_guiding)
             }
             IntegratorSettings::Analytic => "analytic".to_string(),
             IntegratorSettings::Hegeman(h) => hegeman::settings::key(h),
@@ -385,9 +390,14 @@ impl PreparedIntegrator {
             IntegratorSettings::Single { step, sampling, transmittance, volume_lights } => PreparedIntegrator::Single(
                 SingleIntegrator::for_scene(scene, step, sampling, transmittance, volume_lights),
             ),
-            IntegratorSettings::VolPath { max_depth, volume_light_sampling } => PreparedIntegrator::VolPath(Box::new(
-                VolPathIntegrator::for_scene_with(scene, max_depth, volume_light_sampling),
-            )),
+            IntegratorSettings::VolPath { max_depth, volume_light_sampling, emitter_guiding } => {
+                let integrator = VolPathIntegrator::for_scene_with(scene, max_depth, volume_light_sampling);
+                PreparedIntegrator::VolPath(Box::new(if emitter_guiding {
+                    integrator
+                } else {
+                    integrator.with_emitter_guide_fraction(0.0)
+                }))
+            }
             IntegratorSettings::Analytic => PreparedIntegrator::Analytic(AnalyticIntegrator::new()),
             IntegratorSettings::Hegeman(h) => PreparedIntegrator::Hegeman(Box::new(HegemanIntegrator::new(scene, h))),
             IntegratorSettings::Zhou(z) => PreparedIntegrator::Zhou(Box::new(ZhouIntegrator::new(scene, z))),
@@ -724,7 +734,7 @@ mod tests {
         );
         assert_eq!(
             defaults("volpath"),
-            Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true })
+            Some(IntegratorSettings::VolPath { max_depth: 1024, volume_light_sampling: true, emitter_guiding: true })
         );
         assert_eq!(defaults("analytic"), Some(IntegratorSettings::Analytic));
         assert_eq!(defaults("hegeman"), Some(IntegratorSettings::Hegeman(HegemanSettings::default())));

@@ -63,6 +63,9 @@ pub struct VolumeLights {
 struct Emitter {
     medium: MediumId,
     region: Region,
+    /// World bounds (min, max) of where it emits: the region's box, or the
+    /// cells whose emission estimate exceeds the weight floor.
+    bounds: (Vec3, Vec3),
 }
 
 /// Where an emitter's points are drawn.
@@ -119,13 +122,15 @@ impl VolumeLights {
                 Medium::Homogeneous(h) => homogeneous_region(scene, id).map(|(min, max)| {
                     let extent = max - min;
                     let volume = extent.x * extent.y * extent.z;
-                    (Region::Box { min, extent, inv_volume: 1.0 / volume }, h.l_ve.average() * volume)
+                    (Region::Box { min, extent, inv_volume: 1.0 / volume }, h.l_ve.average() * volume, (min, max))
                 }),
-                Medium::Grid(g) => cell_distribution(g).map(|(cells, power)| (Region::Cells(Box::new(cells)), power)),
+                Medium::Grid(g) => {
+                    cell_distribution(g).map(|(cells, power, bounds)| (Region::Cells(Box::new(cells)), power, bounds))
+                }
             };
-            if let Some((region, power)) = found {
+            if let Some((region, power, bounds)) = found {
                 if power > 0.0 && power.is_finite() {
-                    emitters.push(Emitter { medium: id, region });
+                    emitters.push(Emitter { medium: id, region, bounds });
                     weights.push(power);
                 }
             }
@@ -156,6 +161,13 @@ impl VolumeLights {
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.emitters.is_empty()
+    }
+
+    /// World bounds (min, max) of where each sampled medium emits: its
+    /// region's box (homogeneous) or the box of its cells whose emission
+    /// estimate is above the weight floor (grids).
+    pub fn emitting_bounds(&self) -> impl Iterator<Item = (Vec3, Vec3)> + '_ {
+        self.emitters.iter().map(|e| e.bounds)
     }
 
     /// A point drawn from the distribution with uniform numbers `u` (medium
@@ -255,9 +267,10 @@ fn homogeneous_region(scene: &Scene, id: MediumId) -> Option<(Vec3, Vec3)> {
     (extent.cmpgt(Vec3::ZERO).all() && extent.is_finite()).then_some((lo, hi))
 }
 
-/// The cell distribution of a grid medium and its total weight (emitted
-/// radiance per unit length times world volume), or `None` when no cell emits.
-fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32)> {
+/// The cell distribution of a grid medium, its total weight (emitted
+/// radiance per unit length times world volume) and the world bounds of its
+/// cells whose weight is above the floor, or `None` when no cell emits.
+fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32, (Vec3, Vec3))> {
     let majorant = &g.majorant;
     let res = majorant.res();
     let (lo, hi) = majorant.bounds();
@@ -302,6 +315,26 @@ fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32)> {
     if !(largest > 0.0) || !largest.is_finite() {
         return None;
     }
+    // Index bounds of the cells above the floor, then their world box.
+    let (mut cmin, mut cmax) = ([usize::MAX; 3], [0usize; 3]);
+    for (&index, &w) in cells.iter().zip(&weights) {
+        if w > CELL_FLOOR * largest {
+            let index = index as usize;
+            let c = [index % res[0], (index / res[0]) % res[1], index / (res[0] * res[1])];
+            for a in 0..3 {
+                cmin[a] = cmin[a].min(c[a]);
+                cmax[a] = cmax[a].max(c[a] + 1);
+            }
+        }
+    }
+    let (mut wmin, mut wmax) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for k in 0..8 {
+        let pick = |a: usize| (if k >> a & 1 == 0 { cmin[a] } else { cmax[a] }) as f32;
+        let q = lo + size * Vec3::new(pick(0), pick(1), pick(2));
+        let p = grid_to_world.transform_point3(q);
+        wmin = wmin.min(p);
+        wmax = wmax.max(p);
+    }
     for w in &mut weights {
         *w = w.max(CELL_FLOOR * largest);
     }
@@ -322,7 +355,7 @@ fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32)> {
         dist,
         inv_cell_volume: 1.0 / cell_volume,
     };
-    Some((c, total))
+    Some((c, total, (wmin, wmax)))
 }
 
 /// Emitted radiance per unit length at `p` (channel mean, finite, >= 0).

@@ -1,19 +1,30 @@
-//! Direction sampling at a `volpath` vertex mixed with the guide toward
-//! lights inside media ([`LightGuide`]): one-sample MIS of phase or BSDF
-//! sampling and guided directions.
+//! Direction sampling at a `volpath` vertex mixed with a guide, toward
+//! lights inside media ([`LightGuide`]) or toward emissive media at surfaces
+//! ([`EmitterGuide`]): one-sample MIS of phase or BSDF sampling and guided
+//! directions.
 
 use crate::bsdf::Bsdf;
 use crate::math::Vec3;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
 
+use super::emitter_guide::EmitterGuide;
 use super::layout::{self, Block};
 use super::light_guide::LightGuide;
+
+/// What a vertex's guided directions aim at.
+#[derive(Clone, Copy)]
+pub(super) enum GuideTarget<'a> {
+    /// Point and spot lights inside media.
+    Lamps(&'a LightGuide),
+    /// The emitting region of emissive media (surface vertices only).
+    Emitters(&'a EmitterGuide),
+}
 
 /// Direction guiding at a vertex: the guide and the probability of using it.
 #[derive(Clone, Copy)]
 pub(super) struct Guiding<'a> {
-    pub(super) guide: &'a LightGuide,
+    pub(super) target: GuideTarget<'a>,
     pub(super) fraction: f32,
 }
 
@@ -22,7 +33,25 @@ impl Guiding<'_> {
     /// `pdf` of phase or BSDF sampling there.
     #[inline]
     pub(super) fn mix(&self, x: Vec3, w: Vec3, pdf: f32) -> f32 {
-        (1.0 - self.fraction) * pdf + self.fraction * self.guide.pdf(x, w)
+        (1.0 - self.fraction) * pdf + self.fraction * self.pdf(x, w)
+    }
+
+    /// Solid-angle density (1/sr) of the guide's own directions from `x` at `w`.
+    #[inline]
+    fn pdf(&self, x: Vec3, w: Vec3) -> f32 {
+        match self.target {
+            GuideTarget::Lamps(g) => g.pdf(x, w),
+            GuideTarget::Emitters(g) => g.pdf(x, w),
+        }
+    }
+
+    /// A guided unit direction from `x` (see the targets' `sample`).
+    #[inline]
+    fn sample(&self, x: Vec3, u_light: f32, u_dir: glam::Vec2, u_r: f32) -> Option<Vec3> {
+        match self.target {
+            GuideTarget::Lamps(g) => g.sample(x, u_light, u_dir, u_r),
+            GuideTarget::Emitters(g) => g.sample(x, u_light, u_dir, u_r),
+        }
     }
 }
 
@@ -43,7 +72,7 @@ pub(super) fn sample_phase(
         return phase.sample(wo, sampler.next_2d());
     };
     let (u_choice, u_light, u_dir, u_r) = guided_numbers(block, sampler);
-    let wi = if u_choice < g.fraction { g.guide.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
+    let wi = if u_choice < g.fraction { g.sample(x, u_light, u_dir, u_r)? } else { phase.sample(wo, u_dir)?.wi };
     // A phase function's pdf is its value: one evaluation serves both.
     let value = phase.eval(wo, wi);
     let pdf = g.mix(x, wi, value);
@@ -71,11 +100,8 @@ pub(super) fn sample_bsdf(
         return bsdf.sample(n, wo, u_lobe, sampler.next_2d());
     };
     let (u_choice, u_light, u_dir, u_r) = guided_numbers(block, sampler);
-    let wi = if u_choice < g.fraction {
-        g.guide.sample(p, u_light, u_dir, u_r)?
-    } else {
-        bsdf.sample(n, wo, u_lobe, u_dir)?.wi
-    };
+    let wi =
+        if u_choice < g.fraction { g.sample(p, u_light, u_dir, u_r)? } else { bsdf.sample(n, wo, u_lobe, u_dir)?.wi };
     let f = bsdf.eval(n, wo, wi);
     if f.is_black() {
         return None;

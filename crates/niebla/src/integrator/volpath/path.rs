@@ -44,7 +44,7 @@ impl VolPathIntegrator {
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> S {
-        let LightSampling { lights, guiding, volume, forced: forced_medium } = light_sampling;
+        let LightSampling { lights, guiding, emitter_guiding, volume, forced: forced_medium } = light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -347,8 +347,11 @@ impl VolPathIntegrator {
             // Guiding toward lights inside a medium, for non-specular surfaces
             // whose side of `wo` lies in a medium.
             let bsdf = scene.surface_bsdf(&hit);
-            let surface_guiding =
-                guiding.filter(|_| medium.is_some() && !bsdf.is_specular() && !bsdf.has_rough_transmission());
+            // Else guiding toward emissive media, when they are sampled as lights.
+            let surface_guiding = guiding
+                .filter(|_| medium.is_some())
+                .or(emitter_guiding)
+                .filter(|_| !bsdf.is_specular() && !bsdf.has_rough_transmission());
             if !bsdf.is_specular() {
                 let vertex = NeeVertex {
                     p,
