@@ -71,7 +71,7 @@ pub struct VolPathIntegrator {
     /// when emissive media are sampled as lights, of drawing the direction
     /// toward the emitting region (`EmitterGuide`) instead of from the
     /// BSDF (one-sample MIS). 0 turns it off; values above
-    /// [`MAX_GUIDE_FRACTION`] act as it.
+    /// `MAX_GUIDE_FRACTION` act as it.
     pub emitter_guide_fraction: f32,
     /// What depends only on the scene, when computed once for the scene
     /// being rendered ([`VolPathIntegrator::for_scene`]); else found for
