@@ -227,3 +227,12 @@ fn textured_anisotropic_and_twosided_roughness_match_mitsuba() {
 fn anisotropic_roughness_along_dpdu_matches_mitsuba() {
     check("aniso_dpdu");
 }
+
+/// Mitsuba's `cube` with its own uvs and dp/du: a twosided diffuse cube
+/// with a bitmap reflectance (unevenly scaled, axis-aligned) and a turned
+/// cube with anisotropic GGX roughness, beside a sphere of fog (reference:
+/// 64 Mitsuba renders).
+#[test]
+fn cube_with_uvs_matches_mitsuba() {
+    check("cube_uv");
+}
