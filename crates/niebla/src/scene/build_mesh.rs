@@ -167,13 +167,14 @@ fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, Strin
     }
     let closedness = data.closedness();
     let MeshData { positions, normals, uvs, indices } = data;
-    let mesh = TriangleMesh::new(
+    let mut mesh = TriangleMesh::new(
         positions.into_iter().map(Vec3::from).collect(),
         indices,
         normals.map(|n| n.into_iter().map(Vec3::from).collect()),
         uvs.map(|u| u.into_iter().map(Vec2::from).collect()),
     )
     .map_err(|e| e.to_string())?;
+    mesh.winding_flipped = desc.flip_normals;
     if mesh.triangle_count() == 0 {
         return Err(format!("all {} triangles are degenerate (no area)", mesh.degenerate));
     }
