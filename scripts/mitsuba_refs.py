@@ -18,7 +18,8 @@ also from fixed formulas.
 vertex_texcoords, faces), and the surface interactions (p, n, uv, dp_du,
 dp_dv) of rays aimed at two points of each face of a cube placed by a fixed
 `to_world` matrix (turned, unevenly scaled, moved), and those of a triangle
-without uvs with and without `flip_normals`, for the importer's tests.
+without uvs with and without `flip_normals`, and the vertices of a cube
+turned by `<rotate>` about a non-unit axis, for the importer's tests.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
 statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
@@ -148,6 +149,10 @@ def write_cube(mi):
                      "n": list(si.n), "uv": list(si.uv), "dp_du": list(si.dp_du)})
     table["bare_triangle"] = tri
     table["bare_hits"] = bare
+    # <rotate x="1" y="1" z="0.3" angle="40"/>: Mitsuba uses the axis as written (not normalized).
+    rotated = mi.load_string('<scene version="3.0.0"><shape type="cube"><transform name="to_world">'
+                             '<rotate x="1" y="1" z="0.3" angle="40"/></transform></shape></scene>').shapes()[0]
+    table["rotated_cube_positions"] = np.array(mi.traverse(rotated)["vertex_positions"]).reshape(-1, 3).tolist()
     os.makedirs(OUT, exist_ok=True)
     with open(os.path.join(os.path.dirname(OUT), "mitsuba_cube.json"), "w") as f:
         json.dump(table, f)
