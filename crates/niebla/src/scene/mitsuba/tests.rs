@@ -699,7 +699,13 @@ fn cube_with_uvs_is_mitsubas_mesh() {
            <float name="alpha_v" value="0.3"/></bsdf></bsdf>"#,
     ];
     for bsdf in bsdfs {
-        for (to_world, flip) in [("", ""), ("<transform name=\"to_world\"><rotate x=\"1\" angle=\"30\"/></transform>", "<boolean name=\"flip_normals\" value=\"true\"/>")] {
+        for (to_world, flip) in [
+            ("", ""),
+            (
+                "<transform name=\"to_world\"><rotate x=\"1\" angle=\"30\"/></transform>",
+                "<boolean name=\"flip_normals\" value=\"true\"/>",
+            ),
+        ] {
             let s = import(&format!("<shape type=\"cube\">{to_world}{flip}{bsdf}</shape>")).unwrap().scene;
             let shape = &s["shapes"][0];
             assert_eq!(shape["type"], json!("mesh"), "{bsdf}");
@@ -709,8 +715,18 @@ fn cube_with_uvs_is_mitsubas_mesh() {
                 ("uvs", "vertex_texcoords"),
                 ("indices", "faces"),
             ] {
-                let a: Vec<f64> = shape[ours].as_array().unwrap().iter().flat_map(|v| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap())).collect();
-                let b: Vec<f64> = table[theirs].as_array().unwrap().iter().flat_map(|v| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap())).collect();
+                let a: Vec<f64> = shape[ours]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .flat_map(|v| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+                    .collect();
+                let b: Vec<f64> = table[theirs]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .flat_map(|v| v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+                    .collect();
                 assert_eq!(a, b, "{ours} vs Mitsuba's {theirs}");
             }
             assert_eq!(shape["flip_normals"].as_bool().unwrap_or(false), !flip.is_empty());
@@ -718,13 +734,15 @@ fn cube_with_uvs_is_mitsubas_mesh() {
         }
     }
     // A plain surface: a box, or 12 triangles without uvs.
-    let plain = import(r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></shape>"#)
-        .unwrap()
-        .scene;
+    let plain =
+        import(r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf></shape>"#)
+            .unwrap()
+            .scene;
     assert_eq!(plain["shapes"][0]["type"], json!("box"));
-    let turned = import(r#"<shape type="cube"><transform name="to_world"><rotate x="1" angle="30"/></transform></shape>"#)
-        .unwrap()
-        .scene;
+    let turned =
+        import(r#"<shape type="cube"><transform name="to_world"><rotate x="1" angle="30"/></transform></shape>"#)
+            .unwrap()
+            .scene;
     assert_eq!(turned["shapes"][0]["indices"].as_array().unwrap().len(), 12);
     assert!(turned["shapes"][0].get("uvs").is_none());
 }
@@ -754,9 +772,11 @@ fn rotate_keeps_a_non_unit_axis_as_mitsuba() {
         }
     }
     let placed = |axis: &str| {
-        import(&format!(r#"<shape type="rectangle"><transform name="to_world"><rotate {axis} angle="30"/></transform></shape>"#))
-            .unwrap()
-            .scene["shapes"][0]["to_world"]
+        import(&format!(
+            r#"<shape type="rectangle"><transform name="to_world"><rotate {axis} angle="30"/></transform></shape>"#
+        ))
+        .unwrap()
+        .scene["shapes"][0]["to_world"]
             .clone()
     };
     assert_eq!(placed(r#"y="1""#), json!({"rotate_y": 30.0}));
