@@ -203,8 +203,8 @@ impl Shape {
     /// twice the placement's local x axis; disk: the placement of the local
     /// radial direction `(cos phi, sin phi, 0)` (`(1, 0, 0)` at the
     /// center); box: the axis its face's `u` runs along, times the box's
-    /// extent on it; mesh: from the triangle's uvs, else
-    /// `coordinate_system(n)` (see [`MeshInstance::dpdu`]); a moving shape's
+    /// extent on it; mesh: from the triangle's uvs, else its edge `p1 -
+    /// p0` (see [`MeshInstance::dpdu`]); a moving shape's
     /// in its pose at `time`.
     pub fn dpdu(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> Vec3 {
         use crate::math::PI;

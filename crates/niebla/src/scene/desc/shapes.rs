@@ -42,7 +42,7 @@ pub enum TangentFrameDesc {
     /// `"dpdu"`: the shape's `dp/du` made orthogonal to the shading normal,
     /// Mitsuba 3's frame (sphere: along the azimuth; rectangle: its local
     /// x; disk: radial; box: the face's u axis; mesh: from its uvs, else
-    /// the normal's basis).
+    /// its barycentric uv, i.e. the triangle's edge `p1 - p0`).
     Dpdu,
 }
 
@@ -125,7 +125,9 @@ pub struct MeshDesc {
     #[serde(default)]
     pub to_world: TransformDesc,
     /// Turn the mesh inside out: reverse every triangle's winding and negate
-    /// the vertex normals (Mitsuba 3's `flip_normals`). Default false.
+    /// the vertex normals (Mitsuba 3's `flip_normals`; the uv and dp/du of a
+    /// mesh without uvs keep the file's corner order, as Mitsuba's). Default
+    /// false.
     #[serde(default)]
     pub flip_normals: bool,
     /// Shade with the flat triangle normals even where the mesh has vertex
