@@ -46,9 +46,10 @@ const CUBE_TRIANGLES: [[u32; 3]; 12] = [
 /// `[-1, 1]^3` as 24 vertices, 4 per face, with the face's outward normal
 /// and uvs `(0, 1), (1, 1), (1, 0), (0, 0)`, and 2 triangles per face
 /// (local vertices `0 1 2` and `3 0 2`), faces in the order -y, +y, +x, +z,
-/// -x, -z. A face's vertex with uv `(u, v)` sits at `n + (2u - 1) a_u + (2v
-/// - 1) a_v` with the face's axes `a_u`, `a_v` below, so that `dp/du = 2
-/// a_u` on every face. Returns positions, normals, uvs and triangles.
+/// -x, -z. A face's vertex with uv `(u, v)` sits at
+/// `n + (2u - 1) a_u + (2v - 1) a_v` with the face's axes `a_u`, `a_v`
+/// below, so that `dp/du = 2 a_u` on every face. Returns positions,
+/// normals, uvs and triangles.
 #[allow(clippy::type_complexity)]
 pub(super) fn mitsuba_cube() -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
     // (normal, a_u, a_v) per face, read off Mitsuba's vertex table.
