@@ -37,6 +37,11 @@ pub struct TriangleMesh {
     /// Mitsuba 3's `flip_normals`, which keeps the winding and negates the
     /// normal. Default false (set by the scene builder).
     pub winding_flipped: bool,
+    /// True when a hit whose `wo` lies behind the interpolated normal but in
+    /// front of the triangle keeps the shading normal (Mitsuba 3's rule,
+    /// `"shading_normal_backside": "mitsuba"`; see
+    /// [`SurfaceHit::backside_ns`]). Default false (set by the scene builder).
+    pub keeps_backside_ns: bool,
     /// The corners of each triangle of `triangles`, copied so that a leaf's
     /// triangles are read from contiguous memory without the indirection
     /// through the vertex list (36 bytes per triangle).
@@ -142,7 +147,17 @@ impl TriangleMesh {
         let mut bvh = bvh;
         bvh.order = (0..triangles.len() as u32).collect();
         let corners = triangles.iter().map(|t| t.map(|i| positions[i as usize])).collect();
-        Ok(TriangleMesh { positions, normals, uvs, triangles, degenerate, winding_flipped: false, corners, bvh })
+        Ok(TriangleMesh {
+            positions,
+            normals,
+            uvs,
+            triangles,
+            degenerate,
+            winding_flipped: false,
+            keeps_backside_ns: false,
+            corners,
+            bvh,
+        })
     }
 
     /// uv of barycentric point `(b1, b2)` of triangle `prim`: interpolated
@@ -347,14 +362,26 @@ impl MeshInstance {
     /// the shading normal interpolated from the vertex normals (turned to the
     /// geometric normal's side; the geometric one without vertex normals).
     #[inline]
-    pub fn surface_at(&self, _ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
-        self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit)
+    pub fn surface_at(&self, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        let s = self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit);
+        self.mark_backside(s, ray)
+    }
+
+    /// `s` with [`SurfaceHit::backside_ns`] set where this mesh keeps the
+    /// shading normal and `-ray.d` lies on its other side than on `n`'s.
+    #[inline]
+    fn mark_backside(&self, mut s: SurfaceHit, ray: &Ray) -> SurfaceHit {
+        if self.mesh.keeps_backside_ns {
+            let wo = -ray.d;
+            s.backside_ns = (wo.dot(s.ns) > 0.0) != (wo.dot(s.n) > 0.0);
+        }
+        s
     }
 
     /// [`MeshInstance::surface_at`] of a hit found by [`MeshInstance::hit_posed`] with `pose`.
     #[inline]
-    pub fn surface_at_posed(&self, pose: &Transform, hit: &PrimitiveHit) -> SurfaceHit {
-        self.surface_by(Some(pose), hit)
+    pub fn surface_at_posed(&self, pose: &Transform, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        self.mark_backside(self.surface_by(Some(pose), hit), ray)
     }
 
     /// The hit record with the mesh placed by `pose` (`None`: the identity).
@@ -390,7 +417,7 @@ impl MeshInstance {
             }
             None => n,
         };
-        SurfaceHit { t: hit.t, p, n, ns }
+        SurfaceHit { t: hit.t, p, n, ns, backside_ns: false }
     }
 
     /// Mitsuba 3's `dp/du` (world space, not normalized) at `hit` on this

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use niebla_mesh::MeshData;
 
-use super::desc::MeshDesc;
+use super::desc::{MeshDesc, ShadingBacksideDesc};
 use super::SceneError;
 use crate::geometry::{MeshInstance, Transform, TriangleMesh};
 use crate::limits::MemoryBudget;
@@ -175,6 +175,7 @@ fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, Strin
     )
     .map_err(|e| e.to_string())?;
     mesh.winding_flipped = desc.flip_normals;
+    mesh.keeps_backside_ns = desc.shading_normal_backside == ShadingBacksideDesc::Mitsuba;
     if mesh.triangle_count() == 0 {
         return Err(format!("all {} triangles are degenerate (no area)", mesh.degenerate));
     }

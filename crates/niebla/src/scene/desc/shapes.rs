@@ -143,6 +143,28 @@ pub struct MeshDesc {
     /// behind its normals. Default false (such a mesh is an error).
     #[serde(default)]
     pub allow_open: bool,
+    /// `"shading_normal_backside"`: what the surface does where the
+    /// direction toward the viewer lies behind the interpolated vertex
+    /// normal but in front of the triangle; default `"geometric"`.
+    #[serde(default)]
+    pub shading_normal_backside: ShadingBacksideDesc,
+}
+
+/// `"shading_normal_backside"` of a mesh with vertex normals: the rule for a
+/// hit whose `wo` (toward the viewer) lies on the other side of the shading
+/// normal than of the geometric normal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadingBacksideDesc {
+    /// `"geometric"` (the default, niebla's rule before 2026-12): the BSDF
+    /// is evaluated about the geometric normal there.
+    #[default]
+    Geometric,
+    /// `"mitsuba"`: Mitsuba 3's rule: the BSDF is evaluated about the
+    /// shading normal with `wo` behind it, so one-sided BSDFs (diffuse,
+    /// conductors, plastics) give zero, `twosided` shows its back side and
+    /// dielectrics treat `wo` as coming from inside.
+    Mitsuba,
 }
 
 /// A sphere; its normal points outward.

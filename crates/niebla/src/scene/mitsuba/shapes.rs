@@ -150,6 +150,10 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             }
             if p.boolean("face_normals")?.unwrap_or(false) {
                 shape.insert("face_normals".into(), json!(true));
+            } else {
+                // Vertex normals (if the file has them) shade as in Mitsuba 3:
+                // about the shading normal also where `wo` lies behind it.
+                shape.insert("shading_normal_backside".into(), json!("mitsuba"));
             }
             flip_tex_coords = p.boolean("flip_tex_coords")?.unwrap_or(t == "obj");
         }
