@@ -138,6 +138,12 @@ def main():
         # Same resolution on both sides: the JSON is edited, the XML gets the same numbers.
         cam["width"], cam["height"] = a.size, h
         d["sensor"]["film"]["width"], d["sensor"]["film"]["height"] = a.size, h
+        # An XML mesh's vertex normals shade by Mitsuba's rule where wo lies
+        # behind them (the importer's "shading_normal_backside": "mitsuba"):
+        # the JSON side says so too.
+        for shape in desc.get("shapes", []):
+            if shape.get("type") == "mesh" and not shape.get("face_normals"):
+                shape.setdefault("shading_normal_backside", "mitsuba")
         js = os.path.join(os.path.dirname(path), f".roundtrip_{name}.json")
         xml = os.path.join(out, name + ".xml")
         with open(js, "w") as f:

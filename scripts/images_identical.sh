@@ -5,7 +5,9 @@
 # bit for bit (header attributes are ignored).
 #   bash scripts/images_identical.sh BASE [SPP]
 # Cases: every integrator on the built-in default scene and on
-# scenes/smoke.json, and each scene of scenes/ with its own integrator.
+# scenes/smoke.json, each scene of scenes/ with its own integrator, and each
+# Mitsuba XML scene of scenes/mitsuba/ that BASE has too.
+# BASE_BIN=path uses that binary (built from BASE) instead of building one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 base=${1:?usage: images_identical.sh BASE [SPP]}
@@ -14,7 +16,9 @@ root=$PWD/target/identical
 mkdir -p "$root"
 rev=$(git rev-parse --short "$base")
 src=$root/src-$rev
-if [ ! -x "$root/niebla-$rev" ]; then
+if [ -n "${BASE_BIN:-}" ]; then
+  cp "$BASE_BIN" "$root/niebla-$rev"
+elif [ ! -x "$root/niebla-$rev" ]; then
   rm -rf "$src"
   git worktree prune
   git worktree add --detach "$src" "$rev" >/dev/null
@@ -36,6 +40,11 @@ done
 for scene in scenes/*.json; do
   cases+=("$scene own")
 done
+for scene in scenes/mitsuba/*.xml; do
+  if git cat-file -e "$rev:$scene" 2>/dev/null; then
+    cases+=("$scene own")
+  fi
+done
 out=$root/images
 rm -rf "$out" && mkdir -p "$out/base" "$out/head"
 failed=0
@@ -47,10 +56,10 @@ for case in "${cases[@]}"; do
     args+=(--integrator "${integrator%%:*}")
     [[ $integrator == *:* ]] && args+=(--sampling "${integrator#*:}")
   fi
-  name=$(basename "$scene" .json)-${integrator/:/-}.exr
+  name=$(basename "${scene%.*}")-${integrator/:/-}.exr
   "$root/niebla-$rev" "${args[@]}" -o "$out/base/$name" >/dev/null
   "$head_bin" "${args[@]}" -o "$out/head/$name" >/dev/null
-  "$cmp_bin" "$out/base/$name" "$out/head/$name" || failed=$((failed + 1))
+  "$cmp_bin" "$out/base/$name" "$out/head/$name" || { failed=$((failed + 1)); echo "differs: $case"; }
 done
 echo "${#cases[@]} images compared with $rev at $spp spp: $failed differ"
 [ "$failed" = 0 ]

@@ -7,6 +7,8 @@ Run with the bench venv (pip mitsuba):
 
     /work/main/bench/.venv/bin/python scripts/mitsuba_bsdf_values.py --frames \
         > crates/niebla/tests/reference/mitsuba_bsdf_frames.txt
+    /work/main/bench/.venv/bin/python scripts/mitsuba_bsdf_values.py --backside \
+        > crates/niebla/tests/reference/mitsuba_bsdf_backside.txt
 
 The first form prints, per line, a JSON object: the BSDF's parameters (the
 same keys niebla's scene files use), Mitsuba's local-frame directions `wi`
@@ -20,6 +22,11 @@ a normal and a dp/du that is not orthogonal to it
 (`SurfaceInteraction3f.initialize_sh_frame`, Gram-Schmidt): per line the
 BSDF, the world normal `n`, `dp_du`, world directions `wi` and `wo`, and
 Mitsuba's `eval` (including |cos(wo)|) and `pdf` of the local directions.
+The fourth evaluates diffuse, roughconductor, twosided diffuse,
+roughdielectric and dielectric where `wi` (toward the camera) lies in front
+of the geometric normal but behind the shading normal (an interpolated
+normal seen from behind): eval and pdf toward four `wo`, and one sample's
+weight and direction, per line.
 """
 import json
 import math
@@ -153,9 +160,53 @@ def frames():
                                       "pdf": float(p)}))
 
 
+BACKSIDE_CONFIGS = [
+    {"type": "diffuse", "reflectance": [0.8, 0.5, 0.2]},
+    {"type": "roughconductor", "material": "Al", "alpha": 0.2},
+    {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": [0.8, 0.5, 0.2]}},
+    {"type": "roughdielectric", "int_ior": 1.5, "alpha": 0.2},
+    {"type": "dielectric", "int_ior": 1.5},
+]
+
+
+def backside():
+    """wi (toward the camera) in front of the geometric normal n = +z but
+    behind the shading normal ns (n turned 30 degrees about x): Mitsuba's
+    eval/pdf toward several wo and one sample, per line."""
+    print(f"# Mitsuba {mi.__version__}, variant scalar_rgb; geometric n = +z, shading ns = n turned 30 deg about x; "
+          "world wi (toward the camera), wo (toward the light); eval includes |cos(wo)| about ns; "
+          "sample at (u1, u2) = (0.3, (0.4, 0.6)): weight and world wo")
+    ctx = mi.BSDFContext()
+    t = math.radians(30)
+    ns = [0.0, -math.sin(t), math.cos(t)]
+    wi = normalize([0.0, 0.9, 0.2])  # above n (z > 0), below ns (dot < 0)
+    wos = [normalize(v) for v in ([0.0, 0.3, 1.0], [0.3, -0.5, 0.8], [0.0, 0.6, -0.8], [0.0, -0.9, -0.3])]
+    for config in BACKSIDE_CONFIGS:
+        plugin = {key: ({"type": "rgb", "value": v} if isinstance(v, list) else
+                        {kk: ({"type": "rgb", "value": vv} if isinstance(vv, list) else vv) for kk, vv in v.items()}
+                        if isinstance(v, dict) else v) for key, v in config.items()}
+        bsdf = mi.load_dict(plugin)
+        si = mi.SurfaceInteraction3f()
+        si.n = mi.Normal3f(0, 0, 1)
+        si.sh_frame = mi.Frame3f(mi.Vector3f(ns))
+        si.wi = si.to_local(mi.Vector3f(wi))
+        for wo in wos:
+            e = bsdf.eval(ctx, si, si.to_local(mi.Vector3f(wo)))
+            p = bsdf.pdf(ctx, si, si.to_local(mi.Vector3f(wo)))
+            print(json.dumps({"bsdf": config, "n": [0, 0, 1], "ns": ns, "wi": wi, "wo": wo,
+                              "eval": [float(e[0]), float(e[1]), float(e[2])], "pdf": float(p)}))
+        bs, w = bsdf.sample(ctx, si, 0.3, mi.Point2f(0.4, 0.6))
+        wo = si.to_world(bs.wo)
+        print(json.dumps({"bsdf": config, "n": [0, 0, 1], "ns": ns, "wi": wi, "sample": [0.3, 0.4, 0.6],
+                          "sampled_wo": [float(c) for c in wo], "weight": [float(w[0]), float(w[1]), float(w[2])],
+                          "sampled_pdf": float(bs.pdf)}))
+
+
 if __name__ == "__main__":
     if "--conductors" in sys.argv:
         conductors()
+    elif "--backside" in sys.argv:
+        backside()
     elif "--frames" in sys.argv:
         frames()
     else:

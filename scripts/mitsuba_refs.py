@@ -1,9 +1,9 @@
 """Mitsuba 3 references for the XML test scenes in scenes/mitsuba/.
 
-    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--renders 16] [--spp 64] [NAME ...]
+    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--cube] [--renders 16] [--spp 64] [NAME ...]
 
 (disk_roughplastic was made with `--renders 64 disk_roughplastic`, and
-aniso_dpdu with `--renders 64 aniso_dpdu`: their image means need the
+aniso_dpdu with `--renders 64 aniso_dpdu`, cube_uv with `--renders 64 cube_uv`, smooth_normals with `--renders 64 smooth_normals`: their image means need the
 smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
@@ -13,6 +13,13 @@ uniform 16x8 sky, smoke.vol, a 16^3 smooth blob, and albedo_rgb.vol, a 3-channel
 16 x 8 8-bit sRGB image, and tex_raw.png, a 4 x 4 8-bit image read raw) and
 of the `rough_textured` scene (alpha_gray.png, an 8 x 8 8-bit gray roughness map read raw),
 also from fixed formulas.
+`--cube` writes crates/niebla/tests/data/mitsuba_cube.json: Mitsuba's own
+`cube` mesh as `mi.traverse` gives it (vertex_positions, vertex_normals,
+vertex_texcoords, faces), and the surface interactions (p, n, uv, dp_du,
+dp_dv) of rays aimed at two points of each face of a cube placed by a fixed
+`to_world` matrix (turned, unevenly scaled, moved), and those of a triangle
+without uvs with and without `flip_normals`, and the vertices of a cube
+turned by `<rotate>` about a non-unit axis, for the importer's tests.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
 statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
@@ -39,7 +46,7 @@ OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
-         "rough_textured", "rough_aniso_twosided", "aniso_dpdu"]
+         "rough_textured", "rough_aniso_twosided", "aniso_dpdu", "cube_uv", "smooth_normals"]
 
 
 def write_data(mi):
@@ -94,6 +101,63 @@ def write_textures(mi):
     mi.Bitmap(gray, pixel_format=mi.Bitmap.PixelFormat.Y).write(os.path.join(SCENES, "data", "alpha_gray.png"))
 
 
+def write_cube(mi):
+    """Mitsuba's cube mesh and its surface interactions under a fixed to_world."""
+    cube = mi.load_dict({"type": "cube"})
+    params = mi.traverse(cube)
+    table = {
+        "mitsuba": mi.__version__,
+        "variant": mi.variant(),
+        "vertex_positions": np.array(params["vertex_positions"]).reshape(-1, 3).tolist(),
+        "vertex_normals": np.array(params["vertex_normals"]).reshape(-1, 3).tolist(),
+        "vertex_texcoords": np.array(params["vertex_texcoords"]).reshape(-1, 2).tolist(),
+        "faces": np.array(params["faces"]).reshape(-1, 3).tolist(),
+    }
+    to_world = mi.ScalarTransform4f().translate([0.4, -0.3, 0.7]).rotate([1, 2, 0.5], 37).scale([0.6, 1.3, 0.9])
+    m = np.array(to_world.matrix, dtype=np.float64)
+    scene = mi.load_dict({"type": "scene", "cube": {"type": "cube", "to_world": to_world}})
+    hits = []
+    for n in np.vstack([np.eye(3), -np.eye(3)]):
+        k = int(np.argmax(np.abs(n)))
+        a, b = [i for i in range(3) if i != k]
+        for s, t in [(0.5, 0.3), (-0.6, -0.4)]:
+            q = n.copy()
+            q[a], q[b] = s, t
+            p = (m @ np.append(q, 1.0))[:3]
+            nw = np.linalg.inv(m[:3, :3]).T @ n
+            nw /= np.linalg.norm(nw)
+            o = p + 0.5 * nw
+            si = scene.ray_intersect(mi.Ray3f(o.tolist(), (-nw).tolist()))
+            hits.append({"origin": o.tolist(), "direction": (-nw).tolist(), "p": list(si.p), "n": list(si.n),
+                         "uv": list(si.uv), "dp_du": list(si.dp_du), "dp_dv": list(si.dp_dv)})
+    table["to_world"] = m.tolist()
+    table["hits"] = hits
+    # A triangle without uvs, as is and with flip_normals: Mitsuba's uv is the
+    # barycentric (b1, b2) and dp_du = p1 - p0 in the file's order either way.
+    tri = [[0.3, -1.0, 0.2], [-0.4, 1.2, -0.1], [1.1, 0.5, 0.3]]
+    bare = []
+    for flip in (False, True):
+        props = mi.Properties()
+        props["flip_normals"] = flip
+        mesh = mi.Mesh("tri", 3, 1, has_vertex_normals=False, has_vertex_texcoords=False, props=props)
+        mp = mi.traverse(mesh)
+        mp["vertex_positions"] = np.array(tri).ravel().tolist()
+        mp["faces"] = [0, 1, 2]
+        mp.update()
+        si = mi.load_dict({"type": "scene", "m": mesh}).ray_intersect(mi.Ray3f([0.3, 0.2, 5.0], [0.0, 0.0, -1.0]))
+        bare.append({"flip_normals": flip, "origin": [0.3, 0.2, 5.0], "direction": [0.0, 0.0, -1.0], "p": list(si.p),
+                     "n": list(si.n), "uv": list(si.uv), "dp_du": list(si.dp_du)})
+    table["bare_triangle"] = tri
+    table["bare_hits"] = bare
+    # <rotate x="1" y="1" z="0.3" angle="40"/>: Mitsuba uses the axis as written (not normalized).
+    rotated = mi.load_string('<scene version="3.0.0"><shape type="cube"><transform name="to_world">'
+                             '<rotate x="1" y="1" z="0.3" angle="40"/></transform></shape></scene>').shapes()[0]
+    table["rotated_cube_positions"] = np.array(mi.traverse(rotated)["vertex_positions"]).reshape(-1, 3).tolist()
+    os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(os.path.dirname(OUT), "mitsuba_cube.json"), "w") as f:
+        json.dump(table, f)
+
+
 def block_means(img: np.ndarray) -> np.ndarray:
     h, w, _ = img.shape
     return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, 3).mean(axis=(1, 3))
@@ -103,6 +167,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", action="store_true")
     ap.add_argument("--textures", action="store_true")
+    ap.add_argument("--cube", action="store_true")
     ap.add_argument("--renders", type=int, default=16)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--variant", default="llvm_ad_rgb")
@@ -119,6 +184,12 @@ def main():
         write_data(mi)
     if a.data or a.textures:
         write_textures(mi)
+    if a.cube:
+        mi.set_variant("scalar_rgb")
+        write_cube(mi)
+        mi.set_variant(a.variant)
+        if not a.names:
+            return
     os.makedirs(OUT, exist_ok=True)
     for name in a.names or NAMES:
         scene = mi.load_file(os.path.join(SCENES, name + ".xml"), spp=str(a.spp))

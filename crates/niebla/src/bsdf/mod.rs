@@ -452,6 +452,21 @@ impl Bsdf {
         }
     }
 
+    /// True for the models Mitsuba 3 makes one-sided (diffuse, conductors,
+    /// plastics: zero where `wo` lies behind the normal they are given);
+    /// false for dielectrics, thin panes, `null` and `twosided`.
+    #[inline]
+    pub fn is_one_sided(&self) -> bool {
+        matches!(
+            self,
+            Bsdf::Diffuse { .. }
+                | Bsdf::Conductor { .. }
+                | Bsdf::RoughConductor(_)
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+        )
+    }
+
     /// True when a microfacet distribution of the model (a rough
     /// conductor's, a rough dielectric's, a rough-conductor side of a
     /// `twosided`) has `alpha_u != alpha_v`: only then does the tangent

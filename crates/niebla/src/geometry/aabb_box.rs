@@ -61,7 +61,7 @@ impl AxisAlignedBox {
     pub fn surface_at(&self, ray: &Ray, t: f32) -> SurfaceHit {
         let p = ray.at(t);
         let n = self.face_normal(p);
-        SurfaceHit { t, p, n, ns: n }
+        SurfaceHit { t, p, n, ns: n, backside_ns: false }
     }
 
     /// Outward normal of the face nearest to `p`.

@@ -31,6 +31,17 @@ pub struct TriangleMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Triangles left out because they have no area (repeated or collinear vertices).
     pub degenerate: usize,
+    /// True when every triangle's corners 1 and 2 were swapped from the
+    /// file's order to turn the mesh inside out (`flip_normals`): the uv and
+    /// dp/du of a mesh without uvs then still follow the file's order, as
+    /// Mitsuba 3's `flip_normals`, which keeps the winding and negates the
+    /// normal. Default false (set by the scene builder).
+    pub winding_flipped: bool,
+    /// True when a hit whose `wo` lies behind the interpolated normal but in
+    /// front of the triangle keeps the shading normal (Mitsuba 3's rule,
+    /// `"shading_normal_backside": "mitsuba"`; see
+    /// [`SurfaceHit::backside_ns`]). Default false (set by the scene builder).
+    pub keeps_backside_ns: bool,
     /// The corners of each triangle of `triangles`, copied so that a leaf's
     /// triangles are read from contiguous memory without the indirection
     /// through the vertex list (36 bytes per triangle).
@@ -136,17 +147,29 @@ impl TriangleMesh {
         let mut bvh = bvh;
         bvh.order = (0..triangles.len() as u32).collect();
         let corners = triangles.iter().map(|t| t.map(|i| positions[i as usize])).collect();
-        Ok(TriangleMesh { positions, normals, uvs, triangles, degenerate, corners, bvh })
+        Ok(TriangleMesh {
+            positions,
+            normals,
+            uvs,
+            triangles,
+            degenerate,
+            winding_flipped: false,
+            keeps_backside_ns: false,
+            corners,
+            bvh,
+        })
     }
 
     /// uv of barycentric point `(b1, b2)` of triangle `prim`: interpolated
-    /// vertex uvs, else `(b1, b2)` itself (Mitsuba 3's convention).
+    /// vertex uvs, else `(b1, b2)` itself (Mitsuba 3's convention), taken in
+    /// the file's corner order (`(b2, b1)` when `winding_flipped`).
     pub fn uv_at(&self, prim: u32, b1: f32, b2: f32) -> Vec2 {
         match &self.uvs {
             Some(uvs) => {
                 let [a, b, c] = self.triangles[prim as usize].map(|i| uvs[i as usize]);
                 a * (1.0 - b1 - b2) + b * b1 + c * b2
             }
+            None if self.winding_flipped => Vec2::new(b2, b1),
             None => Vec2::new(b1, b2),
         }
     }
@@ -339,14 +362,26 @@ impl MeshInstance {
     /// the shading normal interpolated from the vertex normals (turned to the
     /// geometric normal's side; the geometric one without vertex normals).
     #[inline]
-    pub fn surface_at(&self, _ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
-        self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit)
+    pub fn surface_at(&self, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        let s = self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit);
+        self.mark_backside(s, ray)
+    }
+
+    /// `s` with [`SurfaceHit::backside_ns`] set where this mesh keeps the
+    /// shading normal and `-ray.d` lies on its other side than on `n`'s.
+    #[inline]
+    fn mark_backside(&self, mut s: SurfaceHit, ray: &Ray) -> SurfaceHit {
+        if self.mesh.keeps_backside_ns {
+            let wo = -ray.d;
+            s.backside_ns = (wo.dot(s.ns) > 0.0) != (wo.dot(s.n) > 0.0);
+        }
+        s
     }
 
     /// [`MeshInstance::surface_at`] of a hit found by [`MeshInstance::hit_posed`] with `pose`.
     #[inline]
-    pub fn surface_at_posed(&self, pose: &Transform, hit: &PrimitiveHit) -> SurfaceHit {
-        self.surface_by(Some(pose), hit)
+    pub fn surface_at_posed(&self, pose: &Transform, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
+        self.mark_backside(self.surface_by(Some(pose), hit), ray)
     }
 
     /// The hit record with the mesh placed by `pose` (`None`: the identity).
@@ -382,15 +417,17 @@ impl MeshInstance {
             }
             None => n,
         };
-        SurfaceHit { t: hit.t, p, n, ns }
+        SurfaceHit { t: hit.t, p, n, ns, backside_ns: false }
     }
 
     /// Mitsuba 3's `dp/du` (world space, not normalized) at `hit` on this
     /// instance: from the triangle's vertex uvs, `(duv1.v dp0 - duv0.v dp1) /
     /// det` with `dp0 = p1 - p0`, `dp1 = p2 - p0`, `duv0 = uv1 - uv0`, `duv1 =
-    /// uv2 - uv0`, `det = duv0.u duv1.v - duv0.v duv1.u`; without uvs (or
-    /// where `det` is 0) the x axis of `coordinate_system(n)` of the world
-    /// geometric normal `n` ([`crate::math::Frame::from_z`]).
+    /// uv2 - uv0`, `det = duv0.u duv1.v - duv0.v duv1.u`; without uvs the uv
+    /// is the barycentric `(b1, b2)`, so `dp/du = p1 - p0` in the file's
+    /// corner order (Mitsuba 3.9.1, also with `flip_normals`); where `det` is
+    /// 0 the x axis of `coordinate_system(n)` of the world geometric normal
+    /// `n` ([`crate::math::Frame::from_z`]; the same axis for `-n`).
     pub fn dpdu(&self, hit: &PrimitiveHit, n: Vec3) -> Vec3 {
         self.dpdu_by(&self.transform, hit, n)
     }
@@ -399,9 +436,12 @@ impl MeshInstance {
     pub fn dpdu_by(&self, pose: &Transform, hit: &PrimitiveHit, n: Vec3) -> Vec3 {
         let mesh = &*self.mesh;
         let fallback = || crate::math::Frame::from_z(n).x;
-        let Some(uvs) = &mesh.uvs else { return fallback() };
         let tri = mesh.triangles[hit.prim as usize];
         let [p0, p1, p2] = tri.map(|i| mesh.positions[i as usize]);
+        let Some(uvs) = &mesh.uvs else {
+            let edge = if mesh.winding_flipped { p2 - p0 } else { p1 - p0 };
+            return pose.vector_to_world(edge);
+        };
         let [uv0, uv1, uv2] = tri.map(|i| uvs[i as usize]);
         let (dp0, dp1) = (p1 - p0, p2 - p0);
         let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);

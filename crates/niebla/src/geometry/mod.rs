@@ -39,6 +39,13 @@ pub struct SurfaceHit {
     /// Unit shading normal: interpolated vertex normals of a smooth mesh,
     /// on the geometric normal's side; `n` itself for every other shape.
     pub ns: Vec3,
+    /// True where the mesh keeps its shading normal for a `wo` (the hit's
+    /// `-ray.d`) on the other side of `ns` than of `n` (Mitsuba 3's rule,
+    /// a mesh's `"shading_normal_backside": "mitsuba"`): the BSDF is then
+    /// evaluated about `ns` with `wo` behind it, and one-sided BSDFs give
+    /// zero ([`crate::world::Scene::surface_bsdf`]). False for every other
+    /// hit.
+    pub backside_ns: bool,
 }
 
 impl SurfaceHit {
@@ -46,10 +53,11 @@ impl SurfaceHit {
     /// `wo` (pointing away from the surface): the shading normal, unless
     /// `wo` lies on its other side than on the geometric normal's, where a
     /// smooth normal would shade a face seen from behind and the geometric
-    /// normal is used instead.
+    /// normal is used instead, unless the hit keeps `ns`
+    /// ([`SurfaceHit::backside_ns`], Mitsuba 3's rule).
     #[inline]
     pub fn shading_normal(&self, wo: Vec3) -> Vec3 {
-        if (wo.dot(self.ns) > 0.0) == (wo.dot(self.n) > 0.0) {
+        if (wo.dot(self.ns) > 0.0) == (wo.dot(self.n) > 0.0) || self.backside_ns {
             self.ns
         } else {
             self.n
@@ -203,8 +211,8 @@ impl Shape {
     /// twice the placement's local x axis; disk: the placement of the local
     /// radial direction `(cos phi, sin phi, 0)` (`(1, 0, 0)` at the
     /// center); box: the axis its face's `u` runs along, times the box's
-    /// extent on it; mesh: from the triangle's uvs, else
-    /// `coordinate_system(n)` (see [`MeshInstance::dpdu`]); a moving shape's
+    /// extent on it; mesh: from the triangle's uvs, else its edge `p1 -
+    /// p0` (see [`MeshInstance::dpdu`]); a moving shape's
     /// in its pose at `time`.
     pub fn dpdu(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> Vec3 {
         use crate::math::PI;

@@ -371,7 +371,7 @@ impl MovingShape {
             Some(shape) => shape.surface_at(ray, hit),
             None => {
                 let (instance, pose) = self.mesh_pose(ray.time).expect("a moving shape is a mesh when not still");
-                instance.surface_at_posed(&pose, hit)
+                instance.surface_at_posed(&pose, ray, hit)
             }
         }
     }

@@ -50,7 +50,7 @@ impl Sphere {
         let p = ray.at(t);
         let n = (p - self.center) / self.radius;
         let n = n.normalize();
-        SurfaceHit { t, p, n, ns: n }
+        SurfaceHit { t, p, n, ns: n, backside_ns: false }
     }
 }
 

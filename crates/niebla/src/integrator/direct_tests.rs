@@ -55,7 +55,7 @@ fn lambertian_floor_sees_both_lights_through_fog_and_not_the_hidden_one() {
     // from y = 0.5, t = 1, to the face z = 3, t = 3 / cos 30), the light
     // above the ceiling shadowed.
     let p = Vec3::ZERO;
-    let surface = SurfaceHit { t: 0.0, p, n: Vec3::Y, ns: Vec3::Y };
+    let surface = SurfaceHit { t: 0.0, p, n: Vec3::Y, ns: Vec3::Y, backside_ns: false };
     let l =
         direct_surface_radiance(&scene, &surface, Vec3::Y, &bsdf, None, TransmittanceMethod::Analytic, &mut sampler);
     let point = 0.5 / std::f32::consts::PI * 8.0 / 4.0 * (-0.5f32 * 1.5).exp();
@@ -102,7 +102,7 @@ fn a_surface_lit_from_behind_receives_nothing() {
     // and the sun shines on its top.
     let l = direct_surface_radiance(
         &scene,
-        &SurfaceHit { t: 0.0, p: Vec3::new(0.0, 5.0, 0.0), n: -Vec3::Y, ns: -Vec3::Y },
+        &SurfaceHit { t: 0.0, p: Vec3::new(0.0, 5.0, 0.0), n: -Vec3::Y, ns: -Vec3::Y, backside_ns: false },
         -Vec3::Y,
         &bsdf,
         None,

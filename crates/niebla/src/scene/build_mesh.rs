@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use niebla_mesh::MeshData;
 
-use super::desc::MeshDesc;
+use super::desc::{MeshDesc, ShadingBacksideDesc};
 use super::SceneError;
 use crate::geometry::{MeshInstance, Transform, TriangleMesh};
 use crate::limits::MemoryBudget;
@@ -167,13 +167,15 @@ fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, Strin
     }
     let closedness = data.closedness();
     let MeshData { positions, normals, uvs, indices } = data;
-    let mesh = TriangleMesh::new(
+    let mut mesh = TriangleMesh::new(
         positions.into_iter().map(Vec3::from).collect(),
         indices,
         normals.map(|n| n.into_iter().map(Vec3::from).collect()),
         uvs.map(|u| u.into_iter().map(Vec2::from).collect()),
     )
     .map_err(|e| e.to_string())?;
+    mesh.winding_flipped = desc.flip_normals;
+    mesh.keeps_backside_ns = desc.shading_normal_backside == ShadingBacksideDesc::Mitsuba;
     if mesh.triangle_count() == 0 {
         return Err(format!("all {} triangles are degenerate (no area)", mesh.degenerate));
     }

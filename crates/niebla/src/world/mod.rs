@@ -148,6 +148,11 @@ impl Scene {
     #[inline]
     pub fn surface_bsdf(&self, hit: &Hit) -> Bsdf {
         let object = self.object(hit);
+        if hit.surface.backside_ns && object.bsdf.is_one_sided() {
+            // Mitsuba 3's rule: a one-sided BSDF seen from behind its
+            // shading normal reflects nothing.
+            return Bsdf::Diffuse { reflectance: crate::color::Rgb::ZERO };
+        }
         if object.texture.is_none() && object.roughness.is_none() && !object.dpdu_frame {
             return object.bsdf;
         }

@@ -42,7 +42,7 @@ pub enum TangentFrameDesc {
     /// `"dpdu"`: the shape's `dp/du` made orthogonal to the shading normal,
     /// Mitsuba 3's frame (sphere: along the azimuth; rectangle: its local
     /// x; disk: radial; box: the face's u axis; mesh: from its uvs, else
-    /// the normal's basis).
+    /// its barycentric uv, i.e. the triangle's edge `p1 - p0`).
     Dpdu,
 }
 
@@ -125,7 +125,9 @@ pub struct MeshDesc {
     #[serde(default)]
     pub to_world: TransformDesc,
     /// Turn the mesh inside out: reverse every triangle's winding and negate
-    /// the vertex normals (Mitsuba 3's `flip_normals`). Default false.
+    /// the vertex normals (Mitsuba 3's `flip_normals`; the uv and dp/du of a
+    /// mesh without uvs keep the file's corner order, as Mitsuba's). Default
+    /// false.
     #[serde(default)]
     pub flip_normals: bool,
     /// Shade with the flat triangle normals even where the mesh has vertex
@@ -141,6 +143,28 @@ pub struct MeshDesc {
     /// behind its normals. Default false (such a mesh is an error).
     #[serde(default)]
     pub allow_open: bool,
+    /// `"shading_normal_backside"`: what the surface does where the
+    /// direction toward the viewer lies behind the interpolated vertex
+    /// normal but in front of the triangle; default `"geometric"`.
+    #[serde(default)]
+    pub shading_normal_backside: ShadingBacksideDesc,
+}
+
+/// `"shading_normal_backside"` of a mesh with vertex normals: the rule for a
+/// hit whose `wo` (toward the viewer) lies on the other side of the shading
+/// normal than of the geometric normal.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadingBacksideDesc {
+    /// `"geometric"` (the default, niebla's rule before 2026-12): the BSDF
+    /// is evaluated about the geometric normal there.
+    #[default]
+    Geometric,
+    /// `"mitsuba"`: Mitsuba 3's rule: the BSDF is evaluated about the
+    /// shading normal with `wo` behind it, so one-sided BSDFs (diffuse,
+    /// conductors, plastics) give zero, `twosided` shows its back side and
+    /// dielectrics treat `wo` as coming from inside.
+    Mitsuba,
 }
 
 /// A sphere; its normal points outward.

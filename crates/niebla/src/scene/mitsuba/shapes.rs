@@ -42,6 +42,41 @@ const CUBE_TRIANGLES: [[u32; 3]; 12] = [
     [4, 7, 6],
 ];
 
+/// Mitsuba 3's own `cube` mesh (its `src/shapes/cube.cpp`): the cube
+/// `[-1, 1]^3` as 24 vertices, 4 per face, with the face's outward normal
+/// and uvs `(0, 1), (1, 1), (1, 0), (0, 0)`, and 2 triangles per face
+/// (local vertices `0 1 2` and `3 0 2`), faces in the order -y, +y, +x, +z,
+/// -x, -z. A face's vertex with uv `(u, v)` sits at
+/// `n + (2u - 1) a_u + (2v - 1) a_v` with the face's axes `a_u`, `a_v`
+/// below, so that `dp/du = 2 a_u` on every face. Returns positions,
+/// normals, uvs and triangles.
+#[allow(clippy::type_complexity)]
+pub(super) fn mitsuba_cube() -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+    // (normal, a_u, a_v) per face, read off Mitsuba's vertex table.
+    const FACES: [[[f64; 3]; 3]; 6] = [
+        [[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]],
+        [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, -1.0]],
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]],
+        [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
+        [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        [[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]],
+    ];
+    const UVS: [[f64; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let (mut positions, mut normals, mut uvs, mut triangles) = (vec![], vec![], vec![], vec![]);
+    for (f, [n, au, av]) in FACES.iter().enumerate() {
+        for uv in UVS {
+            let (su, sv) = (2.0 * uv[0] - 1.0, 2.0 * uv[1] - 1.0);
+            positions.push([0, 1, 2].map(|i| n[i] + su * au[i] + sv * av[i]));
+            normals.push(*n);
+            uvs.push(uv);
+        }
+        let o = 4 * f as u32;
+        triangles.push([o, o + 1, o + 2]);
+        triangles.push([o + 3, o, o + 2]);
+    }
+    (positions, normals, uvs, triangles)
+}
+
 /// True when a converted bsdf (or a side of its `twosided`) has an
 /// anisotropic roughness (`alpha_u` other than `alpha_v`).
 fn anisotropic(bsdf: &Value) -> bool {
@@ -92,24 +127,8 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             shape.insert("center".into(), json!(point(&m, center)));
             shape.insert("radius".into(), json!(radius * s));
         }
-        "cube" => {
-            untexturable = Some("a cube (its uv layout is not converted)");
-            if is_axis_aligned(&m) && !flip {
-                let lo = point(&m, [-1.0; 3]);
-                let hi = point(&m, [1.0; 3]);
-                shape.insert("type".into(), json!("box"));
-                shape.insert("min".into(), json!(lo));
-                shape.insert("max".into(), json!(hi));
-            } else {
-                shape.insert("type".into(), json!("mesh"));
-                shape.insert("positions".into(), json!(cube_positions()));
-                shape.insert("indices".into(), json!(CUBE_TRIANGLES));
-                shape.insert("to_world".into(), to_json(&m));
-                if flip {
-                    shape.insert("flip_normals".into(), json!(true));
-                }
-            }
-        }
+        // Its geometry depends on the bsdf (below).
+        "cube" => {}
         "rectangle" | "disk" => {
             // Flipping the normal of [-1, 1]^2 (or of the unit disk) is a half
             // turn about x: the same set, facing -z.
@@ -131,6 +150,10 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             }
             if p.boolean("face_normals")?.unwrap_or(false) {
                 shape.insert("face_normals".into(), json!(true));
+            } else {
+                // Vertex normals (if the file has them) shade as in Mitsuba 3:
+                // about the shading normal also where `wo` lies behind it.
+                shape.insert("shading_normal_backside".into(), json!("mitsuba"));
             }
             flip_tex_coords = p.boolean("flip_tex_coords")?.unwrap_or(t == "obj");
         }
@@ -165,21 +188,45 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         // Mitsuba's default surface.
         None => json!({"type": "diffuse", "reflectance": 0.5}),
     };
+    if t == "cube" {
+        // Mitsuba's own mesh where the surface reads its uvs or dp/du, else
+        // a box (axis-aligned, not flipped) or 12 triangles: the same surface
+        // in fewer primitives.
+        if anisotropic(&bsdf) || super::textures::has_texture(&bsdf) {
+            let (positions, normals, uvs, triangles) = mitsuba_cube();
+            shape.insert("type".into(), json!("mesh"));
+            shape.insert("positions".into(), json!(positions));
+            shape.insert("normals".into(), json!(normals));
+            shape.insert("uvs".into(), json!(uvs));
+            shape.insert("indices".into(), json!(triangles));
+            shape.insert("to_world".into(), to_json(&m));
+            if flip {
+                shape.insert("flip_normals".into(), json!(true));
+            }
+        } else if is_axis_aligned(&m) && !flip {
+            shape.insert("type".into(), json!("box"));
+            shape.insert("min".into(), json!(point(&m, [-1.0; 3])));
+            shape.insert("max".into(), json!(point(&m, [1.0; 3])));
+        } else {
+            shape.insert("type".into(), json!("mesh"));
+            shape.insert("positions".into(), json!(cube_positions()));
+            shape.insert("indices".into(), json!(CUBE_TRIANGLES));
+            shape.insert("to_world".into(), to_json(&m));
+            if flip {
+                shape.insert("flip_normals".into(), json!(true));
+            }
+        }
+    }
     // Anisotropic roughness follows Mitsuba's dp/du ("tangent_frame":
     // "dpdu"); niebla's shapes have Mitsuba's uv parameterization, and so its
-    // dp/du, except a cube (its uv layout is not converted) and a sphere
-    // turned by its to_world (niebla's spheres have no orientation).
+    // dp/du, except a sphere turned by its to_world (niebla's spheres have no
+    // orientation).
     if anisotropic(&bsdf) {
         shape.insert("tangent_frame".into(), json!("dpdu"));
-        let differs = match t {
-            "cube" => Some("a cube (its uv layout is not converted)"),
-            "sphere" => untexturable.map(|_| "a sphere turned by its to_world (niebla's spheres have no orientation)"),
-            _ => None,
-        };
-        if let Some(why) = differs {
+        if t == "sphere" && untexturable.is_some() {
             c.notes.push(format!(
-                "{}: {}: anisotropic roughness follows the shape's dp/du, which on {why} differs from Mitsuba's: \
-                 its direction differs here",
+                "{}: {}: anisotropic roughness follows the shape's dp/du, which on a sphere turned by its to_world \
+                 (niebla's spheres have no orientation) differs from Mitsuba's: its direction differs here",
                 node.loc.at(),
                 p.what()
             ));

@@ -136,10 +136,11 @@ fn form(node: &Node) -> Result<Form, SceneError> {
             "rotate" => {
                 let a = xyz(op, 0.0, false)?;
                 let angle = one_number(op, "angle", op.required("angle")?)?;
+                // Unit axes only: Mitsuba does not normalize the axis.
                 match a {
-                    [x, 0.0, 0.0] if x > 0.0 => (1, "rotate_x", serde_json::json!(angle)),
-                    [0.0, y, 0.0] if y > 0.0 => (2, "rotate_y", serde_json::json!(angle)),
-                    [0.0, 0.0, z] if z > 0.0 => (3, "rotate_z", serde_json::json!(angle)),
+                    [1.0, 0.0, 0.0] => (1, "rotate_x", serde_json::json!(angle)),
+                    [0.0, 1.0, 0.0] => (2, "rotate_y", serde_json::json!(angle)),
+                    [0.0, 0.0, 1.0] => (3, "rotate_z", serde_json::json!(angle)),
                     _ => return Ok(Form::Matrix),
                 }
             }
@@ -217,8 +218,12 @@ fn read_op(op: &Node) -> Result<Mat4, SceneError> {
         }
         "rotate" => {
             op.check_attrs(&["x", "y", "z", "value", "angle"])?;
+            // Mitsuba 3.9.1 uses the axis as written, not normalized (a
+            // non-unit axis gives a matrix that also scales and shears).
             let axis = xyz(op, 0.0, false)?;
-            let axis = normalize(axis).ok_or_else(|| op.loc.error("<rotate>: the axis is zero"))?;
+            if axis == [0.0; 3] {
+                return Err(op.loc.error("<rotate>: the axis is zero"));
+            }
             let angle = one_number(op, "angle", op.required("angle")?)?;
             Ok(rotation(axis, angle))
         }
@@ -268,7 +273,9 @@ fn read_op(op: &Node) -> Result<Mat4, SceneError> {
     }
 }
 
-/// Rotation by `angle` degrees about unit `axis`, right-handed (Mitsuba's `Transform4f::rotate`).
+/// Rotation by `angle` degrees about `axis`, right-handed (Mitsuba's
+/// `Transform4f::rotate`, Rodrigues' formula with the axis as given: a
+/// rotation for a unit axis).
 pub(super) fn rotation(axis: [f64; 3], angle: f64) -> Mat4 {
     let (s, c) = angle.to_radians().sin_cos();
     let [x, y, z] = axis;
