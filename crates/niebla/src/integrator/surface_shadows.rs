@@ -385,7 +385,7 @@ mod tests {
         let mut lit = 0;
         for k in 0..200 {
             let p = Vec3::new(-2.0 + 0.02 * k as f32, 0.0, -1.5 + 0.013 * k as f32);
-            let surface = SurfaceHit { t: 1.0, p, n: Vec3::Y, ns: Vec3::Y };
+            let surface = SurfaceHit { t: 1.0, p, n: Vec3::Y, ns: Vec3::Y, backside_ns: false };
             let wo = Vec3::new(0.0, 0.3, 1.0).normalize();
             let mut a = PixelSampler::new(k, 3, 5, 0);
             let mut b = PixelSampler::new(k, 3, 5, 0);
