@@ -15,11 +15,18 @@
 //! eight surrounding nodes' line integrals: the shadow's edges are blurred
 //! over one lattice cell, and no noise is added.
 
+use crate::bsdf::Bsdf;
 use crate::color::Rgb;
+use crate::geometry::SurfaceHit;
 use crate::light::Light;
-use crate::math::Ray;
+use crate::math::{Ray, Vec3};
+use crate::medium::MediumId;
 use crate::medium::{GridMedium, Medium};
+use crate::sampling::PixelSampler;
 use crate::world::Scene;
+
+use super::direct::{direct_surface_radiance, direct_surface_radiance_with};
+use crate::tracking::{MarchStep, TransmittanceMethod};
 
 use super::hegeman::line_integrals::{LightSource, LineIntegralLattice};
 
@@ -62,6 +69,36 @@ impl SurfaceShadows {
             "lattice_environment" => Some(SurfaceShadows::LatticeEnvironment),
             "march" => Some(SurfaceShadows::March),
             _ => None,
+        }
+    }
+}
+
+/// Direct radiance (W m^-2 sr^-1) leaving an opaque surface point toward
+/// `wo` for the interactive integrators, with its shadows taken as `mode`
+/// says: every shadow segment through a medium by a jittered 32-step ray
+/// march (`March`), or from `lattice(light, id, ray, t_end)` where that
+/// gives a transmittance and by the march where it gives `None`
+/// (`Lattice`, `LatticeEnvironment`; the lattice closure decides which
+/// lights it covers).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn shadowed_surface_radiance<F>(
+    mode: SurfaceShadows,
+    scene: &Scene,
+    surface: &SurfaceHit,
+    wo: Vec3,
+    bsdf: &Bsdf,
+    medium: Option<MediumId>,
+    sampler: &mut PixelSampler,
+    lattice: F,
+) -> Rgb
+where
+    F: FnMut(usize, MediumId, &Ray, f32) -> Option<Rgb>,
+{
+    let march = TransmittanceMethod::RayMarch(MarchStep::Count(32));
+    match mode {
+        SurfaceShadows::March => direct_surface_radiance(scene, surface, wo, bsdf, medium, march, sampler),
+        SurfaceShadows::Lattice | SurfaceShadows::LatticeEnvironment => {
+            direct_surface_radiance_with(scene, surface, wo, bsdf, medium, march, sampler, lattice)
         }
     }
 }

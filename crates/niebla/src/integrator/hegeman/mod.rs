@@ -70,15 +70,12 @@ use crate::math::{Ray, Vec3};
 use crate::medium::{GridMedium, Medium, MediumId};
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
-use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::{Hit, Scene};
 
-use super::direct::direct_surface_radiance_with;
-use super::surface_shadows::{lattice_transmittance, octant_diagonal, octant_transmittance, SurfaceShadows};
-use super::{
-    direct_surface_radiance, walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps,
-    SegmentRadiance,
+use super::surface_shadows::{
+    lattice_transmittance, octant_diagonal, octant_transmittance, shadowed_surface_radiance, SurfaceShadows,
 };
+use super::{walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps, SegmentRadiance};
 use blur::BlurredPhaseTable;
 use calibration::{CalibrationTable, Geometry};
 use line_integrals::{LightSource, LineIntegralLattice};
@@ -1056,21 +1053,17 @@ impl CameraRayVisitor for HegemanWalk<'_> {
         sampler: &mut PixelSampler,
     ) -> Rgb {
         let bsdf = &scene.surface_bsdf(hit);
-        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
         let h = self.integrator;
-        let mut l = match h.settings.surface_shadows {
-            SurfaceShadows::March => direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler),
-            SurfaceShadows::Lattice | SurfaceShadows::LatticeEnvironment => direct_surface_radiance_with(
-                scene,
-                &hit.surface,
-                wo,
-                bsdf,
-                medium,
-                surfaces,
-                sampler,
-                |light, id, ray, t| h.shadow_transmittance(scene, light, id, ray, t),
-            ),
-        };
+        let mut l = shadowed_surface_radiance(
+            h.settings.surface_shadows,
+            scene,
+            &hit.surface,
+            wo,
+            bsdf,
+            medium,
+            sampler,
+            |light, id, ray, t| h.shadow_transmittance(scene, light, id, ray, t),
+        );
         let lit = h.settings.surface_scattering != SurfaceScattering::Off && h.settings.multiple_scattering;
         if let (Some(id), true) = (medium, lit) {
             if let Some(Medium::Grid(g)) = scene.media.get(id.0 as usize) {

@@ -74,16 +74,11 @@ use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
 use crate::medium::{GridMedium, Medium, MediumId};
 use crate::sampling::PixelSampler;
-use crate::tracking::{MarchStep, TransmittanceMethod};
 use crate::world::Scene;
 
-use super::direct::direct_surface_radiance_with;
 use super::hegeman::{Calibration, HegemanIntegrator, HegemanSettings, SurfaceScattering};
-use super::surface_shadows::{ShadowLattices, SurfaceShadows};
-use super::{
-    direct_surface_radiance, walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps,
-    SegmentRadiance,
-};
+use super::surface_shadows::{shadowed_surface_radiance, ShadowLattices, SurfaceShadows};
+use super::{walk_camera_ray, AnalyticIntegrator, CameraRayVisitor, Integrator, JitteredSteps, SegmentRadiance};
 use fit::{FitReport, FitSettings};
 use lattice::Lattice;
 use lighting::{CentreDepth, ModelLight, ZonalDepthTable};
@@ -895,24 +890,20 @@ impl CameraRayVisitor for ZhouWalk<'_> {
         sampler: &mut PixelSampler,
     ) -> Rgb {
         let bsdf = &scene.surface_bsdf(hit);
-        let surfaces = TransmittanceMethod::RayMarch(MarchStep::Count(32));
         let shadows = &self.integrator.shadows;
-        match self.integrator.settings.surface_shadows {
-            SurfaceShadows::March => direct_surface_radiance(scene, &hit.surface, wo, bsdf, medium, surfaces, sampler),
-            SurfaceShadows::Lattice | SurfaceShadows::LatticeEnvironment => direct_surface_radiance_with(
-                scene,
-                &hit.surface,
-                wo,
-                bsdf,
-                medium,
-                surfaces,
-                sampler,
-                |light, id, ray, t| {
-                    let Medium::Grid(g) = scene.medium(id) else { return None };
-                    shadows.transmittance(g, id.0 as usize, light, ray, t)
-                },
-            ),
-        }
+        shadowed_surface_radiance(
+            self.integrator.settings.surface_shadows,
+            scene,
+            &hit.surface,
+            wo,
+            bsdf,
+            medium,
+            sampler,
+            |light, id, ray, t| {
+                let Medium::Grid(g) = scene.medium(id) else { return None };
+                shadows.transmittance(g, id.0 as usize, light, ray, t)
+            },
+        )
     }
 }
 
