@@ -268,6 +268,9 @@ fn sample_ld_light(
     }
 }
 
+/// A shadow ray's `(T_ray, r_l, r_u, medium)` (see [`shadow_transmittance`]).
+pub(super) type ShadowTransmittance = (Rgb, Rgb, Rgb, Option<MediumId>);
+
 /// [`shadow_transmittance`] from a point inside the scene's lone convex
 /// boundary (see [`NeeVertex::lone`]): the transmittance to the boundary,
 /// found by one distance query (exact in a homogeneous medium, by ratio
@@ -285,7 +288,7 @@ fn lone_exit_transmittance(
     group: Channels,
     hero: usize,
     sampler: &mut PixelSampler,
-) -> Option<Option<(Rgb, Rgb, Rgb, Option<MediumId>)>> {
+) -> Option<Option<ShadowTransmittance>> {
     let m = scene.medium(medium?);
     if let Some(homogeneous) = m.as_homogeneous() {
         let t = scene.hit_distance(&Ray::new(p, wi), 0.0, distance)?;
@@ -328,7 +331,7 @@ pub(super) fn shadow_transmittance(
     group: Channels,
     hero: usize,
     sampler: &mut PixelSampler,
-) -> Option<(Rgb, Rgb, Rgb, Option<MediumId>)> {
+) -> Option<ShadowTransmittance> {
     let mut w = ShadowWeights::default();
     let mut last = medium;
     let reached = walk_shadow_ray(scene, p, sampler.time(), medium, wi, distance, ignore, |s| {
@@ -458,7 +461,7 @@ mod tests {
             };
             lone_used += 1;
             reached += lone.is_some() as u32;
-            let bits = |r: Option<(Rgb, Rgb, Rgb, Option<MediumId>)>| {
+            let bits = |r: Option<ShadowTransmittance>| {
                 r.map(|(t, l, u, _)| [t, l, u].map(|c| [c[0], c[1], c[2]].map(f32::to_bits)))
             };
             assert_eq!(bits(lone), bits(walk), "ray {i}");
