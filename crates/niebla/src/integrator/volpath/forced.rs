@@ -27,24 +27,33 @@ use crate::world::Scene;
 
 use super::channels::{per_channel, Channels};
 
-/// The medium in which `volpath` forces collisions, if the scene allows it:
-/// its only object is a box or sphere (convex, so a ray that leaves it never
-/// comes back) with a null BSDF, no emission and vacuum outside, whose
-/// interior is a homogeneous medium without emission; no ambient medium;
-/// the camera outside it or in it; every light directional (a delta in
-/// direction, which no escaping ray can hit; next-event estimation alone
-/// reaches it). Otherwise `None`, and free flight is the usual one.
-pub(super) fn forced_collision_medium(scene: &Scene) -> Option<MediumId> {
+/// The medium inside the scene's lone boundary, if the scene is one: its
+/// only object is a box or sphere (convex, so a ray that leaves it never
+/// comes back) with a null BSDF, no emission and vacuum outside; no ambient
+/// medium; the camera outside it or in it. A ray from a point inside
+/// crosses the medium up to the boundary (one distance query finds it) and
+/// then meets nothing more, whatever the lights.
+pub(super) fn lone_boundary_medium(scene: &Scene) -> Option<MediumId> {
     let [object] = scene.objects.as_slice() else {
         return None;
     };
     let convex = matches!(object.shape, Shape::Box(_) | Shape::Sphere(_));
     let boundary = object.bsdf.is_null() && object.emitter.is_none() && object.exterior.is_none();
     let id = object.interior?;
-    let plain = matches!(scene.medium(id), Medium::Homogeneous(h) if h.l_ve.is_black());
     let camera = scene.camera_medium.is_none() || scene.camera_medium == Some(id);
+    (convex && boundary && camera && scene.ambient_medium.is_none()).then_some(id)
+}
+
+/// The medium in which `volpath` forces collisions, if the scene allows it:
+/// the scene's lone boundary medium ([`lone_boundary_medium`]), homogeneous
+/// and without emission, and every light directional (a delta in
+/// direction, which no escaping ray can hit; next-event estimation alone
+/// reaches it). Otherwise `None`, and free flight is the usual one.
+pub(super) fn forced_collision_medium(scene: &Scene) -> Option<MediumId> {
+    let id = lone_boundary_medium(scene)?;
+    let plain = matches!(scene.medium(id), Medium::Homogeneous(h) if h.l_ve.is_black());
     let lights = scene.lights.iter().all(|l| matches!(l, Light::Directional(_)));
-    (convex && boundary && plain && camera && lights && scene.ambient_medium.is_none()).then_some(id)
+    (plain && lights).then_some(id)
 }
 
 /// Below this, `1 - exp(-x)` and `ln(1 - x)` take `exp_m1` and `ln_1p`
@@ -206,5 +215,14 @@ mod tests {
         assert_eq!(forced(boxed, &format!("{sun}, {sky}")), None);
         assert_eq!(forced(boxed, point), None);
         assert_eq!(forced(&format!("{boxed}, {floor}"), sun), None);
+        // The lone boundary alone (shadow rays and segments by one distance
+        // query) holds whatever the lights, but not with a second object.
+        let lone = |shapes: &str, lights: &str| {
+            let text = slab.replace("SHAPES", shapes).replace("LIGHTS", lights);
+            let desc = parse_scene_str(&text, "lone.json").unwrap();
+            lone_boundary_medium(&build_scene(&desc, "lone.json", ".".as_ref()).unwrap().scene)
+        };
+        assert_eq!(lone(boxed, &format!("{sun}, {sky}, {point}")), Some(MediumId(0)));
+        assert_eq!(lone(&format!("{boxed}, {floor}"), sun), None);
     }
 }

@@ -13,7 +13,7 @@ use crate::medium::MediumId;
 use crate::phase::PhaseFunction;
 use crate::sampling::PixelSampler;
 use crate::tracking::{pass_through_weight, sample_t_maj_without_emission};
-use crate::world::{surface_epsilon, walk_shadow_ray, Scene};
+use crate::world::{surface_epsilon, walk_shadow_ray, Scene, ShadowSegment};
 
 use super::channels::Channels;
 use super::equiangular_nee::{light_weight_against_equiangular, point_light_count, Segment};
@@ -230,8 +230,12 @@ fn sample_ld_light(
         Some(n) => (p + n * surface_epsilon(p), medium),
         None => (p, medium),
     };
-    let exit = if lone { lone_exit_transmittance(scene, origin, medium, ls.wi, ls.distance) } else { None };
-    let Some((t_ray, mut r_l, mut r_u, _)) = exit.or_else(|| {
+    let exit = if lone {
+        lone_exit_transmittance(scene, origin, medium, ls.wi, ls.distance, group, hero, sampler)
+    } else {
+        None
+    };
+    let shadow = exit.unwrap_or_else(|| {
         shadow_transmittance(
             scene,
             origin,
@@ -243,7 +247,8 @@ fn sample_ld_light(
             hero,
             sampler,
         )
-    }) else {
+    });
+    let Some((t_ray, mut r_l, mut r_u, _)) = shadow else {
         return Rgb::ZERO;
     };
     let light_pdf = pmf * ls.pdf;
@@ -263,11 +268,16 @@ fn sample_ld_light(
     }
 }
 
+/// A shadow ray's `(T_ray, r_l, r_u, medium)` (see [`shadow_transmittance`]).
+pub(super) type ShadowTransmittance = (Rgb, Rgb, Rgb, Option<MediumId>);
+
 /// [`shadow_transmittance`] from a point inside the scene's lone convex
-/// boundary around the homogeneous `medium` (see [`NeeVertex::lone`]): the
-/// exact transmittance to the boundary, found by one distance query, then
-/// vacuum. The same numbers as the general walk, without its hit records;
-/// `None` (use the walk) when the boundary is not found before `distance`.
+/// boundary (see [`NeeVertex::lone`]): the transmittance to the boundary,
+/// found by one distance query (exact in a homogeneous medium, by ratio
+/// tracking otherwise), then vacuum. The same numbers as the general walk,
+/// without its occlusion query and hit records; `None` (use the walk) when
+/// the boundary is not found before `distance`.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 fn lone_exit_transmittance(
     scene: &Scene,
@@ -275,11 +285,22 @@ fn lone_exit_transmittance(
     medium: Option<MediumId>,
     wi: Vec3,
     distance: f32,
-) -> Option<(Rgb, Rgb, Rgb, Option<MediumId>)> {
-    let homogeneous = scene.medium(medium?).as_homogeneous()?;
-    let t = scene.hit_distance(&Ray::new(p, wi), 0.0, distance)?;
-    let tr = homogeneous_transmittance(homogeneous.sigma_t(), t);
-    Some((tr, Rgb::ONE, tr, None))
+    group: Channels,
+    hero: usize,
+    sampler: &mut PixelSampler,
+) -> Option<Option<ShadowTransmittance>> {
+    let m = scene.medium(medium?);
+    if let Some(homogeneous) = m.as_homogeneous() {
+        let t = scene.hit_distance(&Ray::new(p, wi), 0.0, distance)?;
+        let tr = homogeneous_transmittance(homogeneous.sigma_t(), t);
+        return Some(Some((tr, Rgb::ONE, tr, None)));
+    }
+    let ray = Ray::at_time(p, wi, sampler.time());
+    let t_end = scene.hit_distance(&ray, 0.0, distance)?;
+    let mut w = ShadowWeights::default();
+    let piece = ShadowSegment { medium, ray: &ray, t_end, pane: None };
+    let reached = w.visit(scene, &piece, group, hero, sampler).is_continue();
+    Some(reached.then_some((w.t_ray, w.r_l, w.r_u, None)))
 }
 
 /// `exp(-sigma_t t)` per channel (0 where the product is NaN), one
@@ -310,44 +331,76 @@ pub(super) fn shadow_transmittance(
     group: Channels,
     hero: usize,
     sampler: &mut PixelSampler,
-) -> Option<(Rgb, Rgb, Rgb, Option<MediumId>)> {
-    let mut t_ray = Rgb::ONE;
-    let mut r_l = Rgb::ONE;
-    let mut r_u = Rgb::ONE;
+) -> Option<ShadowTransmittance> {
+    let mut w = ShadowWeights::default();
     let mut last = medium;
     let reached = walk_shadow_ray(scene, p, sampler.time(), medium, wi, distance, ignore, |s| {
         last = s.medium;
+        w.visit(scene, &s, group, hero, sampler)
+    });
+    reached.then_some((w.t_ray, w.r_l, w.r_u, last))
+}
+
+/// A shadow ray's transmittance estimate and path-pdf ratios so far.
+struct ShadowWeights {
+    /// The transmittance estimate, per channel.
+    t_ray: Rgb,
+    /// Light-sampling path pdf ratios (ratio tracking's majorant factors).
+    r_l: Rgb,
+    /// Unidirectional path pdf ratios (free flight passing).
+    r_u: Rgb,
+}
+
+impl Default for ShadowWeights {
+    fn default() -> ShadowWeights {
+        ShadowWeights { t_ray: Rgb::ONE, r_l: Rgb::ONE, r_u: Rgb::ONE }
+    }
+}
+
+impl ShadowWeights {
+    /// Ratio tracking (or exact transmittance) over one piece of the shadow
+    /// ray, with the pane it ends at; `Break` once the estimate is 0.
+    #[inline]
+    fn visit(
+        &mut self,
+        scene: &Scene,
+        s: &ShadowSegment,
+        group: Channels,
+        hero: usize,
+        sampler: &mut PixelSampler,
+    ) -> ControlFlow<()> {
+        let ShadowWeights { t_ray, r_l, r_u } = self;
         if let Some(id) = s.medium {
             let m = scene.medium(id);
             if let Some(homogeneous) = m.as_homogeneous() {
                 // Exact transmittance: the light-sampling path pdf is unchanged,
                 // the unidirectional one (free flight passing) gains T per channel.
                 let tr = homogeneous_transmittance(homogeneous.sigma_t(), s.t_end);
-                t_ray *= tr;
-                r_u *= tr;
+                *t_ray *= tr;
+                *r_u *= tr;
             } else {
                 // Ratio tracking reads no emission: skip its lookups.
                 let t_maj = sample_t_maj_without_emission(m, s.ray, s.t_end, hero, sampler, |c, sampler| {
                     let w = c.ratio_tracking_weights(hero);
-                    t_ray *= w.throughput;
-                    r_l *= w.majorant;
-                    r_u *= w.throughput;
+                    *t_ray *= w.throughput;
+                    *r_l *= w.majorant;
+                    *r_u *= w.throughput;
                     // Russian roulette on the MIS-normalized transmittance (pbrt-v4).
-                    let tr = t_ray * group.indicator() / group.average(r_l + r_u);
+                    let tr = *t_ray * group.indicator() / group.average(*r_l + *r_u);
                     if tr.max_channel() < 0.05 {
                         if sampler.next_1d() < 0.75 {
-                            t_ray = Rgb::ZERO;
+                            *t_ray = Rgb::ZERO;
                         } else {
-                            t_ray /= 0.25;
+                            *t_ray /= 0.25;
                         }
                     }
                     !t_ray.is_black()
                 });
                 match pass_through_weight(t_maj, hero) {
                     Some(w) => {
-                        t_ray *= w;
-                        r_l *= w;
-                        r_u *= w;
+                        *t_ray *= w;
+                        *r_l *= w;
+                        *r_u *= w;
                     }
                     // The hero channel cannot pass but others can: the hero-based pdfs are 0.
                     None if !t_maj.is_black() => return ControlFlow::Break(()),
@@ -358,21 +411,65 @@ pub(super) fn shadow_transmittance(
         // A thin pane: a weight for light sampling; a path sampling the pane
         // passes it with probability `1 - R'`, which its pdf gains.
         if let Some(pane) = s.pane {
-            t_ray *= pane.weight;
-            r_u *= pane.pass_probability;
+            *t_ray *= pane.weight;
+            *r_u *= pane.pass_probability;
         }
         if t_ray.is_black() || !t_ray.is_finite() {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
-    });
-    reached.then_some((t_ray, r_l, r_u, last))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bsdf::{Microfacet, MicrofacetKind, RoughDielectric};
+    use crate::scene::{build_scene, parse_scene_str};
+
+    /// Inside a lone box of procedural cloud, the one-query shadow ray gives
+    /// the same bits as the general walk (same numbers drawn, same ratio
+    /// tracking), blocked or not, toward a sun and toward point lights
+    /// inside (the walk is used) and outside the box; and the sampler ends
+    /// in the same state.
+    #[test]
+    fn lone_shadow_rays_equal_the_walk_in_a_grid() {
+        let json = r#"{"version": 1,
+            "camera": {"type": "perspective", "position": [0.5, 0.5, 4], "target": [0.5, 0.5, 0.5], "fov_y": 40,
+                       "width": 4, "height": 4},
+            "media": {"cloud": {"type": "grid", "sigma_t": 12, "albedo": 0.9,
+                      "density": {"type": "procedural", "shape": "cloud", "resolution": 24, "seed": 3}}},
+            "shapes": [{"type": "box", "min": [0, 0, 0], "max": [1, 1, 1], "interior": "cloud", "bsdf": {"type": "null"}}],
+            "lights": [{"type": "directional", "direction": [-0.3, -1, -0.2], "irradiance": 2}]}"#;
+        let desc = parse_scene_str(json, "lone.json").unwrap();
+        let scene = build_scene(&desc, "lone.json", ".".as_ref()).unwrap().scene;
+        let id = super::super::forced::lone_boundary_medium(&scene);
+        assert!(id.is_some());
+        let (mut lone_used, mut reached) = (0, 0);
+        for i in 0..400u64 {
+            let mut s = PixelSampler::from_key(1000 + i);
+            let p = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.98 + Vec3::splat(0.01);
+            let wi = crate::sampling::sample_uniform_sphere(s.next_2d());
+            // A sun (unbounded), a light outside the box, or one inside it.
+            let distance = [f32::INFINITY, 3.0, 0.05][(i % 3) as usize];
+            let mut a = s.clone();
+            let mut b = s.clone();
+            let lone = lone_exit_transmittance(&scene, p, id, wi, distance, Channels::ALL, 1, &mut a);
+            let walk = shadow_transmittance(&scene, p, id, wi, distance, None, Channels::ALL, 1, &mut b);
+            let Some(lone) = lone else {
+                continue;
+            };
+            lone_used += 1;
+            reached += lone.is_some() as u32;
+            let bits = |r: Option<ShadowTransmittance>| {
+                r.map(|(t, l, u, _)| [t, l, u].map(|c| [c[0], c[1], c[2]].map(f32::to_bits)))
+            };
+            assert_eq!(bits(lone), bits(walk), "ray {i}");
+            assert_eq!(a.next_1d().to_bits(), b.next_1d().to_bits(), "sampler state after ray {i}");
+        }
+        // Both kinds of outcome were exercised (the in-box light falls back).
+        assert!(lone_used >= 250 && reached >= 20 && reached < lone_used, "{lone_used} {reached}");
+    }
 
     /// Light sampling at a rough dielectric reaches both sides (the
     /// transmitted pair with `f |cos|` and the BSDF's own pdf), at a diffuse

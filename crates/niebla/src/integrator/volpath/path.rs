@@ -44,7 +44,8 @@ impl VolPathIntegrator {
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> S {
-        let LightSampling { lights, guiding, emitter_guiding, volume, forced: forced_medium } = light_sampling;
+        let LightSampling { lights, guiding, emitter_guiding, volume, forced: forced_medium, lone: lone_medium } =
+            light_sampling;
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -69,10 +70,12 @@ impl VolPathIntegrator {
         loop {
             let (ray, medium) = (path.ray, path.medium);
             let mut block = None;
-            // In the forced-collision medium (the scene's lone boundary) the
-            // path scatters before the boundary: its distance is enough, the
-            // hit record is found only if the path passes after all.
-            let lone = medium.is_some() && medium == forced_medium;
+            // Inside the scene's lone boundary the path mostly scatters
+            // before it: its distance is enough, the hit record is found only
+            // if the path passes after all.
+            let lone = medium.is_some() && medium == lone_medium;
+            // The forced-collision medium (it is the lone boundary's).
+            let forcing = medium.is_some() && medium == forced_medium;
             let mut hit = None;
             let t_end = if lone {
                 scene.hit_distance(&ray, path.t_min, f32::INFINITY).unwrap_or(f32::INFINITY)
@@ -102,7 +105,7 @@ impl VolPathIntegrator {
                 // forced within the segment (its first number, as free
                 // flight's distance) and the weights take the probability.
                 let forced = match m.as_homogeneous() {
-                    Some(h) if lone => ForcedCollision::sample(h, &ray, t_end, hero, group, sampler.next_1d()),
+                    Some(h) if forcing => ForcedCollision::sample(h, &ray, t_end, hero, group, sampler.next_1d()),
                     _ => None,
                 };
                 if let Some(f) = &forced {
