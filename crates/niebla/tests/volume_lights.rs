@@ -235,7 +235,8 @@ fn volume_light_density_is_normalized_and_consistent() {
 
 /// The same checks on a grid whose majorant grid is coarse (4^3 cells, each
 /// split into 8^3 light cells), where the light cells' pdf varies within a
-/// majorant cell: besides, the frequency with which points land in each of
+/// majorant cell (a dim sphere beside it, so that most points are the
+/// grid's): besides, the frequency with which points land in each of
 /// the 4^3 octants of the grid's box equals the pdf's integral over it
 /// (within 4 standard errors of both).
 #[test]
@@ -247,7 +248,7 @@ fn subdivided_light_cells_follow_their_density() {
             "density": {"type": "procedural", "shape": "cloud", "seed": 5, "resolution": 32},
             "emission": {"L_ve": [4, 1.6, 0.4]},
             "to_world": {"scale": [1.2, 0.8, 1.0], "rotate_y": 30, "translate": [-1.5, 0.1, -0.6]}},
-                  "glow": {"type": "homogeneous", "sigma_t": 2, "albedo": 0.2, "emission": {"L_ve": 1}}},
+                  "glow": {"type": "homogeneous", "sigma_t": 2, "albedo": 0.2, "emission": {"L_ve": 0.02}}},
         "shapes": [{"type": "sphere", "center": [1, 0.5, 0], "radius": 0.5, "interior": "glow"}]}"#,
     );
     let niebla::medium::Medium::Grid(g) = &scene.media[0] else { panic!("a grid medium") };
@@ -303,7 +304,7 @@ fn subdivided_light_cells_follow_their_density() {
             "octant {o}: frequency {p} vs integral {mean} +- {combined}"
         );
     }
-    assert!(fire_draws > draws / 4, "the grid is drawn: {fire_draws}");
+    assert!(fire_draws > draws / 2, "the grid is drawn most: {fire_draws}");
     assert!(varied >= 4, "the pdf varies within majorant cells in {varied} of them");
 }
 
