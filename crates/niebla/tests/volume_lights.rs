@@ -279,7 +279,7 @@ fn subdivided_light_cells_follow_their_density() {
     let box_volume = ((hi - lo).x * (hi - lo).y * (hi - lo).z) as f64 * det;
     let per = 20_000;
     let mut varied = 0;
-    for o in 0..64 {
+    for (o, &drawn_here) in count.iter().enumerate() {
         let c = Vec3::new((o % 4) as f32, ((o / 4) % 4) as f32, (o / 16) as f32);
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         let mut values = Vec::with_capacity(per);
@@ -296,7 +296,7 @@ fn subdivided_light_cells_follow_their_density() {
         if max > 2.0 * min && mean > 1e-3 {
             varied += 1;
         }
-        let p = count[o] as f64 / draws as f64;
+        let p = drawn_here as f64 / draws as f64;
         let se_p = (p * (1.0 - p) / draws as f64).sqrt();
         let combined = (se * se + se_p * se_p).sqrt();
         assert!(
