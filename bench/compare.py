@@ -58,6 +58,10 @@ THREADS = 2
 # system, all threads) of the render calls, net of fixed per-call costs
 # (--clock).
 CLOCK = "wall"
+# Whether niebla's times exclude its output writes (peers.Niebla's
+# `no_writes`: --no-checkpoints, CPU seconds before the final EXR);
+# --niebla-with-writes turns it off (the convention before 2026-12-03).
+NO_WRITES = True
 
 
 # ---------------------------------------------------------------------------
@@ -99,10 +103,10 @@ def time_to_reach(points, target):
 
 
 class Niebla(peers.Niebla):
-    """peers.Niebla with this script's thread count and clock."""
+    """peers.Niebla with this script's thread count, clock and write convention."""
 
     def __init__(self, binary: str, scene_path: str, workdir: str):
-        super().__init__(binary, scene_path, workdir, THREADS, CLOCK)
+        super().__init__(binary, scene_path, workdir, THREADS, CLOCK, no_writes=NO_WRITES)
 
 
 class Mitsuba:
@@ -342,7 +346,7 @@ def versions(binary: str, label: str | None) -> dict:
 
 
 def main():
-    global THREADS, CLOCK
+    global THREADS, CLOCK, NO_WRITES
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="96x96 and smaller budgets (~3 min)")
     ap.add_argument("--scale", type=float, default=None,
@@ -368,8 +372,12 @@ def main():
                     help="wall: render times as reported (default); cpu: CPU seconds (user + system) of the render "
                          "calls, net of fixed per-call costs (niebla: an 8-pixel-wide 1-spp render of the scene; "
                          "Cycles: a 1x1-pixel render; Mitsuba: none), for a shared machine")
+    ap.add_argument("--niebla-with-writes", action="store_true",
+                    help="time niebla with its EXR checkpoints and final write (default: without, "
+                         "--no-checkpoints and the CPU seconds it reports before the final write)")
     args = ap.parse_args()
     THREADS, CLOCK = args.threads, args.clock
+    NO_WRITES = not args.niebla_with_writes
 
     scale = args.scale or (0.375 if args.quick else 0.5)
     ref_s = args.ref_seconds or (12.0 if args.quick else 40.0)

@@ -21,6 +21,13 @@ other processes on a shared machine do not inflate them. `--clock cpu`
 times both renderers so: niebla as above, Cycles by the CPU seconds of its
 worker process during the render call, net of those of a 1x1-pixel render.
 
+niebla's renders never write checkpoints (--no-checkpoints) and its CPU
+seconds are those it reports before writing its final EXR, so neither clock
+counts image output for niebla (Cycles' render call saves nothing either);
+`--niebla-with-writes` restores the earlier convention (the whole process:
+checkpoints and the final ZIP-compressed EXR; reported render time with
+checkpoints).
+
 Errors are measured against niebla's reference (volume light sampling on,
 `--ref-spp`), its own noise (from two independent halves) subtracted; the
 Cycles reference (`--cycles-ref-spp`) serves the agreement check (means and
@@ -118,6 +125,9 @@ def main():
     ap.add_argument("--niebla-only", action="store_true",
                     help="skip Cycles; niebla's times in CPU seconds net of the per-call fixed cost")
     ap.add_argument("--threads", type=int, default=THREADS, help=f"threads of each renderer (default {THREADS})")
+    ap.add_argument("--niebla-with-writes", action="store_true",
+                    help="time niebla's whole process, checkpoints and final EXR write included (the convention "
+                         "before 2026-12-03)")
     ap.add_argument("--clock", default="wall", choices=["wall", "cpu"],
                     help="wall (default; --niebla-only implies cpu): niebla's reported render time and Cycles' "
                          "render call; cpu: CPU seconds (user + system) of niebla's render process and of Cycles' "
@@ -146,13 +156,15 @@ def main():
         peers.ensure_cycles()
         version = peers.cycles_version()
     print(f"{args.size}x{args.size}, {args.threads} threads, {'CPU seconds, ' if cpu else ''}Cycles {version}, "
+          f"niebla {'with' if args.niebla_with_writes else 'without'} output writes, "
           f"load average "
           f"{os.getloadavg()[0]:.2f}; pixels: floor {m['floor'].sum()}, smoke {m['smoke'].sum()}, "
           f"fire {m['fire'].sum()}", flush=True)
 
-    nvls = peers.Niebla(args.niebla, paths[True], args.out, args.threads)
+    no_writes = not args.niebla_with_writes
+    nvls = peers.Niebla(args.niebla, paths[True], args.out, args.threads, no_writes=no_writes)
     nvls.name = "niebla"
-    nfree = peers.Niebla(args.niebla, paths[False], args.out, args.threads)
+    nfree = peers.Niebla(args.niebla, paths[False], args.out, args.threads, no_writes=no_writes)
     nfree.name = "niebla-free"
     half = args.ref_spp // 2
     ra, ta, _ = nvls.render(half, 1000, "ref_a")

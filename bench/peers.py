@@ -105,13 +105,20 @@ class Niebla:
     render of the same scene (start-up, loading, baking), measured by
     `measure_fixed_cpu()`. After each call `last_cpu` holds the child's gross
     CPU seconds, `last_output` its printed output, and `peak_mib` the
-    largest peak resident set so far (MiB)."""
+    largest peak resident set so far (MiB).
+
+    With `no_writes`, renders run with --no-checkpoints (no EXR
+    checkpoints between passes; the reported render time then excludes all
+    writes) and the CPU seconds are those niebla reports before writing its
+    final EXR (loading included), as a peer's render call does not save its
+    image either."""
 
     name = "niebla"
 
-    def __init__(self, binary: str, scene_path: str, workdir: str, threads: int = 2, clock: str = "wall"):
+    def __init__(self, binary: str, scene_path: str, workdir: str, threads: int = 2, clock: str = "wall",
+                 no_writes: bool = False):
         self.binary, self.scene_path, self.workdir = binary, scene_path, workdir
-        self.threads, self.clock = threads, clock
+        self.threads, self.clock, self.no_writes = threads, clock, no_writes
         self.fixed_cpu, self.last_cpu, self.peak_mib = 0.0, 0.0, 0.0
 
     def run(self, scene_path: str, spp: int, seed: int, tag: str, extra=()):
@@ -120,6 +127,8 @@ class Niebla:
         import time
 
         out = os.path.join(self.workdir, f"niebla_{tag}.exr")
+        if self.no_writes:
+            extra = (*extra, "--no-checkpoints")
         cmd = [self.binary, "render", scene_path, "--spp", str(spp), "--seed", str(seed),
                "--threads", str(self.threads), "--quiet", "-o", out, *extra]
         t0 = time.perf_counter()
@@ -135,7 +144,13 @@ class Niebla:
         if not m or int(m.group(1)) != spp:
             raise RuntimeError(f"unexpected niebla output: {text!r}")
         self.last_output = text
-        return out, float(m.group(2)), ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0, wall
+        cpu = ru.ru_utime + ru.ru_stime
+        if self.no_writes:
+            c = re.search(r"process CPU ([0-9.]+) s before the final write", text)
+            if not c:
+                raise RuntimeError(f"no CPU time in niebla's output {text!r} (a binary without --no-checkpoints?)")
+            cpu = float(c.group(1))
+        return out, float(m.group(2)), cpu, ru.ru_maxrss / 1024.0, wall
 
     def measure_fixed_cpu(self, repeats: int = 2) -> float:
         """The smaller CPU seconds of `repeats` 8-pixel-wide, 1-spp renders

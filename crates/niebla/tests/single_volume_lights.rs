@@ -220,7 +220,10 @@ fn single_volume_lights_setting_parses_keys_and_counts_memory() {
     );
     let niebla::medium::Medium::Grid(g) = &scene.media[0] else { panic!("a grid medium") };
     let cells = g.majorant.res().iter().product::<usize>() as u64;
+    assert_eq!(cells, 16 * 16 * 16);
+    // 16 bytes per light cell; each majorant cell is split 2x2x2 (the finest
+    // split within 2^15 light cells).
     let m = precompute_memory(&on, &scene).expect("an estimate with volume lights on");
-    assert_eq!((m.bytes, m.field), (16 * cells, "volume_lights"));
+    assert_eq!((m.bytes, m.field), (16 * 8 * cells, "volume_lights"));
     assert_eq!(precompute_memory(&default, &scene), None);
 }

@@ -221,7 +221,7 @@ fn floor_under_an_emissive_absorbing_sphere_matches_the_quadrature() {
 /// drawn for another.
 #[test]
 fn volume_light_density_is_normalized_and_consistent() {
-    let scene = load(
+    check_density(
         r#"{"version": 1,
         "camera": {"type": "perspective", "position": [0, 1, 5], "target": [0, 0.5, 0], "width": 8, "height": 8},
         "media": {"fire": {"type": "grid", "sigma_t": 6, "albedo": 0.5,
@@ -231,6 +231,88 @@ fn volume_light_density_is_normalized_and_consistent() {
                   "glow": {"type": "homogeneous", "sigma_t": 2, "albedo": 0.2, "emission": {"L_ve": 1}}},
         "shapes": [{"type": "sphere", "center": [1, 0.5, 0], "radius": 0.5, "interior": "glow"}]}"#,
     );
+}
+
+/// The same checks on a grid whose majorant grid is coarse (4^3 cells, each
+/// split into 8^3 light cells), where the light cells' pdf varies within a
+/// majorant cell (a dim sphere beside it, so that most points are the
+/// grid's): besides, the frequency with which points land in each of
+/// the 4^3 octants of the grid's box equals the pdf's integral over it
+/// (within 4 standard errors of both).
+#[test]
+fn subdivided_light_cells_follow_their_density() {
+    let scene = check_density(
+        r#"{"version": 1,
+        "camera": {"type": "perspective", "position": [0, 1, 5], "target": [0, 0.5, 0], "width": 8, "height": 8},
+        "media": {"fire": {"type": "grid", "sigma_t": 6, "albedo": 0.5, "majorant_resolution": 4,
+            "density": {"type": "procedural", "shape": "cloud", "seed": 5, "resolution": 32},
+            "emission": {"L_ve": [4, 1.6, 0.4]},
+            "to_world": {"scale": [1.2, 0.8, 1.0], "rotate_y": 30, "translate": [-1.5, 0.1, -0.6]}},
+                  "glow": {"type": "homogeneous", "sigma_t": 2, "albedo": 0.2, "emission": {"L_ve": 0.02}}},
+        "shapes": [{"type": "sphere", "center": [1, 0.5, 0], "radius": 0.5, "interior": "glow"}]}"#,
+    );
+    let niebla::medium::Medium::Grid(g) = &scene.media[0] else { panic!("a grid medium") };
+    assert_eq!(g.majorant.res(), [4, 4, 4]);
+    let lights = VolumeLights::new(&scene);
+    let fire = niebla::medium::MediumId(0);
+    let (lo, hi) = g.majorant.bounds();
+    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+    let to_world = g.world_to_grid.inverse();
+    let octant = |q: Vec3| -> usize {
+        let f = ((q - lo) / (hi - lo) * 4.0).clamp(Vec3::ZERO, Vec3::splat(3.999));
+        (f.z as usize * 4 + f.y as usize) * 4 + f.x as usize
+    };
+    let mut s = PixelSampler::from_key(11);
+    // Frequencies of drawn points (of the grid medium) per octant.
+    let draws = 200_000;
+    let mut count = [0u32; 64];
+    let mut fire_draws = 0u32;
+    for _ in 0..draws {
+        let v = lights.sample(s.next_1d(), [s.next_1d(), s.next_1d(), s.next_1d()]).unwrap();
+        if v.medium == fire {
+            fire_draws += 1;
+            count[octant(g.world_to_grid.transform_point3(v.p))] += 1;
+        }
+    }
+    // The pdf's integral per octant, by uniform points in grid space.
+    let det = to_world.matrix3.determinant().abs() as f64;
+    let box_volume = ((hi - lo).x * (hi - lo).y * (hi - lo).z) as f64 * det;
+    let per = 20_000;
+    let mut varied = 0;
+    for (o, &drawn_here) in count.iter().enumerate() {
+        let c = Vec3::new((o % 4) as f32, ((o / 4) % 4) as f32, (o / 16) as f32);
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let mut values = Vec::with_capacity(per);
+        for _ in 0..per {
+            let q = lo + (hi - lo) * (c + Vec3::new(s.next_1d(), s.next_1d(), s.next_1d())) / 4.0;
+            let f = lights.pdf(fire, to_world.transform_point3(q)) as f64 * box_volume / 64.0;
+            sum += f;
+            sum2 += f * f;
+            values.push(f);
+        }
+        let mean = sum / per as f64;
+        let se = ((sum2 / per as f64 - mean * mean) / per as f64).sqrt();
+        let (min, max) = values.iter().fold((f64::MAX, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        if max > 2.0 * min && mean > 1e-3 {
+            varied += 1;
+        }
+        let p = drawn_here as f64 / draws as f64;
+        let se_p = (p * (1.0 - p) / draws as f64).sqrt();
+        let combined = (se * se + se_p * se_p).sqrt();
+        assert!(
+            (p - mean).abs() <= 4.0 * combined + 1e-6,
+            "octant {o}: frequency {p} vs integral {mean} +- {combined}"
+        );
+    }
+    assert!(fire_draws > draws / 2, "the grid is drawn most: {fire_draws}");
+    assert!(varied >= 4, "the pdf varies within majorant cells in {varied} of them");
+}
+
+/// Sampled densities equal evaluated ones, the density integrates to one
+/// over a box holding the emitters, and no point of one medium has density
+/// in the other; the scene, for further checks.
+fn check_density(text: &str) -> Scene {
+    let scene = load(text);
     let lights = VolumeLights::new(&scene);
     assert!(!lights.is_empty());
     let mut s = PixelSampler::from_key(3);
@@ -260,11 +342,12 @@ fn volume_light_density_is_normalized_and_consistent() {
     let mean = sum / n as f64;
     let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
     assert!((mean - 1.0).abs() < 4.0 * se, "integral {mean} +- {se}");
+    scene
 }
 
 /// The setting: parsed with its default, refused with its name when not a
 /// boolean, named in the stable key only when off; the distribution's memory
-/// is reported to `--max-memory` (16 bytes per majorant cell of an emissive
+/// is reported to `--max-memory` (16 bytes per light cell of an emissive
 /// grid) only when it is on.
 #[test]
 fn volume_light_sampling_setting_parses_keys_and_counts_memory() {
@@ -290,7 +373,10 @@ fn volume_light_sampling_setting_parses_keys_and_counts_memory() {
     );
     let niebla::medium::Medium::Grid(g) = &scene.media[0] else { panic!("a grid medium") };
     let cells = g.majorant.res().iter().product::<usize>() as u64;
+    assert_eq!(cells, 16 * 16 * 16);
+    // 16 bytes per light cell; each of the 4096 majorant cells is split
+    // 2x2x2 (the finest split within 2^15 light cells).
     let m = precompute_memory(&on, &scene).expect("an estimate with light sampling on");
-    assert_eq!((m.bytes, m.field), (16 * cells, "volume_light_sampling"));
+    assert_eq!((m.bytes, m.field), (16 * 8 * cells, "volume_light_sampling"));
     assert_eq!(precompute_memory(&off, &scene), None);
 }

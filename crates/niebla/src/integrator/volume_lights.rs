@@ -2,14 +2,17 @@
 //! scene where media emit, for next-event estimation toward emission inside
 //! media (the "volume light" strategy; see `volpath`'s `volume_nee`).
 //!
-//! - A grid medium is covered by the cells of its majorant grid. Each cell
-//!   whose majorant is positive (free-flight sampling only collects emission
-//!   where it draws tentative collisions) gets a weight: its world volume
-//!   times an estimate of its emitted radiance per unit length `L_ve` (the
-//!   mean and the largest of a 3x3x3 lattice of evaluations), plus a small
-//!   floor so that every such cell keeps a positive probability whatever the
-//!   lattice missed. A cell is chosen with probability proportional to its
-//!   weight, then a uniform point in it.
+//! - A grid medium is covered by light cells: the cells of its majorant
+//!   grid, each split into `s^3` equal cells when the majorant grid is
+//!   coarse (up to 2^15 light cells; a fire a few majorant cells across
+//!   emits unevenly within each). Each light cell whose majorant cell is
+//!   positive (free-flight sampling only collects emission where it draws
+//!   tentative collisions) gets a weight: its world volume times an
+//!   estimate of its emitted radiance per unit length `L_ve` (the mean and
+//!   the largest of a 3x3x3 lattice of evaluations), plus a small floor so
+//!   that every such cell keeps a positive probability whatever the lattice
+//!   missed. A cell is chosen with probability proportional to its weight,
+//!   then a uniform point in it.
 //! - A homogeneous medium bounded by closed shapes (it is the interior of
 //!   each, never an exterior, the ambient medium or bounded by an open
 //!   shape) is sampled uniformly in the bounding box of those shapes.
@@ -42,9 +45,9 @@ const LATTICE: usize = 3;
 /// cell weight of its medium.
 const CELL_FLOOR: f32 = 1e-3;
 
-/// Bytes per majorant cell of an emissive grid medium: the cell's
-/// probability (f32) and, for cells with a positive majorant, the cell index
-/// (u32) and the cumulative table's entries (two f32).
+/// Bytes per light cell of an emissive grid medium: the cell's probability
+/// (f32) and, for cells with a positive majorant, the cell index (u32) and
+/// the cumulative table's entries (two f32).
 const BYTES_PER_CELL: u64 = 16;
 
 /// The emissive media of a scene as light sources.
@@ -150,7 +153,9 @@ impl VolumeLights {
             .iter()
             .map(|m| match m {
                 Medium::Grid(g) if m.is_emissive() => {
-                    g.majorant.res().iter().map(|&r| r as u64).product::<u64>() * BYTES_PER_CELL
+                    let res = g.majorant.res();
+                    let sub = subdivision(res) as u64;
+                    res.iter().map(|&r| r as u64 * sub).product::<u64>() * BYTES_PER_CELL
                 }
                 _ => 0,
             })
@@ -267,12 +272,41 @@ fn homogeneous_region(scene: &Scene, id: MediumId) -> Option<(Vec3, Vec3)> {
     (extent.cmpgt(Vec3::ZERO).all() && extent.is_finite()).then_some((lo, hi))
 }
 
-/// The cell distribution of a grid medium, its total weight (emitted
-/// radiance per unit length times world volume) and the world bounds of its
-/// cells whose weight is above the floor, or `None` when no cell emits.
+/// Most light cells a grid's distribution divides its majorant cells into
+/// (the subdivision stops before exceeding it).
+const LIGHT_CELLS: usize = 1 << 15;
+
+/// Largest subdivision of a majorant cell per axis.
+const MAX_SUBDIVISION: usize = 16;
+
+/// Light cells per majorant cell and axis: the largest `s <=
+/// MAX_SUBDIVISION` with `cells * s^3 <= LIGHT_CELLS` (at least 1), so that
+/// a coarse majorant grid (a few cells across a fire) still gets cells
+/// small enough to follow where it emits.
+fn subdivision(res: [usize; 3]) -> usize {
+    let n = res.iter().product::<usize>().max(1);
+    let mut s = 1;
+    while s < MAX_SUBDIVISION && n.saturating_mul((s + 1).pow(3)) <= LIGHT_CELLS {
+        s += 1;
+    }
+    s
+}
+
+/// The cell distribution of a grid medium, its total weight and the world
+/// bounds of its cells whose emission is above the floor, or `None` when no
+/// cell emits.
+///
+/// The cells are those of the majorant grid, each divided into
+/// [`subdivision`]^3 light cells; a light cell inside a majorant cell with a
+/// positive majorant is sampled, with a weight: its world volume times its
+/// emission estimate (the mean and the largest `L_ve` of a 3x3x3 lattice),
+/// at least [`CELL_FLOOR`] times the largest weight. Any positive weights
+/// keep the estimator unbiased; these only shape its variance.
 fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32, (Vec3, Vec3))> {
     let majorant = &g.majorant;
-    let res = majorant.res();
+    let mres = majorant.res();
+    let sub = subdivision(mres);
+    let res = [mres[0] * sub, mres[1] * sub, mres[2] * sub];
     let (lo, hi) = majorant.bounds();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let grid_to_world = g.world_to_grid.inverse();
@@ -283,13 +317,15 @@ fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32, (Vec3, Ve
         return None;
     }
     let values = majorant.values();
+    let count = res[0] * res[1] * res[2];
     let mut cells = Vec::new();
     let mut weights = Vec::new();
     for z in 0..res[2] {
         for y in 0..res[1] {
             for x in 0..res[0] {
                 let index = (z * res[1] + y) * res[0] + x;
-                if !(values[index] > 0.0) {
+                let major = ((z / sub) * mres[1] + y / sub) * mres[0] + x / sub;
+                if !(values[major] > 0.0) {
                     continue;
                 }
                 let corner = lo + size * Vec3::new(x as f32, y as f32, z as f32);
@@ -300,8 +336,7 @@ fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32, (Vec3, Ve
                         ((k / LATTICE) % LATTICE) as f32 + 0.5,
                         (k / (LATTICE * LATTICE)) as f32 + 0.5,
                     ) / LATTICE as f32;
-                    let p = grid_to_world.transform_point3(corner + size * f);
-                    let e = emission_estimate(g, p);
+                    let e = emission_estimate(g, grid_to_world.transform_point3(corner + size * f));
                     sum += e;
                     max = max.max(e);
                 }
@@ -339,7 +374,7 @@ fn cell_distribution(g: &GridMedium) -> Option<(CellDistribution, f32, (Vec3, Ve
         *w = w.max(CELL_FLOOR * largest);
     }
     let dist = Distribution1D::new(&weights);
-    let mut cell_pmf = vec![0.0f32; values.len()];
+    let mut cell_pmf = vec![0.0f32; count];
     for (j, &index) in cells.iter().enumerate() {
         cell_pmf[index as usize] = dist.pmf(j);
     }
