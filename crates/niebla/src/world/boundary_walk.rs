@@ -64,10 +64,15 @@ impl PathRay {
     }
 
     /// Leave surface `hit` toward unit `wi` (a sampled reflection or, when
-    /// `transmitted`, a refraction into the medium on `wi`'s side).
+    /// `transmitted`, a refraction into the medium on `wi`'s side). On a
+    /// mesh that keeps its shading normal
+    /// ([`crate::geometry::Shape::keeps_shading_normal`]) the medium is the
+    /// one on `wi`'s geometric side whatever the lobe (Mitsuba 3's
+    /// `target_medium`), since there a reflection may cross the triangle's
+    /// plane and a transmission may stay on its side.
     #[inline]
     pub fn leave_surface(&mut self, scene: &Scene, hit: &Hit, wi: Vec3, transmitted: bool) {
-        if transmitted {
+        if transmitted || scene.object(hit).shape.keeps_shading_normal() {
             self.medium = scene.medium_after_crossing(hit, wi, self.medium);
         }
         self.ray = Ray::at_time(hit.surface.p, wi, self.ray.time);
