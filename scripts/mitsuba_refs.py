@@ -3,7 +3,8 @@
     /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--cube] [--renders 16] [--spp 64] [NAME ...]
 
 (disk_roughplastic was made with `--renders 64 disk_roughplastic`, and
-aniso_dpdu with `--renders 64 aniso_dpdu`, cube_uv with `--renders 64 cube_uv`, smooth_normals with `--renders 64 smooth_normals`: their image means need the
+aniso_dpdu with `--renders 64 aniso_dpdu`, cube_uv with `--renders 64 cube_uv`, smooth_normals with `--renders 64 smooth_normals`,
+smooth_normals_inward with `--renders 64 smooth_normals_inward`: their image means need the
 smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
@@ -46,7 +47,8 @@ OUT = os.path.join(ROOT, "crates", "niebla", "tests", "data", "mitsuba_refs")
 BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
-         "rough_textured", "rough_aniso_twosided", "aniso_dpdu", "cube_uv", "smooth_normals"]
+         "rough_textured", "rough_aniso_twosided", "aniso_dpdu", "cube_uv", "smooth_normals",
+         "smooth_normals_inward"]
 
 
 def write_data(mi):

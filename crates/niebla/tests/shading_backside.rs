@@ -137,3 +137,31 @@ fn geometric_rule_stays_the_default_and_bad_values_are_named() {
     let err = err.to_string();
     assert!(err.contains("shading_normal_backside") && err.contains("geometric"), "{err}");
 }
+
+/// Vertex normals that point against the winding: Mitsuba 3 keeps them as
+/// written (measured with the wheel: `si.n` is the winding normal,
+/// `si.sh_frame.n` the vertex normal), and so does the `"mitsuba"` rule,
+/// which then marks a hit seen from the winding's side as behind the
+/// shading normal; the default rule turns them to the geometric side.
+#[test]
+fn normals_against_the_winding_are_kept_under_mitsubas_rule() {
+    let ns = Vec3::new(0.0, 0.5, -0.75f32.sqrt());
+    let xml = write_scene("inward", ns, r#"<bsdf type="diffuse"/>"#, "");
+    let wo = Vec3::new(0.1, -0.2, 1.0).normalize();
+    let built = load_scene(&xml).unwrap();
+    let hit = built.scene.intersect(&Ray::new(wo * 2.0, -wo), 0.0, f32::INFINITY).unwrap();
+    assert!((hit.surface.n - Vec3::Z).length() < 1e-6);
+    assert!((hit.surface.ns - ns).length() < 1e-5, "kept as written: {}", hit.surface.ns);
+    assert!(hit.surface.backside_ns);
+    assert_eq!(hit.surface.shading_normal(wo), hit.surface.ns);
+    // Diffuse (one-sided) seen from behind its shading normal: black.
+    assert!(built.scene.surface_bsdf(&hit).eval(hit.surface.ns, wo, -wo).is_black());
+
+    let mut desc = niebla::scene::read_scene_source(&xml, &[]).unwrap().desc;
+    let niebla::scene::GeometryDesc::Mesh(mesh) = &mut desc.shapes[0].geometry else { panic!("a mesh") };
+    mesh.shading_normal_backside = Default::default();
+    let built = niebla::scene::build_scene(&desc, "test", xml.parent().unwrap()).unwrap();
+    let hit = built.scene.intersect(&Ray::new(wo * 2.0, -wo), 0.0, f32::INFINITY).unwrap();
+    assert!((hit.surface.ns + ns).length() < 1e-5, "turned to n's side: {}", hit.surface.ns);
+    assert!(!hit.surface.backside_ns);
+}

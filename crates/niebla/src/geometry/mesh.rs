@@ -4,7 +4,8 @@
 //! Conventions: triangles wind counter-clockwise seen from outside, so the
 //! geometric normal `(p1 - p0) x (p2 - p0)` points outward (pbrt-v4 and
 //! Mitsuba 3 agree); vertex normals, when given, are oriented to agree with
-//! the geometric normal; without uv coordinates a hit's uv is its barycentric
+//! the geometric normal (kept as written under Mitsuba 3's rule,
+//! [`TriangleMesh::keeps_backside_ns`]); without uv coordinates a hit's uv is its barycentric
 //! `(b1, b2)` (Mitsuba 3's convention).
 
 use std::sync::Arc;
@@ -40,7 +41,10 @@ pub struct TriangleMesh {
     /// True when a hit whose `wo` lies behind the interpolated normal but in
     /// front of the triangle keeps the shading normal (Mitsuba 3's rule,
     /// `"shading_normal_backside": "mitsuba"`; see
-    /// [`SurfaceHit::backside_ns`]). Default false (set by the scene builder).
+    /// [`SurfaceHit::backside_ns`]), and interpolated normals that point
+    /// against the winding are kept as written instead of being turned to
+    /// the geometric normal's side (Mitsuba 3 keeps them too). Default
+    /// false (set by the scene builder).
     pub keeps_backside_ns: bool,
     /// The corners of each triangle of `triangles`, copied so that a leaf's
     /// triangles are read from contiguous memory without the indirection
@@ -360,7 +364,9 @@ impl MeshInstance {
     /// The hit record of `hit` (found by [`MeshInstance::hit`] on `ray`):
     /// the point interpolated on the triangle, the outward geometric normal,
     /// the shading normal interpolated from the vertex normals (turned to the
-    /// geometric normal's side; the geometric one without vertex normals).
+    /// geometric normal's side unless the mesh keeps its shading normal,
+    /// [`TriangleMesh::keeps_backside_ns`]; the geometric one without vertex
+    /// normals).
     #[inline]
     pub fn surface_at(&self, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {
         let s = self.surface_by(if self.identity { None } else { Some(&self.transform) }, hit);
@@ -406,7 +412,9 @@ impl MeshInstance {
                         None => s.normalize(),
                         Some(t) => t.normal_to_world(s),
                     };
-                    if s.dot(n) < 0.0 {
+                    // Turned to the geometric normal's side, unless the
+                    // mesh keeps its normals as written (Mitsuba 3).
+                    if s.dot(n) < 0.0 && !mesh.keeps_backside_ns {
                         -s
                     } else {
                         s

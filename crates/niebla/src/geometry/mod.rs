@@ -37,7 +37,9 @@ pub struct SurfaceHit {
     /// Unit outward geometric normal.
     pub n: Vec3,
     /// Unit shading normal: interpolated vertex normals of a smooth mesh,
-    /// on the geometric normal's side; `n` itself for every other shape.
+    /// on the geometric normal's side (as written on a mesh that keeps its
+    /// normals, [`TriangleMesh::keeps_backside_ns`]); `n` itself for every
+    /// other shape.
     pub ns: Vec3,
     /// True where the mesh keeps its shading normal for a `wo` (the hit's
     /// `-ray.d`) on the other side of `ns` than of `n` (Mitsuba 3's rule,
@@ -262,6 +264,22 @@ impl Shape {
             Shape::Rectangle(_) | Shape::Disk(_) => true,
             // A mesh may be re-entered; a moving shape never bounds a medium.
             Shape::Mesh(_) | Shape::Moving(_) => false,
+        }
+    }
+
+    /// True for a mesh that keeps its shading normal everywhere (Mitsuba
+    /// 3's rule, [`TriangleMesh::keeps_backside_ns`]): a path leaves its
+    /// hits along any direction its BSDF samples about the shading normal,
+    /// also one that crosses the triangle's plane against the sampled lobe
+    /// (a reflection that leaves the geometric side, a transmission that
+    /// stays on it), and the medium it then travels in is the one on the
+    /// direction's geometric side. False for every other shape.
+    #[inline]
+    pub fn keeps_shading_normal(&self) -> bool {
+        match self {
+            Shape::Mesh(m) => m.mesh.keeps_backside_ns,
+            Shape::Moving(m) => m.at_zero.keeps_shading_normal(),
+            Shape::Sphere(_) | Shape::Box(_) | Shape::Rectangle(_) | Shape::Disk(_) => false,
         }
     }
 

@@ -137,7 +137,7 @@ pub(crate) fn walk_camera_ray<V: CameraRayVisitor>(
             let Some(bs) = bsdf.sample(ns, -path.ray.d, u_lobe, sampler.next_2d()) else {
                 break;
             };
-            if !hit.surface.sides_agree(ns, bs.wi) {
+            if !scene.path_continues(&hit, ns, bs.wi) {
                 break;
             }
             beta *= bs.weight(ns);

@@ -64,10 +64,15 @@ impl PathRay {
     }
 
     /// Leave surface `hit` toward unit `wi` (a sampled reflection or, when
-    /// `transmitted`, a refraction into the medium on `wi`'s side).
+    /// `transmitted`, a refraction into the medium on `wi`'s side). On a
+    /// mesh that keeps its shading normal
+    /// ([`crate::geometry::Shape::keeps_shading_normal`]) the medium is the
+    /// one on `wi`'s geometric side whatever the lobe (Mitsuba 3's
+    /// `target_medium`), since there a reflection may cross the triangle's
+    /// plane and a transmission may stay on its side.
     #[inline]
     pub fn leave_surface(&mut self, scene: &Scene, hit: &Hit, wi: Vec3, transmitted: bool) {
-        if transmitted {
+        if transmitted || scene.object(hit).shape.keeps_shading_normal() {
             self.medium = scene.medium_after_crossing(hit, wi, self.medium);
         }
         self.ray = Ray::at_time(hit.surface.p, wi, self.ray.time);
@@ -342,5 +347,52 @@ mod tests {
         path.crossings = MAX_PATH_BOUNDARY_CROSSINGS;
         assert!(!path.cross(&scene, &hit));
         assert_eq!(path.medium, None);
+    }
+
+    /// A glass triangle in z = 0 (geometric normal +z) with medium `fog`
+    /// behind it and vertex normals tilted 60 degrees toward +y, under the
+    /// given `"shading_normal_backside"` rule.
+    fn tilted_glass(rule: &str) -> Scene {
+        let json = format!(
+            r#"{{
+          "version": 1,
+          "camera": {{"type": "perspective", "position": [0, 0, 10], "target": [0, 0, 0], "fov_y": 40,
+                     "width": 4, "height": 4}},
+          "media": {{"fog": {{"type": "homogeneous", "sigma_a": 0.5, "sigma_s": 0.0}}}},
+          "shapes": [{{"type": "mesh", "positions": [[-4, -4, 0], [4, -4, 0], [0, 4, 0]], "indices": [[0, 1, 2]],
+             "normals": [[0, 0.866025, 0.5], [0, 0.866025, 0.5], [0, 0.866025, 0.5]],
+             "interior": "fog", "allow_open": true, "shading_normal_backside": "{rule}",
+             "bsdf": {{"type": "dielectric", "int_ior": 1.5}}}}]
+        }}"#
+        );
+        let desc = parse_scene_str(&json, "<test>").unwrap();
+        build_scene(&desc, "<test>", std::path::Path::new(".")).unwrap().scene
+    }
+
+    /// Mitsuba 3's rule: a direction sampled about the shading normal goes
+    /// on even where it crosses the triangle's plane against its lobe, and
+    /// the medium after the surface is the one on its geometric side; the
+    /// default rule refuses such a direction and keeps the medium of a
+    /// reflection.
+    #[test]
+    fn mitsubas_rule_follows_the_geometric_side_after_a_surface() {
+        let fog = Some(crate::medium::MediumId(0));
+        // From inside (below z = 0), a "reflection" about the tilted normal
+        // that leaves through the plane: below ns, above n.
+        let wi = Vec3::new(0.0, -0.9, 0.3).normalize();
+        for (rule, continues, medium) in [("mitsuba", true, None), ("geometric", false, fog)] {
+            let scene = tilted_glass(rule);
+            let mut path = PathRay::new(Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z), fog, 0.0);
+            let hit = path.intersect(&scene).unwrap();
+            let ns = hit.surface.shading_normal(-path.ray.d);
+            assert!(wi.dot(ns) < 0.0 && wi.dot(hit.surface.n) > 0.0);
+            assert_eq!(scene.path_continues(&hit, ns, wi), continues, "{rule}");
+            path.leave_surface(&scene, &hit, wi, false);
+            assert_eq!(path.medium, medium, "{rule}");
+            // A transmission about ns that stays below the plane stays in the fog.
+            let mut path = PathRay::new(Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z), fog, 0.0);
+            path.leave_surface(&scene, &hit, Vec3::new(0.0, 0.9, -0.3).normalize(), true);
+            assert_eq!(path.medium, fog, "{rule}");
+        }
     }
 }

@@ -193,6 +193,18 @@ impl Scene {
         &self.media[id.0 as usize]
     }
 
+    /// Whether a path that sampled unit `wi` about the shading normal
+    /// `ns_used` at `hit` goes on: where `wi` lies on the same side of
+    /// `ns_used` as of the geometric normal ([`SurfaceHit::sides_agree`],
+    /// niebla's guard against light leaks), and always on a mesh that keeps
+    /// its shading normal ([`crate::geometry::Shape::keeps_shading_normal`]:
+    /// Mitsuba 3 evaluates and samples BSDFs in the shading frame alone and
+    /// lets a path whose direction crosses the triangle's plane go on).
+    #[inline]
+    pub fn path_continues(&self, hit: &Hit, ns_used: Vec3, wi: Vec3) -> bool {
+        hit.surface.sides_agree(ns_used, wi) || self.object(hit).shape.keeps_shading_normal()
+    }
+
     /// The object hit.
     #[inline]
     pub fn object(&self, hit: &Hit) -> &SceneObject {

@@ -403,7 +403,7 @@ impl Tracer<'_> {
             let Some(bs) = bsdf.sample_with_mode(ns, wo, u_lobe, u_bsdf, TransportMode::Importance) else {
                 return;
             };
-            if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
+            if !(bs.pdf > 0.0) || !scene.path_continues(&hit, ns, bs.wi) {
                 return;
             }
             // Importance transport over shading normals: Veach's (1997, eq.

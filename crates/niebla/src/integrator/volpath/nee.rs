@@ -30,8 +30,12 @@ pub(super) enum Scatter<'a> {
     /// rough transmission lobe ([`Bsdf::has_rough_transmission`]) directions
     /// below both are transmissions (radiance mode: `f` carries `1 / etap^2`),
     /// so light sampling reaches lights on either side. Directions between
-    /// the two normals (where shading and geometry disagree) get nothing.
-    Surface(&'a Bsdf, Vec3, Vec3, Vec3),
+    /// the two normals (where shading and geometry disagree) get nothing,
+    /// unless the last field is true: a mesh that keeps its shading normal
+    /// (Mitsuba 3's rule, the same directions its BSDF sampling follows,
+    /// [`crate::world::Scene::path_continues`]), where only the side of the
+    /// shading normal counts.
+    Surface(&'a Bsdf, Vec3, Vec3, Vec3, bool),
 }
 
 impl Scatter<'_> {
@@ -45,10 +49,10 @@ impl Scatter<'_> {
                 debug_assert_eq!(p.to_bits(), phase.pdf(wo, wi).to_bits());
                 (Rgb::splat(p), p)
             }
-            Scatter::Surface(bsdf, ns, n, ng) => {
+            Scatter::Surface(bsdf, ns, n, ng, keeps_ns) => {
                 let (cos, cos_g) = (wi.dot(n), wi.dot(ng));
-                let reflected = cos > 0.0 && cos_g > 0.0;
-                let transmitted = cos < 0.0 && cos_g < 0.0 && bsdf.has_rough_transmission();
+                let reflected = cos > 0.0 && (cos_g > 0.0 || keeps_ns);
+                let transmitted = cos < 0.0 && (cos_g < 0.0 || keeps_ns) && bsdf.has_rough_transmission();
                 if !reflected && !transmitted {
                     return (Rgb::ZERO, 0.0);
                 }
@@ -211,7 +215,7 @@ fn sample_ld_light(
     let light: &Light = &scene.lights[light_index];
     let pmf = lights.pmf();
     let normal = match scatter {
-        Scatter::Surface(_, _, _, ng) => Some(ng),
+        Scatter::Surface(_, _, _, ng, _) => Some(ng),
         Scatter::Phase(_) => None,
     };
     let Some(ls) = light.sample_li(p, normal, u_dir, sampler.time()) else {
@@ -474,7 +478,8 @@ mod tests {
     /// Light sampling at a rough dielectric reaches both sides (the
     /// transmitted pair with `f |cos|` and the BSDF's own pdf), at a diffuse
     /// surface only `wo`'s side; directions where the shading and geometric
-    /// normals disagree get nothing.
+    /// normals disagree get nothing, except on a mesh that keeps its
+    /// shading normal.
     #[test]
     fn surface_scatter_covers_the_transmission_side_of_rough_dielectrics_only() {
         let glass = Bsdf::RoughDielectric(RoughDielectric {
@@ -488,18 +493,29 @@ mod tests {
         let n = Vec3::Z;
         let wo = Vec3::new(0.3, 0.0, 1.0).normalize();
         let wi = Vec3::new(-0.2, 0.1, -1.0).normalize();
-        let (f, pdf) = Scatter::Surface(&glass, n, n, n).eval(wo, wi);
+        let (f, pdf) = Scatter::Surface(&glass, n, n, n, false).eval(wo, wi);
         let expected = glass.eval(n, wo, wi) * wi.z.abs();
         assert!(f[0] > 0.0 && (f[0] - expected[0]).abs() <= 1e-6 * expected[0], "{f:?} vs {expected:?}");
         assert!(pdf > 0.0 && (pdf - glass.pdf(n, wo, wi)).abs() <= 1e-6 * pdf);
         // From inside (wo below the outward normal): the facing normal is -n.
-        let (f_in, _) = Scatter::Surface(&glass, n, -n, -n).eval(-wo, -wi);
+        let (f_in, _) = Scatter::Surface(&glass, n, -n, -n, false).eval(-wo, -wi);
         assert!(f_in[0] > 0.0);
-        assert_eq!(Scatter::Surface(&diffuse, n, n, n).eval(wo, wi), (Rgb::ZERO, 0.0));
+        assert_eq!(Scatter::Surface(&diffuse, n, n, n, false).eval(wo, wi), (Rgb::ZERO, 0.0));
         // Shading normal says "through", geometry says "same side": refused.
         let tilted = Vec3::new(0.0, 0.9, 0.2).normalize();
         let wi_between = Vec3::new(0.0, -1.0, 0.05).normalize();
         assert!(wi_between.dot(tilted) < 0.0 && wi_between.dot(n) > 0.0);
-        assert_eq!(Scatter::Surface(&glass, tilted, tilted, n).eval(wo, wi_between), (Rgb::ZERO, 0.0));
+        assert_eq!(Scatter::Surface(&glass, tilted, tilted, n, false).eval(wo, wi_between), (Rgb::ZERO, 0.0));
+        // A mesh that keeps its shading normal (Mitsuba 3's rule): such a
+        // direction is a transmission about `tilted`, with the BSDF's values
+        // (seen from `wo_near`, close to `tilted`, whose refraction lies near it).
+        let wo_near = Vec3::new(0.0, 0.9, 0.3).normalize();
+        assert_eq!(Scatter::Surface(&glass, tilted, tilted, n, false).eval(wo_near, wi_between), (Rgb::ZERO, 0.0));
+        let (f_keep, pdf_keep) = Scatter::Surface(&glass, tilted, tilted, n, true).eval(wo_near, wi_between);
+        let expected = glass.eval(tilted, wo_near, wi_between) * wi_between.dot(tilted).abs();
+        assert!(f_keep[0] > 0.0 && (f_keep[0] - expected[0]).abs() <= 1e-6 * expected[0], "{f_keep:?}");
+        assert!(pdf_keep > 0.0 && (pdf_keep - glass.pdf(tilted, wo_near, wi_between)).abs() <= 1e-6 * pdf_keep);
+        // A diffuse surface still reflects nothing below its shading normal.
+        assert_eq!(Scatter::Surface(&diffuse, tilted, tilted, n, true).eval(wo_near, wi_between), (Rgb::ZERO, 0.0));
     }
 }

@@ -345,7 +345,14 @@ impl VolPathIntegrator {
             // The BSDF is evaluated about the shading normal `ns` (outward),
             // light sampling faces `wo`'s side (`n`, and the geometric `ng`).
             let ns = hit.surface.shading_normal(wo);
-            let (n, ng) = if ns.dot(wo) < 0.0 { (-ns, -hit.surface.n) } else { (ns, hit.surface.n) };
+            let (n, mut ng) = if ns.dot(wo) < 0.0 { (-ns, -hit.surface.n) } else { (ns, hit.surface.n) };
+            // A mesh that keeps its shading normal (Mitsuba 3's rule) may
+            // have `wo` behind `ns` but in front of the triangle: shadow rays
+            // leave on their own geometric side, in the medium there.
+            let keeps_ns = scene.object(&hit).shape.keeps_shading_normal();
+            if keeps_ns && ng.dot(wo) < 0.0 {
+                ng = -ng;
+            }
             let p = hit.surface.p;
             // Guiding toward lights inside a medium, for non-specular surfaces
             // whose side of `wo` lies in a medium.
@@ -359,7 +366,7 @@ impl VolPathIntegrator {
                 let vertex = NeeVertex {
                     p,
                     wo,
-                    scatter: Scatter::Surface(&bsdf, ns, n, ng),
+                    scatter: Scatter::Surface(&bsdf, ns, n, ng, keeps_ns),
                     medium,
                     medium_behind: scene.medium_after_crossing(&hit, -wo, medium),
                     beta,
@@ -382,7 +389,7 @@ impl VolPathIntegrator {
             else {
                 return l;
             };
-            if !(bs.pdf > 0.0) || !hit.surface.sides_agree(ns, bs.wi) {
+            if !(bs.pdf > 0.0) || !scene.path_continues(&hit, ns, bs.wi) {
                 return l;
             }
             beta *= bs.weight(ns);

@@ -62,7 +62,7 @@ pub(super) fn sample_volume_ld(
         return Rgb::ZERO;
     }
     let normal = match scatter {
-        Scatter::Surface(_, _, _, ng) => Some(ng),
+        Scatter::Surface(_, _, _, ng, _) => Some(ng),
         Scatter::Phase(_) => None,
     };
     let (origin, start) = match normal {

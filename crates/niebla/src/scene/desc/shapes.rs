@@ -163,7 +163,11 @@ pub enum ShadingBacksideDesc {
     /// `"mitsuba"`: Mitsuba 3's rule: the BSDF is evaluated about the
     /// shading normal with `wo` behind it, so one-sided BSDFs (diffuse,
     /// conductors, plastics) give zero, `twosided` shows its back side and
-    /// dielectrics treat `wo` as coming from inside.
+    /// dielectrics treat `wo` as coming from inside. Paths go on along every
+    /// direction the BSDF samples about the shading normal (also across the
+    /// triangle's plane; the medium is the one on the direction's
+    /// geometric side), light sampling reaches the same directions, and
+    /// vertex normals that point against the winding are kept as written.
     Mitsuba,
 }
 
