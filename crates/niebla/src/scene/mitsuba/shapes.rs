@@ -224,10 +224,8 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     if anisotropic(&bsdf) {
         shape.insert("tangent_frame".into(), json!("dpdu"));
     }
-    if super::textures::has_texture(&bsdf) {
-        if flip_tex_coords {
-            shape.insert("flip_tex_coords".into(), json!(true));
-        }
+    if flip_tex_coords && super::textures::has_texture(&bsdf) {
+        shape.insert("flip_tex_coords".into(), json!(true));
     }
     p.finish()?;
     if emitters.len() > 1 {
