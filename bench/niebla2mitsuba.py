@@ -20,7 +20,8 @@ an error rather than a silent approximation:
   from the data (false for gray media, as a Mitsuba user would);
 - phase: `isotropic`, `hg` (same sign convention: g > 0 forward), an inline
   `tabulated` table at regularly spaced cosines -> `tabphase`;
-- shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere`, `rectangle` and
+- shapes: `box` -> `cube` (scaled [-1,1]^3), `sphere` (with a `rotation`:
+  the unit sphere placed by scale, the rotation and translate), `rectangle` and
   `disk` (both renderers use [-1,1]^2, or the unit disk, in local xy with
   normal +z) with niebla's
   `to_world` (scale, rotate x, y, z, translate, or a matrix); bsdf `null` ->
@@ -160,6 +161,26 @@ def niebla_transform_ops(t):
             ops.append(("rotate", v, float(deg)))
     if "translate" in t:
         ops.append(("translate", [float(x) for x in t["translate"]]))
+    return ops
+
+
+def _sphere_ops(s):
+    """A sphere with a `rotation` (which turns its uvs and dp/du) as Mitsuba's
+    unit sphere placed by scale (its radius), the rotation (about x, then y,
+    then z, or its 3x3 matrix) and translate (its center)."""
+    r, ops = float(s["radius"]), []
+    ops.append(("scale", [r, r, r]))
+    rot = s["rotation"]
+    if "matrix" in rot:
+        m = np.eye(4)
+        m[:3, :3] = np.array(rot["matrix"], dtype=float)
+        ops.append(("matrix", m))
+    else:
+        for axis, v in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0]), ("z", [0.0, 0.0, 1.0])):
+            deg = rot.get("rotate_" + axis, 0.0)
+            if deg:
+                ops.append(("rotate", v, float(deg)))
+    ops.append(("translate", [float(x) for x in s["center"]]))
     return ops
 
 
@@ -563,6 +584,8 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
             d = {"type": "cube", "to_world": placement(mi, [("matrix", _box_matrix(s["min"], s["max"]))])}
         elif t == "sphere":
             d = {"type": "sphere", "center": s["center"], "radius": float(s["radius"])}
+            if s.get("rotation"):
+                d = {"type": "sphere", "to_world": placement(mi, _sphere_ops(s))}
         elif t in ("rectangle", "disk"):
             d = {"type": t, "to_world": placement(mi, niebla_transform_ops(s.get("to_world")))}
         else:

@@ -1,10 +1,11 @@
 """Mitsuba 3 references for the XML test scenes in scenes/mitsuba/.
 
-    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--cube] [--renders 16] [--spp 64] [NAME ...]
+    /work/main/bench/.venv/bin/python scripts/mitsuba_refs.py [--data] [--textures] [--cube] [--sphere] [--renders 16] [--spp 64] [NAME ...]
 
 (disk_roughplastic was made with `--renders 64 disk_roughplastic`, and
 aniso_dpdu with `--renders 64 aniso_dpdu`, cube_uv with `--renders 64 cube_uv`, smooth_normals with `--renders 64 smooth_normals`,
-smooth_normals_inward with `--renders 64 smooth_normals_inward`: their image means need the
+smooth_normals_inward with `--renders 64 smooth_normals_inward`, sphere_turned with
+`--renders 64 sphere_turned`: their image means need the
 smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
@@ -21,6 +22,10 @@ dp_dv) of rays aimed at two points of each face of a cube placed by a fixed
 `to_world` matrix (turned, unevenly scaled, moved), and those of a triangle
 without uvs with and without `flip_normals`, and the vertices of a cube
 turned by `<rotate>` about a non-unit axis, for the importer's tests.
+`--sphere` writes crates/niebla/tests/data/mitsuba_sphere.json: for spheres
+turned by their `to_world` (written in the XML as stored in the table), the
+surface interactions (p, n, uv, dp_du) of rays aimed along the normal at
+points spread over each sphere.
 For each scene, Mitsuba renders `--renders` independent images (seeds 0, 1,
 ...) of `--spp` samples per pixel, and the script stores only small
 statistics in crates/niebla/tests/data/mitsuba_refs/NAME.json: per 8x8-pixel
@@ -48,7 +53,7 @@ BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
          "rough_textured", "rough_aniso_twosided", "aniso_dpdu", "cube_uv", "smooth_normals",
-         "smooth_normals_inward"]
+         "smooth_normals_inward", "sphere_turned"]
 
 
 def write_data(mi):
@@ -160,6 +165,45 @@ def write_cube(mi):
         json.dump(table, f)
 
 
+# Spheres turned by their to_world: Mitsuba keeps the rotation, which turns
+# the uv parameterization and dp/du. Rotation axes are unit (Mitsuba uses a
+# <rotate> axis as written, so a non-unit one would also scale).
+SPHERE_XML = [
+    '<shape type="sphere"><point name="center" x="0.1" y="0.2" z="-0.3"/><float name="radius" value="0.5"/>'
+    '<transform name="to_world"><scale value="0.7"/>'
+    '<rotate x="0.4364357805" y="0.8728715609" z="0.2182178902" angle="37"/>'
+    '<translate x="0.2" y="-0.1" z="0.3"/></transform></shape>',
+    '<shape type="sphere"><float name="radius" value="1.3"/>'
+    '<transform name="to_world"><rotate x="1" angle="-70"/><rotate z="1" angle="120"/>'
+    '<translate x="-0.5" y="0.4" z="0.1"/></transform></shape>',
+]
+
+
+def write_sphere(mi):
+    """Surface interactions on spheres turned by their to_world."""
+    table = {"mitsuba": mi.__version__, "variant": mi.variant(), "spheres": []}
+    for xml in SPHERE_XML:
+        scene = mi.load_string(f'<scene version="3.0.0">{xml}</scene>')
+        shape = scene.shapes()[0]
+        m = np.array(mi.traverse(shape)["to_world"].matrix, dtype=np.float64)
+        center, radius = m[:3, 3], float(np.linalg.norm(m[:3, 0]))
+        rot = m[:3, :3] / radius
+        hits = []
+        # Local polar angle and azimuth, away from the poles and the seam.
+        for theta, phi in [(0.35, 0.6), (0.9, 1.7), (1.2, 2.9), (1.6, 3.6), (2.0, 4.4), (2.5, 5.3), (2.85, 6.0),
+                           (1.4, 0.2)]:
+            local = np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+            n = rot @ local
+            p = center + radius * n
+            o = p + 0.5 * n
+            si = scene.ray_intersect(mi.Ray3f(o.tolist(), (-n).tolist()))
+            hits.append({"origin": o.tolist(), "direction": (-n).tolist(), "p": list(si.p), "n": list(si.n),
+                         "uv": list(si.uv), "dp_du": list(si.dp_du)})
+        table["spheres"].append({"xml": xml, "to_world": m.tolist(), "hits": hits})
+    with open(os.path.join(os.path.dirname(OUT), "mitsuba_sphere.json"), "w") as f:
+        json.dump(table, f)
+
+
 def block_means(img: np.ndarray) -> np.ndarray:
     h, w, _ = img.shape
     return img.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, 3).mean(axis=(1, 3))
@@ -170,6 +214,7 @@ def main():
     ap.add_argument("--data", action="store_true")
     ap.add_argument("--textures", action="store_true")
     ap.add_argument("--cube", action="store_true")
+    ap.add_argument("--sphere", action="store_true")
     ap.add_argument("--renders", type=int, default=16)
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--variant", default="llvm_ad_rgb")
@@ -186,9 +231,12 @@ def main():
         write_data(mi)
     if a.data or a.textures:
         write_textures(mi)
-    if a.cube:
+    if a.cube or a.sphere:
         mi.set_variant("scalar_rgb")
-        write_cube(mi)
+        if a.cube:
+            write_cube(mi)
+        if a.sphere:
+            write_sphere(mi)
         mi.set_variant(a.variant)
         if not a.names:
             return

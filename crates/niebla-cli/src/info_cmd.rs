@@ -128,12 +128,24 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
     Ok(())
 }
 
-/// How `niebla info` names a shape: its type, with a mesh's sizes; a moving
+/// How `niebla info` names a shape: its type, with a mesh's sizes and a
+/// sphere's rotation (row-major, local to world) if it has one; a moving
 /// shape as "moving" and its type (its bounds cover the shutter).
 fn shape_kind(shape: &niebla::geometry::Shape) -> String {
     use niebla::geometry::Shape;
     match shape {
-        Shape::Sphere(_) => "sphere".to_string(),
+        Shape::Sphere(s) => match s.rotation {
+            None => "sphere".to_string(),
+            Some(r) => {
+                let rows = (0..3)
+                    .map(|i| {
+                        let row = r.row(i);
+                        format!("[{:.4}, {:.4}, {:.4}]", row.x, row.y, row.z)
+                    })
+                    .collect::<Vec<_>>();
+                format!("sphere (uv frame turned by rotation [{}])", rows.join(", "))
+            }
+        },
         Shape::Box(_) => "box".to_string(),
         Shape::Rectangle(_) => "rectangle".to_string(),
         Shape::Disk(_) => "disk".to_string(),

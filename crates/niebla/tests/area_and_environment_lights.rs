@@ -50,13 +50,13 @@ fn mean_radiance<I: Integrator>(integrator: &I, s: &Scene, ray: Ray, medium: Opt
 fn floor_under_a_sphere_light_shows_the_closed_form_radiance() {
     let (radius, height, radiance, rho) = (0.5f32, 3.0f32, 4.0f32, 0.7f32);
     let light = AreaLight::new(
-        AreaShape::Sphere(Sphere { center: Vec3::new(0.0, height, 0.0), radius }),
+        AreaShape::Sphere(Sphere::new(Vec3::new(0.0, height, 0.0), radius)),
         Rgb::splat(radiance),
         false,
     )
     .unwrap();
     let emitter = SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::new(0.0, height, 0.0), radius }),
+        shape: Shape::Sphere(Sphere::new(Vec3::new(0.0, height, 0.0), radius)),
         bsdf: Bsdf::Diffuse { reflectance: Rgb::ZERO },
         interior: None,
         exterior: None,
@@ -146,7 +146,7 @@ fn uniform_environment_map_is_a_white_furnace_for_volpath() {
         phase: PhaseFunction::hg(0.5),
     });
     let sphere = SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
+        shape: Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0)),
         bsdf: Bsdf::Null,
         interior: Some(MediumId(0)),
         exterior: None,

@@ -378,7 +378,7 @@ fn envmap_errors_name_the_file_and_the_problem() {
 // Area lights
 
 fn sphere_light(center: Vec3, radius: f32, l: f32, two_sided: bool) -> AreaLight {
-    AreaLight::new(AreaShape::Sphere(Sphere { center, radius }), Rgb::splat(l), two_sided).unwrap()
+    AreaLight::new(AreaShape::Sphere(Sphere::new(center, radius)), Rgb::splat(l), two_sided).unwrap()
 }
 
 /// A rectangle light of half-sides (a_x, a_y), parallel to the xy plane at

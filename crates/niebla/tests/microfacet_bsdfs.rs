@@ -716,7 +716,7 @@ use niebla::scene::{surface_epsilon, Scene, SceneObject};
 /// environment of radiance `env`.
 fn sphere_scene(bsdf: Bsdf, interior: Option<Medium>, env: f32) -> Scene {
     let object = SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
+        shape: Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0)),
         bsdf,
         interior: interior.as_ref().map(|_| MediumId(0)),
         exterior: None,

@@ -40,7 +40,7 @@ fn glass_of_milk_in_a_uniform_environment_is_a_white_furnace() {
         phase: PhaseFunction::hg(0.7),
     });
     let glass = SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
+        shape: Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0)),
         bsdf: Bsdf::dielectric(1.5, 1.0),
         interior: Some(MediumId(0)),
         exterior: None,

@@ -25,7 +25,7 @@ fn sphere_scene(sigma_s: Rgb, sigma_a: Rgb, lights: Vec<Light>) -> Scene {
     let medium =
         Medium::Homogeneous(HomogeneousMedium { sigma_a, sigma_s, l_ve: Rgb::ZERO, phase: PhaseFunction::hg(0.3) });
     let sphere = SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::new(4.0, 0.0, 0.0), radius: 1.0 }),
+        shape: Shape::Sphere(Sphere::new(Vec3::new(4.0, 0.0, 0.0), 1.0)),
         bsdf: Bsdf::Null,
         interior: Some(MediumId(0)),
         exterior: None,
@@ -199,7 +199,7 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
     let lamp = Light::Point(PointLight { position: Vec3::new(4.0, 0.25, 0.2), intensity: Rgb::splat(0.5) });
     let mut s = sphere_scene(Rgb::splat(0.6), Rgb::splat(0.03), vec![lamp]);
     s.objects.push(SceneObject {
-        shape: Shape::Sphere(Sphere { center: Vec3::new(4.2, -0.45, -0.1), radius: 0.25 }),
+        shape: Shape::Sphere(Sphere::new(Vec3::new(4.2, -0.45, -0.1), 0.25)),
         bsdf: Bsdf::Diffuse { reflectance: Rgb::splat(0.7) },
         interior: None,
         exterior: Some(MediumId(0)),

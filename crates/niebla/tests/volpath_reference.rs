@@ -147,7 +147,7 @@ fn volpath_white_furnace_returns_environment() {
         phase: PhaseFunction::hg(-0.4),
     });
     for (label, medium) in [("homogeneous chromatic", dense_homogeneous), ("grid", sharp_grid_medium(1.0))] {
-        let sphere = boundary(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }), 0);
+        let sphere = boundary(Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0)), 0);
         let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![medium], vec![env.clone()], None);
         for (k, target) in [Vec3::ZERO, Vec3::new(0.0, 0.5, 0.3), Vec3::new(0.0, 0.95, 0.0)].into_iter().enumerate() {
             let ray = Ray::new(Vec3::new(-3.0, target.y, target.z), Vec3::X);
@@ -159,7 +159,7 @@ fn volpath_white_furnace_returns_environment() {
         }
     }
     // Albedo < 1: darker than the environment, brighter than its attenuated view.
-    let sphere = boundary(Shape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }), 0);
+    let sphere = boundary(Shape::Sphere(Sphere::new(Vec3::ZERO, 1.0)), 0);
     let s = scene(common::camera_along_x(1, 1, 30.0), vec![sphere], vec![sharp_grid_medium(0.8)], vec![env], None);
     let ray = Ray::new(Vec3::new(-3.0, 0.0, 0.0), Vec3::X);
     let stats = estimate(&s, ray, None, 4_000, 100_000);

@@ -174,17 +174,14 @@ impl Shape {
 
     /// Texture coordinates of a hit found on this shape (the conventions of
     /// [`crate::texture`]): interpolated vertex uvs on meshes (else the
-    /// barycentric `(b1, b2)`), azimuth and polar angle on spheres, the
+    /// barycentric `(b1, b2)`), azimuth and polar angle on spheres
+    /// (about their [`Sphere::rotation`]), the
     /// local square on rectangles, the face's coordinates on boxes; a moving
     /// shape's in its pose at `time`, the time of the ray that found the hit.
     pub fn uv(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> crate::math::Vec2 {
-        use crate::math::{Vec2, INV_PI, PI};
+        use crate::math::Vec2;
         match self {
-            Shape::Sphere(s) => {
-                let n = (surface.p - s.center) / s.radius;
-                let u = n.y.atan2(n.x).rem_euclid(2.0 * PI) * (0.5 * INV_PI);
-                Vec2::new(u, n.z.clamp(-1.0, 1.0).acos() * INV_PI)
-            }
+            Shape::Sphere(s) => s.uv(surface.p),
             Shape::Rectangle(r) => {
                 let q = r.transform.to_local.transform_point3(surface.p);
                 Vec2::new(0.5 * (q.x + 1.0), 0.5 * (q.y + 1.0))
@@ -208,8 +205,8 @@ impl Shape {
 
     /// Mitsuba 3's `dp/du` at a hit found on this shape (world space, not
     /// normalized; see [`Shape::uv`] for each shape's `u`): the tangent of
-    /// anisotropic roughness with `"tangent_frame": "dpdu"`. Sphere: `2 pi
-    /// (-q.y, q.x, 0)` with `q = p - center` (zero at the poles); rectangle:
+    /// anisotropic roughness with `"tangent_frame": "dpdu"`. Sphere: see
+    /// [`Sphere::dpdu`] (zero at the poles); rectangle:
     /// twice the placement's local x axis; disk: the placement of the local
     /// radial direction `(cos phi, sin phi, 0)` (`(1, 0, 0)` at the
     /// center); box: the axis its face's `u` runs along, times the box's
@@ -217,12 +214,8 @@ impl Shape {
     /// p0` (see [`MeshInstance::dpdu`]); a moving shape's
     /// in its pose at `time`.
     pub fn dpdu(&self, surface: &SurfaceHit, local: &PrimitiveHit, time: f32) -> Vec3 {
-        use crate::math::PI;
         match self {
-            Shape::Sphere(s) => {
-                let q = surface.p - s.center;
-                Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI)
-            }
+            Shape::Sphere(s) => s.dpdu(surface.p),
             Shape::Rectangle(r) => r.transform.vector_to_world(Vec3::X) * 2.0,
             Shape::Disk(d) => {
                 let q = d.transform.to_local.transform_point3(surface.p);

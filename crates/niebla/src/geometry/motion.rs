@@ -214,10 +214,12 @@ fn pad(lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
     (lo - e, hi + e)
 }
 
-/// The sphere at `time` between `start` (time 0) and `end` (time 1).
+/// The sphere at `time` between `start` (time 0) and `end` (time 1); its
+/// uv frame stays `start`'s ([`Sphere::rotation`]).
 #[inline]
 pub fn sphere_at(start: &Sphere, end: &Sphere, time: f32) -> Sphere {
-    Sphere { center: start.center.lerp(end.center, time), radius: start.radius + (end.radius - start.radius) * time }
+    Sphere::new(start.center.lerp(end.center, time), start.radius + (end.radius - start.radius) * time)
+        .with_rotation(start.rotation)
 }
 
 /// The box at `time` between `start` (time 0) and `end` (time 1).
@@ -453,8 +455,8 @@ mod tests {
 
     #[test]
     fn degenerate_motions_are_errors() {
-        let s0 = Sphere { center: Vec3::ZERO, radius: 1.0 };
-        let s1 = Sphere { center: Vec3::X, radius: 0.0 };
+        let s0 = Sphere::new(Vec3::ZERO, 1.0);
+        let s1 = Sphere::new(Vec3::X, 0.0);
         assert!(MovingShape::new(Motion::Sphere { start: s0, end: s1 }, [0.0, 0.5]).is_ok());
         assert!(matches!(
             MovingShape::new(Motion::Sphere { start: s0, end: s1 }, [0.0, 1.0]),
@@ -469,8 +471,8 @@ mod tests {
     /// A sliding sphere is hit where the still sphere at the ray's time is.
     #[test]
     fn rays_hit_the_pose_at_their_time() {
-        let start = Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0 };
-        let end = Sphere { center: Vec3::new(2.0, 0.0, 5.0), radius: 1.0 };
+        let start = Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0);
+        let end = Sphere::new(Vec3::new(2.0, 0.0, 5.0), 1.0);
         let shape = Shape::Moving(Box::new(MovingShape::new(Motion::Sphere { start, end }, [0.0, 1.0]).unwrap()));
         let ray = |time| Ray::at_time(Vec3::new(1.0, 0.0, 0.0), Vec3::Z, time);
         let inv = Vec3::Z.recip();

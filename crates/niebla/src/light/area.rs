@@ -90,7 +90,7 @@ pub struct AreaLightSample {
 /// use niebla::geometry::Sphere;
 /// use niebla::light::{AreaLight, AreaShape};
 /// use niebla::math::{Vec2, Vec3};
-/// let sphere = Sphere { center: Vec3::new(0.0, 0.0, 4.0), radius: 1.0 };
+/// let sphere = Sphere::new(Vec3::new(0.0, 0.0, 4.0), 1.0);
 /// let light = AreaLight::new(AreaShape::Sphere(sphere), Rgb::splat(2.0), false).unwrap();
 /// let s = light.sample_li(Vec3::ZERO, Vec2::new(0.3, 0.7)).unwrap();
 /// assert_eq!(s.li, Rgb::splat(2.0));
@@ -307,7 +307,7 @@ mod tests {
         // Every sampled point faces p_ref (n . (p_ref - p) >= 0, to rounding)
         // and lies on the sphere, for a near and a far (small-cone) sphere.
         for dc in [1.5f32, 60.0] {
-            let s = Sphere { center: Vec3::new(0.0, dc, 0.0), radius: 1.0 };
+            let s = Sphere::new(Vec3::new(0.0, dc, 0.0), 1.0);
             let mut rng = PixelSampler::from_key(7);
             for _ in 0..10_000 {
                 let (p, n, _) = sample_sphere_cone(&s, Vec3::ZERO, rng.next_2d());
@@ -326,14 +326,14 @@ mod tests {
         let two = AreaLight { two_sided: true, ..one };
         assert!((two.power().g() - 2.0 * PI * 1.5 * 24.0).abs() < 1e-3);
         assert!(AreaLight::new(one.shape, Rgb::new(1.0, -1.0, 0.0), false).is_err());
-        let bad = AreaShape::Sphere(Sphere { center: Vec3::ZERO, radius: 0.0 });
+        let bad = AreaShape::Sphere(Sphere::new(Vec3::ZERO, 0.0));
         assert!(AreaLight::new(bad, Rgb::ONE, false).is_err());
     }
 
     #[test]
     fn le_is_zero_behind_a_one_sided_light() {
         let l = AreaLight {
-            shape: AreaShape::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0 }),
+            shape: AreaShape::Sphere(Sphere::new(Vec3::ZERO, 1.0)),
             radiance: Rgb::ONE,
             two_sided: false,
             motion: None,

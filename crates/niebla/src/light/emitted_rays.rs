@@ -234,10 +234,7 @@ mod tests {
             Light::Directional(DirectionalLight { direction: -Vec3::Y, irradiance: Rgb::splat(2.0) }),
             Light::Constant(ConstantLight { radiance: Rgb::splat(0.5) }),
             Light::Area(AreaLight::new(AreaShape::Rectangle(Rectangle::new(t)), Rgb::splat(3.0), true).unwrap()),
-            Light::Area(
-                AreaLight::new(AreaShape::Sphere(Sphere { center: Vec3::X, radius: 0.4 }), Rgb::splat(1.5), false)
-                    .unwrap(),
-            ),
+            Light::Area(AreaLight::new(AreaShape::Sphere(Sphere::new(Vec3::X, 0.4)), Rgb::splat(1.5), false).unwrap()),
             Light::Area(AreaLight::new(AreaShape::Disk(Disk::new(t)), Rgb::splat(2.0), false).unwrap()),
         ]
     }

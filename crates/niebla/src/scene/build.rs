@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use glam::{Affine3A, Mat4};
+use glam::{Affine3A, Mat3, Mat4};
 
 use super::desc::*;
 use super::{RenderSettings, Scene, SceneError, SceneObject};
@@ -187,7 +187,7 @@ fn build_with_loaders(
         let path = format!("shapes[{i}]");
         let bounds_medium = s.interior.is_some() || s.exterior.is_some();
         let shape = match &s.geometry {
-            GeometryDesc::Sphere(d) => Shape::Sphere(Sphere { center: Vec3::from(d.center), radius: d.radius }),
+            GeometryDesc::Sphere(d) => Shape::Sphere(build_sphere(d)),
             GeometryDesc::Box(d) => Shape::Box(AxisAlignedBox { min: Vec3::from(d.min), max: Vec3::from(d.max) }),
             GeometryDesc::Rectangle(d) => {
                 let t = build_transform(&d.to_world)
@@ -271,9 +271,7 @@ fn build_with_loaders(
             LightDesc::Area(a) => {
                 let shape_path = format!("{path}.shape");
                 let area_shape = match &a.shape.geometry {
-                    GeometryDesc::Sphere(d) => {
-                        AreaShape::Sphere(Sphere { center: Vec3::from(d.center), radius: d.radius })
-                    }
+                    GeometryDesc::Sphere(d) => AreaShape::Sphere(build_sphere(d)),
                     GeometryDesc::Rectangle(d) => {
                         let t = build_transform(&d.to_world).ok_or_else(|| {
                             err(&format!("{shape_path}.to_world"), "transform is singular (zero scale?)".into())
@@ -426,10 +424,8 @@ fn moving_shape(
     };
     let kind = match (geometry, still) {
         (GeometryDesc::Sphere(d), Shape::Sphere(start)) => {
-            let end = Sphere {
-                center: Vec3::from(motion.center.unwrap_or(d.center)),
-                radius: motion.radius.unwrap_or(d.radius),
-            };
+            let end = Sphere::new(Vec3::from(motion.center.unwrap_or(d.center)), motion.radius.unwrap_or(d.radius))
+                .with_rotation(start.rotation);
             Motion::Sphere { start, end }
         }
         (GeometryDesc::Box(d), Shape::Box(start)) => {
@@ -640,6 +636,25 @@ fn charge_envmap(file: &Path, budget: &mut crate::limits::MemoryBudget) -> Resul
 /// integrator registry when the file was parsed).
 pub fn integrator_settings(spec: &IntegratorSpec) -> IntegratorSettings {
     spec.settings
+}
+
+/// A sphere from its description, turned by its `rotation` if it has one.
+fn build_sphere(d: &SphereDesc) -> Sphere {
+    Sphere::new(Vec3::from(d.center), d.radius).with_rotation(d.rotation.as_ref().map(build_rotation))
+}
+
+/// The local-to-world rotation a sphere's `rotation` describes: about x,
+/// then y, then z (degrees, right-handed, as [`Transform::from_components`]),
+/// or its row-major matrix as written.
+fn build_rotation(desc: &RotationDesc) -> Mat3 {
+    match *desc {
+        RotationDesc::Angles([x, y, z]) => {
+            Mat3::from_rotation_z(z.to_radians())
+                * Mat3::from_rotation_y(y.to_radians())
+                * Mat3::from_rotation_x(x.to_radians())
+        }
+        RotationDesc::Matrix(rows) => Mat3::from_cols_array_2d(&rows).transpose(),
+    }
 }
 
 /// Transform from its description: scale, rotate x, y, z (degrees), translate;

@@ -921,6 +921,36 @@ fn parse_transform(object: Object) -> Result<TransformDesc, Located> {
     })
 }
 
+deserialize_object!(RotationDesc, "a rotation object (rotate_x, rotate_y, rotate_z, or matrix)", parse_rotation);
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRotation {
+    #[serde(default)]
+    rotate_x: Option<f32>,
+    #[serde(default)]
+    rotate_y: Option<f32>,
+    #[serde(default)]
+    rotate_z: Option<f32>,
+    #[serde(default)]
+    matrix: Option<[[f32; 3]; 3]>,
+}
+
+fn parse_rotation(object: Object) -> Result<RotationDesc, Located> {
+    let raw: RawRotation = rest(object)?;
+    let angles = [raw.rotate_x, raw.rotate_y, raw.rotate_z];
+    match raw.matrix {
+        Some(matrix) => match ["rotate_x", "rotate_y", "rotate_z"].iter().zip(angles).find(|(_, a)| a.is_some()) {
+            Some((name, _)) => Err(Located::new(
+                *name,
+                format!("`{name}` cannot be combined with `matrix`: give a 3x3 matrix, or rotate_x/rotate_y/rotate_z"),
+            )),
+            None => Ok(RotationDesc::Matrix(matrix)),
+        },
+        None => Ok(RotationDesc::Angles(angles.map(|a| a.unwrap_or(0.0)))),
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Lights
 // ---------------------------------------------------------------------------

@@ -675,6 +675,9 @@ fn validate_shape(desc: &SceneDesc, base: &str, shape: &ShapeDesc) -> Check {
         GeometryDesc::Sphere(s) => {
             vector(&format!("{base}.center"), &s.center)?;
             positive(&format!("{base}.radius"), s.radius)?;
+            if let Some(r) = &s.rotation {
+                validate_rotation(&format!("{base}.rotation"), r)?;
+            }
         }
         GeometryDesc::Box(b) => {
             vector(&format!("{base}.min"), &b.min)?;
@@ -892,6 +895,48 @@ fn validate_mesh(base: &str, m: &MeshDesc) -> Check {
         (None, Some(_), Some(_)) => {
             if m.object.is_some() {
                 return fail(format!("{base}.object"), "selects an object of an OBJ `file`; this mesh has none");
+            }
+            Ok(())
+        }
+    }
+}
+
+/// A sphere's `rotation`: finite angles, or a finite 3x3 matrix that is
+/// orthonormal with determinant +1 to 1e-4 (a rotation, no scale, shear or
+/// mirror: the sphere's size is its `radius`).
+fn validate_rotation(base: &str, rotation: &RotationDesc) -> Check {
+    match rotation {
+        RotationDesc::Angles(a) => {
+            for (axis, x) in ["x", "y", "z"].iter().zip(a) {
+                finite(&format!("{base}.rotate_{axis}"), *x)?;
+            }
+            Ok(())
+        }
+        RotationDesc::Matrix(m) => {
+            for (r, row) in m.iter().enumerate() {
+                for (c, x) in row.iter().enumerate() {
+                    finite(&format!("{base}.matrix[{r}][{c}]"), *x)?;
+                }
+            }
+            let a = |r: usize, c: usize| f64::from(m[r][c]);
+            let mut worst = 0.0f64;
+            for i in 0..3 {
+                for j in 0..3 {
+                    let dot = (0..3).map(|k| a(i, k) * a(j, k)).sum::<f64>();
+                    worst = worst.max((dot - if i == j { 1.0 } else { 0.0 }).abs());
+                }
+            }
+            let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
+                - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
+                + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+            if worst > 1e-4 || det <= 0.0 {
+                return fail(
+                    format!("{base}.matrix"),
+                    format!(
+                        "must be a rotation (rows orthonormal to 1e-4, determinant +1; got rows off by {worst:.2e}, \
+                         determinant {det:.4}): a sphere's size is its `radius`, and it cannot be mirrored"
+                    ),
+                );
             }
             Ok(())
         }

@@ -212,7 +212,7 @@ mod tests {
             for k in 1..n {
                 objects.push(match k {
                     1 => object(Shape::Box(unit)),
-                    2 => object(Shape::Sphere(Sphere { center: Vec3::new(0.5, 0.0, 0.0), radius: 0.8 })),
+                    2 => object(Shape::Sphere(Sphere::new(Vec3::new(0.5, 0.0, 0.0), 0.8))),
                     _ => object(Shape::Box(AxisAlignedBox { min: Vec3::splat(-0.2), max: Vec3::splat(2.0) })),
                 });
             }

@@ -180,6 +180,24 @@ pub struct SphereDesc {
     pub center: [f32; 3],
     /// Radius in scene units, > 0.
     pub radius: f32,
+    /// `"rotation"` (optional): turns the sphere's uv parameterization, and
+    /// so its `dp/du` (textures, `"tangent_frame": "dpdu"`), but not its
+    /// surface; as the rotation of a Mitsuba 3 sphere's `to_world`. Default:
+    /// none (the uv pole along world `+z`, the seam `u = 0` toward `+x`).
+    #[serde(default)]
+    pub rotation: Option<RotationDesc>,
+}
+
+/// A rotation of a sphere's local frame into world space.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RotationDesc {
+    /// `{"rotate_x": a, "rotate_y": b, "rotate_z": c}`: degrees about world
+    /// x, then y, then z (right-handed; the order of a transform's
+    /// components), each default 0.
+    Angles([f32; 3]),
+    /// `{"matrix": [[...], [...], [...]]}`: a row-major 3x3 matrix from
+    /// local to world, orthonormal with determinant +1 (to 1e-4).
+    Matrix([[f32; 3]; 3]),
 }
 
 /// An axis-aligned box; its normals point outward.

@@ -100,8 +100,6 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     };
     let flip = p.boolean("flip_normals")?.unwrap_or(false);
     let mut shape = Map::new();
-    // Why a texture on this shape would not look as in Mitsuba, if it would not.
-    let mut untexturable: Option<&str> = None;
     // Mitsuba's flip_tex_coords (default true for OBJ, false for PLY).
     let mut flip_tex_coords = false;
     match t {
@@ -119,13 +117,16 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             if !(radius > 0.0) {
                 return Err(p.error(format!("`radius` must be > 0, got {radius}")));
             }
-            let r = |i: usize, j: usize| m[i][j] / s - if i == j { 1.0 } else { 0.0 };
-            if (0..3).any(|i| (0..3).any(|j| r(i, j).abs() > 1e-6)) {
-                untexturable = Some("a sphere rotated by its to_world (niebla's spheres have no orientation for uvs)");
-            }
             shape.insert("type".into(), json!("sphere"));
             shape.insert("center".into(), json!(point(&m, center)));
             shape.insert("radius".into(), json!(radius * s));
+            // Mitsuba keeps the rotation of the sphere's to_world: it turns
+            // the uvs and dp/du (niebla's "rotation"; the surface is the same).
+            let r = |i: usize, j: usize| m[i][j] / s;
+            if (0..3).any(|i| (0..3).any(|j| (r(i, j) - if i == j { 1.0 } else { 0.0 }).abs() > 1e-6)) {
+                let rows: Vec<[f64; 3]> = (0..3).map(|i| [r(i, 0), r(i, 1), r(i, 2)]).collect();
+                shape.insert("rotation".into(), json!({ "matrix": rows }));
+            }
         }
         // Its geometry depends on the bsdf (below).
         "cube" => {}
@@ -219,26 +220,12 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     }
     // Anisotropic roughness follows Mitsuba's dp/du ("tangent_frame":
     // "dpdu"); niebla's shapes have Mitsuba's uv parameterization, and so its
-    // dp/du, except a sphere turned by its to_world (niebla's spheres have no
-    // orientation).
+    // dp/du (a sphere's turned by its "rotation").
     if anisotropic(&bsdf) {
         shape.insert("tangent_frame".into(), json!("dpdu"));
-        if t == "sphere" && untexturable.is_some() {
-            c.notes.push(format!(
-                "{}: {}: anisotropic roughness follows the shape's dp/du, which on a sphere turned by its to_world \
-                 (niebla's spheres have no orientation) differs from Mitsuba's: its direction differs here",
-                node.loc.at(),
-                p.what()
-            ));
-        }
     }
-    if super::textures::has_texture(&bsdf) {
-        if let Some(why) = untexturable {
-            return Err(p.error(format!("a textured bsdf on {why} is not supported")));
-        }
-        if flip_tex_coords {
-            shape.insert("flip_tex_coords".into(), json!(true));
-        }
+    if flip_tex_coords && super::textures::has_texture(&bsdf) {
+        shape.insert("flip_tex_coords".into(), json!(true));
     }
     p.finish()?;
     if emitters.len() > 1 {
