@@ -19,6 +19,20 @@ use crate::sparse::{
 };
 use crate::SparseGrid;
 
+/// Hint that the cache line holding `x` will be read soon (no effect on
+/// what any read returns; nothing on targets other than x86-64).
+#[inline(always)]
+fn prefetch_read(x: &f32) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` is a hint that never faults, and SSE is part of
+    // the x86-64 baseline; the pointer comes from a reference.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((x as *const f32).cast::<i8>());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 /// A cache key no voxel can have (voxel coordinates shifted right by 3 or
 /// more bits stay above `i32::MIN`).
 const NO_KEY: [i32; 3] = [i32::MIN; 3];
@@ -69,6 +83,10 @@ pub struct SparseAccessor<'a> {
     upper_key: Cell<[i32; 3]>,
     /// The root's entry for that 4096^3 region ([`EMPTY`] when absent).
     upper_entry: Cell<u32>,
+    /// `ijk >> 3` of the block found by the last
+    /// [`SparseAccessor::prefetch_index`] (a second cache entry).
+    next_key: Cell<[i32; 3]>,
+    next_block: Cell<Block<'a>>,
 }
 
 impl SparseGrid {
@@ -91,6 +109,8 @@ impl<'a> SparseAccessor<'a> {
             lower_entry: Cell::new(EMPTY),
             upper_key: Cell::new(NO_KEY),
             upper_entry: Cell::new(EMPTY),
+            next_key: Cell::new(NO_KEY),
+            next_block: Cell::new(Block::Constant(grid.background)),
         }
     }
 
@@ -117,7 +137,7 @@ impl<'a> SparseAccessor<'a> {
         if key == self.block_key.get() {
             return self.block.get();
         }
-        let b = self.descend(ijk);
+        let b = if key == self.next_key.get() { self.next_block.get() } else { self.descend(ijk) };
         self.block_key.set(key);
         self.block.set(b);
         b
@@ -150,6 +170,47 @@ impl<'a> SparseAccessor<'a> {
             Block::Constant(self.tile_value(e))
         } else {
             Block::Leaf(&g.leaves[e as usize].values)
+        }
+    }
+
+    /// Starts loading the voxels that a later [`SparseAccessor::lookup_index`]
+    /// at index-space point `p` reads: finds their 8^3 block (kept as a
+    /// second cache entry, so that the later lookup skips the descent; the
+    /// block of the previous hint moves to the first entry) and
+    /// asks the processor to bring the block's cache lines holding the
+    /// lookup's 8 voxels (those of the neighbouring blocks when the stencil
+    /// crosses a face are not asked for). Changes no value any read returns;
+    /// the lookup at `p` may come after other lookups through the accessor.
+    #[inline]
+    pub fn prefetch_index(&self, p: [f32; 3]) {
+        if !(p.iter().all(|v| v.abs() < 1.0e9)) {
+            return;
+        }
+        let (ijk, _) = split_index_point(p);
+        let key = ijk.map(|v| v >> LEAF_TOTAL);
+        let b = if key == self.block_key.get() {
+            self.block.get()
+        } else if key == self.next_key.get() {
+            self.next_block.get()
+        } else {
+            // The block of the previous hint, most likely read before this
+            // one's, moves to the first entry.
+            if self.next_key.get() != NO_KEY {
+                self.block_key.set(self.next_key.get());
+                self.block.set(self.next_block.get());
+            }
+            let b = self.descend(ijk);
+            self.next_key.set(key);
+            self.next_block.set(b);
+            b
+        };
+        if let Block::Leaf(v) = b {
+            // The stencil's values lie at n..=n + 9 and n + 64..=n + 73 (at
+            // most 4 cache lines; the last index is clamped to the block).
+            let n = Leaf::offset(ijk);
+            for i in [n, (n + 9).min(511), (n + 64).min(511), (n + 73).min(511)] {
+                prefetch_read(&v[i]);
+            }
         }
     }
 

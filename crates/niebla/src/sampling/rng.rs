@@ -224,6 +224,18 @@ impl PixelSampler {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 
+    /// The number [`PixelSampler::next_1d`] would return after `skip` more
+    /// draws of one dimension each (`next_1d`, `next_f64`), without drawing:
+    /// the sampler is left as it is.
+    #[inline]
+    pub fn peek_1d(&self, skip: u32) -> f32 {
+        let mut s = self.clone();
+        for _ in 0..skip {
+            s.next_u32();
+        }
+        s.next_1d()
+    }
+
     /// Next uniform number in [0, 1) with 53 bits, for uses that need f64
     /// precision (a Sobol value's 32 bits are completed by 21 hashed bits).
     #[inline]
