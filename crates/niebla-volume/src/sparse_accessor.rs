@@ -83,10 +83,6 @@ pub struct SparseAccessor<'a> {
     upper_key: Cell<[i32; 3]>,
     /// The root's entry for that 4096^3 region ([`EMPTY`] when absent).
     upper_entry: Cell<u32>,
-    /// `ijk >> 3` of the block found by the last
-    /// [`SparseAccessor::prefetch_index`] (a second cache entry).
-    next_key: Cell<[i32; 3]>,
-    next_block: Cell<Block<'a>>,
 }
 
 impl SparseGrid {
@@ -109,8 +105,6 @@ impl<'a> SparseAccessor<'a> {
             lower_entry: Cell::new(EMPTY),
             upper_key: Cell::new(NO_KEY),
             upper_entry: Cell::new(EMPTY),
-            next_key: Cell::new(NO_KEY),
-            next_block: Cell::new(Block::Constant(grid.background)),
         }
     }
 
@@ -137,7 +131,7 @@ impl<'a> SparseAccessor<'a> {
         if key == self.block_key.get() {
             return self.block.get();
         }
-        let b = if key == self.next_key.get() { self.next_block.get() } else { self.descend(ijk) };
+        let b = self.descend(ijk);
         self.block_key.set(key);
         self.block.set(b);
         b
@@ -174,13 +168,10 @@ impl<'a> SparseAccessor<'a> {
     }
 
     /// Starts loading the voxels that a later [`SparseAccessor::lookup_index`]
-    /// at index-space point `p` reads: finds their 8^3 block (kept as a
-    /// second cache entry, so that the later lookup skips the descent; the
-    /// block of the previous hint moves to the first entry) and
-    /// asks the processor to bring the block's cache lines holding the
-    /// lookup's 8 voxels (those of the neighbouring blocks when the stencil
-    /// crosses a face are not asked for). Changes no value any read returns;
-    /// the lookup at `p` may come after other lookups through the accessor.
+    /// at index-space point `p` reads: finds their 8^3 block (and, where the
+    /// stencil crosses a block face, the neighbouring blocks) and asks the
+    /// processor to bring the cache lines holding the lookup's 8 voxels.
+    /// Leaves the cache as it was and changes no value any read returns.
     #[inline]
     pub fn prefetch_index(&self, p: [f32; 3]) {
         if !(p.iter().all(|v| v.abs() < 1.0e9)) {
@@ -188,28 +179,27 @@ impl<'a> SparseAccessor<'a> {
         }
         let (ijk, _) = split_index_point(p);
         let key = ijk.map(|v| v >> LEAF_TOTAL);
-        let b = if key == self.block_key.get() {
-            self.block.get()
-        } else if key == self.next_key.get() {
-            self.next_block.get()
-        } else {
-            // The block of the previous hint, most likely read before this
-            // one's, moves to the first entry.
-            if self.next_key.get() != NO_KEY {
-                self.block_key.set(self.next_key.get());
-                self.block.set(self.next_block.get());
-            }
-            let b = self.descend(ijk);
-            self.next_key.set(key);
-            self.next_block.set(b);
-            b
-        };
+        let b = if key == self.block_key.get() { self.block.get() } else { self.descend(ijk) };
+        let inner = [(ijk[0] & 7) != 7, (ijk[1] & 7) != 7, (ijk[2] & 7) != 7];
         if let Block::Leaf(v) = b {
-            // The stencil's values lie at n..=n + 9 and n + 64..=n + 73 (at
-            // most 4 cache lines; the last index is clamped to the block).
+            // The stencil's values in this block lie at n..=n + 9 and
+            // n + 64..=n + 73 (at most 4 cache lines; clamped to the block).
             let n = Leaf::offset(ijk);
             for i in [n, (n + 9).min(511), (n + 64).min(511), (n + 73).min(511)] {
                 prefetch_read(&v[i]);
+            }
+        }
+        if inner[0] && inner[1] && inner[2] {
+            return;
+        }
+        // The corners in the neighbouring blocks, one line each.
+        let cross = ((!inner[0] as usize) << 2) | ((!inner[1] as usize) << 1) | (!inner[2] as usize);
+        for c in 1..8usize {
+            if c & !cross == 0 {
+                let q = [ijk[0] + (c >> 2) as i32, ijk[1] + ((c >> 1) & 1) as i32, ijk[2] + (c & 1) as i32];
+                if let Block::Leaf(v) = self.descend(q) {
+                    prefetch_read(&v[Leaf::offset(q)]);
+                }
             }
         }
     }

@@ -168,3 +168,51 @@ fn voxel_walks_across_node_borders_match() {
         }
     }
 }
+
+#[test]
+fn prefetch_hints_change_no_lookup() {
+    // Hints at the next one or two points of a ray (as the trackers give
+    // them) and at unrelated points (a wrong guess), interleaved with the
+    // lookups: every lookup still equals the uncached tree's bit for bit.
+    let (g, _) = blob_grid();
+    let mut rng = Rng(17);
+    let mut total = 0usize;
+    let mut off_background = 0usize;
+    for ray in 0..2000 {
+        let acc = g.accessor();
+        let (lo, hi) = if ray % 2 == 0 {
+            ([-45.0, -15.0, -55.0], [60.0, 45.0, 45.0])
+        } else {
+            ([240.0, -5.0, -5.0], [400.0, 135.0, 135.0])
+        };
+        let o: [f32; 3] = std::array::from_fn(|a| rng.range(lo[a], hi[a]));
+        let q: [f32; 3] = std::array::from_fn(|a| rng.range(lo[a], hi[a]));
+        let at = |t: f32| [0, 1, 2].map(|a| o[a] + t * (q[a] - o[a]));
+        let mut t = 0.0f32;
+        while t < 1.0 {
+            let next = t + rng.range(0.0, 0.1);
+            match rng.next() % 4 {
+                0 => {}
+                1 => acc.prefetch_index(at(next)),
+                2 => {
+                    acc.prefetch_index(at(next));
+                    acc.prefetch_index(at(next + 0.05));
+                }
+                _ => acc.prefetch_index([0, 1, 2].map(|a| rng.range(LO[a], HI[a]))),
+            }
+            let p = at(t);
+            let (a, b) = (acc.lookup_index(p), g.lookup_index(p));
+            assert_eq!(a.to_bits(), b.to_bits(), "ray {ray} at {p:?}: accessor {a}, tree {b}");
+            total += 1;
+            off_background += (b != BACKGROUND) as usize;
+            t = next;
+        }
+    }
+    // Hints at far or non-finite points are ignored.
+    let acc = g.accessor();
+    for p in [[1e10, 0.0, 0.0], [f32::NAN, 1.0, 1.0], [9000.5, 10.25, 3.0]] {
+        acc.prefetch_index(p);
+        assert_eq!(acc.lookup_index(p).to_bits(), g.lookup_index(p).to_bits(), "at {p:?}");
+    }
+    assert!(total > 20_000 && off_background > total / 4, "{off_background} of {total} points off the background");
+}
