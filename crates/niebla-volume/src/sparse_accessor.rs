@@ -19,20 +19,6 @@ use crate::sparse::{
 };
 use crate::SparseGrid;
 
-/// Hint that the cache line holding `x` will be read soon (no effect on
-/// what any read returns; nothing on targets other than x86-64).
-#[inline(always)]
-fn prefetch_read(x: &f32) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: `_mm_prefetch` is a hint that never faults, and SSE is part of
-    // the x86-64 baseline; the pointer comes from a reference.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((x as *const f32).cast::<i8>());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
-}
-
 /// A cache key no voxel can have (voxel coordinates shifted right by 3 or
 /// more bits stay above `i32::MIN`).
 const NO_KEY: [i32; 3] = [i32::MIN; 3];
@@ -164,43 +150,6 @@ impl<'a> SparseAccessor<'a> {
             Block::Constant(self.tile_value(e))
         } else {
             Block::Leaf(&g.leaves[e as usize].values)
-        }
-    }
-
-    /// Starts loading the voxels that a later [`SparseAccessor::lookup_index`]
-    /// at index-space point `p` reads: finds their 8^3 block (and, where the
-    /// stencil crosses a block face, the neighbouring blocks) and asks the
-    /// processor to bring the cache lines holding the lookup's 8 voxels.
-    /// Leaves the cache as it was and changes no value any read returns.
-    #[inline]
-    pub fn prefetch_index(&self, p: [f32; 3]) {
-        if !(p.iter().all(|v| v.abs() < 1.0e9)) {
-            return;
-        }
-        let (ijk, _) = split_index_point(p);
-        let key = ijk.map(|v| v >> LEAF_TOTAL);
-        let b = if key == self.block_key.get() { self.block.get() } else { self.descend(ijk) };
-        let inner = [(ijk[0] & 7) != 7, (ijk[1] & 7) != 7, (ijk[2] & 7) != 7];
-        if let Block::Leaf(v) = b {
-            // The stencil's values in this block lie at n..=n + 9 and
-            // n + 64..=n + 73 (at most 4 cache lines; clamped to the block).
-            let n = Leaf::offset(ijk);
-            for i in [n, (n + 9).min(511), (n + 64).min(511), (n + 73).min(511)] {
-                prefetch_read(&v[i]);
-            }
-        }
-        if inner[0] && inner[1] && inner[2] {
-            return;
-        }
-        // The corners in the neighbouring blocks, one line each.
-        let cross = ((!inner[0] as usize) << 2) | ((!inner[1] as usize) << 1) | (!inner[2] as usize);
-        for c in 1..8usize {
-            if c & !cross == 0 {
-                let q = [ijk[0] + (c >> 2) as i32, ijk[1] + ((c >> 1) & 1) as i32, ijk[2] + (c & 1) as i32];
-                if let Block::Leaf(v) = self.descend(q) {
-                    prefetch_read(&v[Leaf::offset(q)]);
-                }
-            }
         }
     }
 

@@ -224,18 +224,6 @@ impl PixelSampler {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 
-    /// The number [`PixelSampler::next_1d`] would return after `skip` more
-    /// draws of one dimension each (`next_1d`, `next_f64`), without drawing:
-    /// the sampler is left as it is.
-    #[inline]
-    pub fn peek_1d(&self, skip: u32) -> f32 {
-        let mut s = self.clone();
-        for _ in 0..skip {
-            s.next_u32();
-        }
-        s.next_1d()
-    }
-
     /// Next uniform number in [0, 1) with 53 bits, for uses that need f64
     /// precision (a Sobol value's 32 bits are completed by 21 hashed bits).
     #[inline]
@@ -377,27 +365,6 @@ impl PixelSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn peek_gives_the_numbers_later_drawn_and_leaves_the_sampler() {
-        // Independent and Sobol samplers, inside a slot and past its end,
-        // across Sobol pairs: peeking `skip` ahead gives the number drawn
-        // after `skip` draws, bit for bit, and draws nothing.
-        for kind in [SamplerKind::Independent, SamplerKind::Sobol, SamplerKind::SobolSequential] {
-            for sample in [0u64, 1, 5, 1 << 33] {
-                let mut s = PixelSampler::for_pixel(kind, 3, 17, 4, sample);
-                s.use_slots(4, 3, 0);
-                for step in 0..40 {
-                    let peeked: Vec<u32> = (0..4).map(|k| s.peek_1d(k).to_bits()).collect();
-                    let mut ahead = s.clone();
-                    let drawn: Vec<u32> = (0..4).map(|_| ahead.next_1d().to_bits()).collect();
-                    assert_eq!(peeked, drawn, "{kind:?} sample {sample} step {step}");
-                    assert_eq!(s.peek_1d(0).to_bits(), s.clone().next_1d().to_bits());
-                    s.next_1d();
-                }
-            }
-        }
-    }
 
     #[test]
     fn sampler_is_uniform_and_decorrelated_between_pixels() {

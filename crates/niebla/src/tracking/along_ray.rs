@@ -46,10 +46,6 @@ pub trait DensityAlongRay {
     fn positive_segments<F: FnMut(DensitySegment) -> ControlFlow<()>>(&self, mut f: F) -> ControlFlow<()> {
         self.segments(|s| if s.d_max > 0.0 { f(s) } else { ControlFlow::Continue(()) })
     }
-    /// A hint that [`DensityAlongRay::density`] at `t` is likely to be read
-    /// soon: storage that can starts loading it. Changes no value.
-    #[inline]
-    fn prefetch(&self, _t: f32) {}
 }
 
 /// Density 1 over `[t0, t1]`: a homogeneous medium.
@@ -83,10 +79,6 @@ pub trait GridLookup {
     fn nonnegative(&self) -> bool {
         false
     }
-    /// A hint that the value at grid-space point `p` is likely to be read
-    /// soon (see [`SparseAccessor::prefetch_index`]). Changes no value.
-    #[inline]
-    fn prefetch_grid(&self, _p: Vec3) {}
 }
 
 impl GridLookup for DenseGrid {
@@ -133,10 +125,6 @@ impl GridLookup for SparseAccessor<'_> {
     fn lookup_grid(&self, p: Vec3) -> f32 {
         self.lookup_index(p.to_array())
     }
-    #[inline]
-    fn prefetch_grid(&self, p: Vec3) {
-        self.prefetch_index(p.to_array())
-    }
 }
 
 /// A grid seen along a ray given in the grid's space (`o + t d`, `d` not unit,
@@ -176,14 +164,6 @@ impl<G: GridLookup> DensityAlongRay for GridAlongRay<'_, G> {
     #[inline]
     fn zero_outside_segments(&self) -> bool {
         self.grid.nonnegative()
-    }
-
-    #[inline]
-    fn prefetch(&self, t: f32) {
-        // A moving medium's point depends on its velocity lookup: no hint.
-        if self.motion.is_none() {
-            self.grid.prefetch_grid(self.o + self.d * t);
-        }
     }
 
     #[inline]

@@ -51,7 +51,7 @@ where
         Medium::Homogeneous(h) => {
             let r = UnitDensity { t0: 0.0, t1: t_max };
             let point = h.point();
-            walk(&r, h.sigma_t(), ray, hero, None, sampler, |_, _| point, callback)
+            walk(&r, h.sigma_t(), ray, hero, sampler, |_, _| point, callback)
         }
         Medium::Grid(g) => {
             let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
@@ -59,8 +59,7 @@ where
             };
             let time = sampler.time();
             let at = move |p: Vec3, density: f32| g.point_with_density(p, density, time);
-            let flight =
-                Flight { sigma_t: g.sigma_t(), ray, hero, lookahead: Some(1), sampler, point_at: at, callback };
+            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
             with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
         }
     }
@@ -93,8 +92,7 @@ where
                 let (sigma_a, sigma_s) = g.absorption_scattering(p, density, time);
                 MediumPoint { sigma_a, sigma_s, l_ve: Rgb::ZERO }
             };
-            let flight =
-                Flight { sigma_t: g.sigma_t(), ray, hero, lookahead: Some(0), sampler, point_at: at, callback };
+            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
             with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
         }
     }
@@ -105,7 +103,6 @@ struct Flight<'a, P, F> {
     sigma_t: Rgb,
     ray: &'a Ray,
     hero: usize,
-    lookahead: Option<u32>,
     sampler: &'a mut PixelSampler,
     point_at: P,
     callback: F,
@@ -119,29 +116,16 @@ where
     type Output = Rgb;
     #[inline]
     fn visit<G: GridLookup>(self, r: &GridAlongRay<'_, G>) -> Rgb {
-        walk(r, self.sigma_t, self.ray, self.hero, self.lookahead, self.sampler, self.point_at, self.callback)
+        walk(r, self.sigma_t, self.ray, self.hero, self.sampler, self.point_at, self.callback)
     }
 }
 
 /// The concrete loop of [`sample_t_maj`] over one density view.
-///
-/// `lookahead`: how many numbers the callback usually draws at a null
-/// collision before the next free-flight number is drawn (1 for delta
-/// tracking's real-or-null choice, 0 for ratio tracking), or `None`. With
-/// it, each collision first computes where the next two fall if the
-/// callback draws that many numbers and goes on, from the numbers the
-/// sampler will then give ([`PixelSampler::peek_1d`]), and asks the density
-/// view to start loading them ([`DensityAlongRay::prefetch`]) before
-/// reading the density here: the memory latency of successive lookups
-/// overlaps. Only a hint: the collisions, numbers and values are the same
-/// with or without it.
-#[allow(clippy::too_many_arguments)]
 fn walk<R, P, F>(
     r: &R,
     sigma_t: Rgb,
     ray: &Ray,
     hero: usize,
-    lookahead: Option<u32>,
     sampler: &mut PixelSampler,
     point_at: P,
     mut callback: F,
@@ -158,8 +142,6 @@ where
     let mut stopped = false;
     // Hero-channel majorant optical depth left to the next collision, once drawn.
     let mut to_collision: Option<f32> = None;
-    // Whether the next collision's density was asked for (`lookahead`).
-    let mut hinted_next = false;
     let _ = r.segments(|seg| {
         let sigma_maj = sigma_t * seg.d_max;
         let mut t_min = seg.t0;
@@ -185,22 +167,6 @@ where
             tau += sigma_maj * (t - t_min);
             let t_maj = transmittance(tau, grey);
             let p = ray.at(t);
-            if let Some(skip) = lookahead {
-                // The next two collisions if the callback goes on twice (the
-                // arithmetic of the next passes of this loop while they stay
-                // in this segment): the next one was asked for at the
-                // previous collision unless that was the first or its
-                // guess left the segment.
-                let t_next = t + -(1.0 - sampler.peek_1d(skip)).ln() / sigma_maj[hero];
-                if !hinted_next && t_next < seg.t1 {
-                    r.prefetch(t_next);
-                }
-                let t_after = t_next + -(1.0 - sampler.peek_1d(2 * skip + 1)).ln() / sigma_maj[hero];
-                hinted_next = t_after < seg.t1;
-                if hinted_next {
-                    r.prefetch(t_after);
-                }
-            }
             let collision = MajorantCollision { t, p, point: point_at(p, r.density(t)), sigma_maj, t_maj };
             if !callback(collision, sampler) {
                 stopped = true;
