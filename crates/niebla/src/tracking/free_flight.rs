@@ -10,7 +10,7 @@
 
 use crate::color::Rgb;
 use crate::math::{Ray, Vec3};
-use crate::medium::{Medium, MediumPoint};
+use crate::medium::{GridMedium, Medium, MediumPoint};
 use crate::sampling::PixelSampler;
 
 use super::along_ray::{DensityAlongRay, GridAlongRay, GridLookup, UnitDensity};
@@ -53,15 +53,9 @@ where
             let point = h.point();
             walk(&r, h.sigma_t(), ray, hero, sampler, |_, _| point, callback)
         }
-        Medium::Grid(g) => {
-            let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
-                return Rgb::ONE;
-            };
-            let time = sampler.time();
-            let at = move |p: Vec3, density: f32| g.point_with_density(p, density, time);
-            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
-            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
-        }
+        Medium::Grid(g) => grid_flight(g, ray, t_max, hero, sampler, callback, |time| {
+            move |p: Vec3, density: f32| g.point_with_density(p, density, time)
+        }),
     }
 }
 
@@ -83,19 +77,39 @@ where
 {
     match medium {
         Medium::Homogeneous(_) => sample_t_maj(medium, ray, t_max, hero, sampler, callback),
-        Medium::Grid(g) => {
-            let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
-                return Rgb::ONE;
-            };
-            let time = sampler.time();
-            let at = move |p: Vec3, density: f32| {
+        Medium::Grid(g) => grid_flight(g, ray, t_max, hero, sampler, callback, |time| {
+            move |p: Vec3, density: f32| {
                 let (sigma_a, sigma_s) = g.absorption_scattering(p, density, time);
                 MediumPoint { sigma_a, sigma_s, l_ve: Rgb::ZERO }
-            };
-            let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: at, callback };
-            with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
-        }
+            }
+        }),
     }
+}
+
+/// The grid-medium case shared by [`sample_t_maj`] and
+/// [`sample_t_maj_without_emission`]: clips `[0, t_max)` to the grid's
+/// bounds (no overlap: no collision, returns `Rgb::ONE`), reads the
+/// sampler's time and walks the density view along the ray, with the
+/// coefficients at each collision given by `point_at(time)`.
+fn grid_flight<F, P>(
+    g: &GridMedium,
+    ray: &Ray,
+    t_max: f32,
+    hero: usize,
+    sampler: &mut PixelSampler,
+    callback: F,
+    point_at: impl FnOnce(f32) -> P,
+) -> Rgb
+where
+    F: FnMut(MajorantCollision, &mut PixelSampler) -> bool,
+    P: Fn(Vec3, f32) -> MediumPoint,
+{
+    let Some((a, b)) = g.clip(ray, 0.0, t_max) else {
+        return Rgb::ONE;
+    };
+    let time = sampler.time();
+    let flight = Flight { sigma_t: g.sigma_t(), ray, hero, sampler, point_at: point_at(time), callback };
+    with_grid_along_ray(g, g.ray_to_grid(ray), (a, b), time, false, flight)
 }
 
 /// [`walk`] as a [`GridRayVisitor`]: its arguments but the density view.
