@@ -121,14 +121,7 @@ impl SceneConstants {
 }
 
 /// [`VolPathIntegrator::guide_fraction`] of [`VolPathIntegrator::new`].
-///
-/// Measured on the bench's lamp in fog (`fog_point`, 32 pixels wide, Sobol,
-/// relative MSE at 64 spp over 6 and 12 seeds, samples per CPU second
-/// unchanged within the noise): fractions 0.1, 0.25, 0.5 and 0.75 gave
-/// 7.1e-3, 5.5-5.7e-3, 4.9-5.0e-3 and 5.3e-3. Half of the directions stay
-/// with phase or BSDF sampling, which bounds the loss (2x) where the light
-/// comes from elsewhere.
-pub const DEFAULT_GUIDE_FRACTION: f32 = 0.5;
+pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
 
 /// [`VolPathIntegrator::emitter_guide_fraction`] of [`VolPathIntegrator::new`].
 ///
