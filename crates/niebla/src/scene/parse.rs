@@ -901,15 +901,7 @@ fn parse_transform(object: Object) -> Result<TransformDesc, Located> {
             ("rotate_y", raw.rotate_y.is_some()),
             ("rotate_z", raw.rotate_z.is_some()),
         ];
-        if let Some((name, _)) = others.iter().find(|(_, given)| *given) {
-            return Err(Located::new(
-                *name,
-                format!(
-                    "`{name}` cannot be combined with `matrix`: give a full matrix, or \
-                     translate/scale/rotate_x/rotate_y/rotate_z"
-                ),
-            ));
-        }
+        only_matrix(&others, "a full matrix, or translate/scale/rotate_x/rotate_y/rotate_z")?;
         return Ok(TransformDesc::Matrix(matrix));
     }
     Ok(TransformDesc::Components {
@@ -940,14 +932,28 @@ fn parse_rotation(object: Object) -> Result<RotationDesc, Located> {
     let raw: RawRotation = rest(object)?;
     let angles = [raw.rotate_x, raw.rotate_y, raw.rotate_z];
     match raw.matrix {
-        Some(matrix) => match ["rotate_x", "rotate_y", "rotate_z"].iter().zip(angles).find(|(_, a)| a.is_some()) {
-            Some((name, _)) => Err(Located::new(
-                *name,
-                format!("`{name}` cannot be combined with `matrix`: give a 3x3 matrix, or rotate_x/rotate_y/rotate_z"),
-            )),
-            None => Ok(RotationDesc::Matrix(matrix)),
-        },
+        Some(matrix) => {
+            let others = [
+                ("rotate_x", raw.rotate_x.is_some()),
+                ("rotate_y", raw.rotate_y.is_some()),
+                ("rotate_z", raw.rotate_z.is_some()),
+            ];
+            only_matrix(&others, "a 3x3 matrix, or rotate_x/rotate_y/rotate_z")?;
+            Ok(RotationDesc::Matrix(matrix))
+        }
         None => Ok(RotationDesc::Angles(angles.map(|a| a.unwrap_or(0.0)))),
+    }
+}
+
+/// Refuses the first key given beside `matrix` (`others`: each key's name
+/// and whether the object has it), with an error at that key saying that
+/// the object takes `alternatives` instead.
+fn only_matrix(others: &[(&'static str, bool)], alternatives: &str) -> Result<(), Located> {
+    match others.iter().find(|(_, given)| *given) {
+        Some((name, _)) => {
+            Err(Located::new(*name, format!("`{name}` cannot be combined with `matrix`: give {alternatives}")))
+        }
+        None => Ok(()),
     }
 }
 
