@@ -128,13 +128,9 @@
 //! - Built and read grids release their vectors' spare capacity, so
 //!   [`SparseGrid::memory_bytes`] is within 1% of the leaves and tiles
 //!   ([`SparseGrid::payload_bytes`]) for grids of more than a few leaves
-//!   per internal node, plus at most 1.5% for the flat table of the 8^3
-//!   blocks over the leaves' box (4 bytes per block, built when the box
-//!   holds at most 8 blocks per leaf), through which the accessor finds a
-//!   block in one read instead of descending the tree.
+//!   per internal node.
 
 mod affine;
-mod block_table;
 mod dda;
 mod dense;
 mod error;

@@ -22,7 +22,6 @@
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-use crate::block_table::BlockTable;
 use crate::Affine;
 
 /// Number of voxels along a leaf's edge.
@@ -240,9 +239,6 @@ pub struct SparseGrid {
     pub(crate) lower_origins: Vec<[i32; 3]>,
     pub(crate) leaves: Vec<Leaf>,
     pub(crate) tiles: Vec<Tile>,
-    /// The blocks over the leaves' box, for [`crate::SparseAccessor`]
-    /// (built by `finish` once the topology is final).
-    pub(crate) blocks: BlockTable,
 }
 
 /// `floor(v)` as an integer and as a float, the float bit-identical to
@@ -317,7 +313,6 @@ impl SparseGrid {
             lower_origins: Vec::new(),
             leaves: Vec::new(),
             tiles: Vec::new(),
-            blocks: BlockTable::default(),
         }
     }
 
@@ -497,8 +492,7 @@ impl SparseGrid {
         let tables = (self.uppers.capacity() + self.lowers.capacity()) * size_of::<u32>();
         let origins = (self.upper_origins.capacity() + self.lower_origins.capacity()) * size_of::<[i32; 3]>();
         let data = self.leaves.capacity() * size_of::<Leaf>() + self.tiles.capacity() * size_of::<Tile>();
-        let blocks = self.blocks.memory_bytes();
-        (root + tables + origins + data + blocks + self.name.capacity() + self.map_type.capacity()) as u64
+        (root + tables + origins + data + self.name.capacity() + self.map_type.capacity()) as u64
     }
 
     /// Number of active voxels (leaf voxels plus the volume of active tiles).

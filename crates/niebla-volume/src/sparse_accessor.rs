@@ -9,9 +9,7 @@
 //! like the grid does; it is `Send` but not `Sync`: make one per ray (or
 //! per thread), never share one between threads. Every read returns
 //! exactly what the uncached [`SparseGrid`] method returns (the same
-//! stored values, combined by the same arithmetic). A block that misses the
-//! cache is found in the grid's flat block table when its box covers it
-//! (one array read), else by descending the tree.
+//! stored values, combined by the same arithmetic).
 
 use std::cell::Cell;
 
@@ -125,15 +123,10 @@ impl<'a> SparseAccessor<'a> {
         b
     }
 
-    /// The block holding `ijk`: from the grid's block table when it covers
-    /// `ijk` (one read), else by tree descent starting from the deepest
-    /// cached node that holds `ijk`.
+    /// Tree descent starting from the deepest cached node that holds `ijk`.
     #[inline(never)]
     fn descend(&self, ijk: [i32; 3]) -> Block<'a> {
         let g = self.grid;
-        if let Some(e) = g.blocks.entry(ijk) {
-            return self.block_of(e);
-        }
         let lower_key = ijk.map(|v| v >> LOWER_TOTAL);
         let e = if lower_key == self.lower_key.get() {
             self.lower_entry.get()
@@ -153,17 +146,10 @@ impl<'a> SparseAccessor<'a> {
             e
         };
         let e = if e & TILE_BIT != 0 { e } else { g.lowers[e as usize * LOWER_SIZE + lower_offset(ijk)] };
-        self.block_of(e)
-    }
-
-    /// The block a lower-node-level entry stands for: a leaf, or a tile's
-    /// (or the background's) value.
-    #[inline(always)]
-    fn block_of(&self, e: u32) -> Block<'a> {
         if e & TILE_BIT != 0 {
             Block::Constant(self.tile_value(e))
         } else {
-            Block::Leaf(&self.grid.leaves[e as usize].values)
+            Block::Leaf(&g.leaves[e as usize].values)
         }
     }
 

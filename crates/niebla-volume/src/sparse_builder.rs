@@ -1,7 +1,6 @@
 //! Building sparse grids: node allocation (shared with the VDB reader) and
 //! [`SparseGridBuilder`] for grids made in code (tests, procedural data).
 
-use crate::block_table::BlockTable;
 use crate::sparse::{
     lower_offset, upper_offset, Leaf, Tile, EMPTY, LEAF_TOTAL, LOWER_SIZE, LOWER_TOTAL, TILE_BIT, UPPER_SIZE,
     UPPER_TOTAL,
@@ -98,14 +97,13 @@ impl SparseGrid {
                 out.root.insert(key, new);
             }
         }
-        out.finish();
+        out.shrink_to_fit();
         out
     }
 
-    /// Makes a grid whose topology is final ready to read: releases the
-    /// spare capacity of every table (grids are built by pushing, which
-    /// leaves up to half of each vector unused) and builds the block table.
-    pub(crate) fn finish(&mut self) {
+    /// Releases the spare capacity of every table (grids are built by
+    /// pushing, which leaves up to half of each vector unused).
+    pub(crate) fn shrink_to_fit(&mut self) {
         self.root.shrink_to_fit();
         self.uppers.shrink_to_fit();
         self.upper_origins.shrink_to_fit();
@@ -113,7 +111,6 @@ impl SparseGrid {
         self.lower_origins.shrink_to_fit();
         self.leaves.shrink_to_fit();
         self.tiles.shrink_to_fit();
-        self.blocks = BlockTable::build(self);
     }
 
     fn copy_entry(&self, out: &mut SparseGrid, e: u32, depth: u8) -> u32 {

@@ -126,7 +126,7 @@ pub(crate) fn read_tree(
         }
     }
     for grid in grids.iter_mut() {
-        grid.finish();
+        grid.shrink_to_fit();
     }
     Ok(())
 }
