@@ -102,11 +102,14 @@ impl MajorantGrid {
     where
         F: FnMut([usize; 3], Segment) -> ControlFlow<()>,
     {
-        // Clip the ray to the grid's box (slab test).
+        // Clip the ray to the grid's box (slab test), keeping the reciprocal
+        // directions (0 for a zero component) so that stepping needs no
+        // division.
         let (mut t0, mut t1) = (t_min, t_max);
         if o.iter().chain(&d).any(|v| !v.is_finite()) {
             return ControlFlow::Continue(());
         }
+        let mut inv_d = [0.0f32; 3];
         for a in 0..3 {
             if d[a] == 0.0 {
                 if !(o[a] >= self.bounds_min[a] && o[a] <= self.bounds_max[a]) {
@@ -115,6 +118,7 @@ impl MajorantGrid {
                 continue;
             }
             let inv = 1.0 / d[a];
+            inv_d[a] = inv;
             let (mut near, mut far) = ((self.bounds_min[a] - o[a]) * inv, (self.bounds_max[a] - o[a]) * inv);
             if near > far {
                 std::mem::swap(&mut near, &mut far);
@@ -127,9 +131,8 @@ impl MajorantGrid {
             return ControlFlow::Continue(());
         }
 
-        // Cell widths and reciprocal directions, so that stepping needs no division.
+        // Cell widths.
         let width: [f32; 3] = std::array::from_fn(|a| (self.bounds_max[a] - self.bounds_min[a]) / self.res[a] as f32);
-        let inv_d: [f32; 3] = std::array::from_fn(|a| if d[a] != 0.0 { 1.0 / d[a] } else { 0.0 });
         // The ray parameter where it crosses boundary plane `k` of axis `a`
         // (the plane formula of `plane`'s callers in the DDA: `bounds_min + k
         // width`, the last plane exactly `bounds_max`).
@@ -151,7 +154,10 @@ impl MajorantGrid {
         for a in 0..3 {
             let p = o[a] + d[a] * t0;
             let extent = self.bounds_max[a] - self.bounds_min[a];
-            let u = ((p - self.bounds_min[a]) / extent * self.res[a] as f32).floor();
+            // The cell `floor(u)` clamped to the grid; for `u >= 0` the
+            // truncating conversion is the floor, and a negative `u` (or
+            // NaN) clamps to 0 either way, so no `floor` call is needed.
+            let u = (p - self.bounds_min[a]) / extent * self.res[a] as f32;
             cell[a] = (u.max(0.0) as usize).min(self.res[a] - 1);
             // Rounding may put p just across a plane: settle on the cell that
             // the ray is entering (or, moving along -axis, leaving).

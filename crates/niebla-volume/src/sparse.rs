@@ -241,14 +241,31 @@ pub struct SparseGrid {
     pub(crate) tiles: Vec<Tile>,
 }
 
+/// `floor(v)` as an integer and as a float, the float bit-identical to
+/// `v.floor()` (the sign of a zero included), for `|v| < 1e9` (callers
+/// check; larger values and NaN give unspecified results, no panic).
+///
+/// `f32::floor` is a call to libm's `floorf` on baseline x86-64 (no SSE4.1
+/// `roundss`); this is a truncating conversion, one compare and a sign copy.
+/// Exact: truncation toward zero is the floor for `v >= 0` and one more than
+/// it for a negative non-integer `v` (then `t as f32 > v`); every integer of
+/// magnitude below 2^31 that is the floor of an `f32` is itself an `f32`, so
+/// `i as f32` is exact; and `floor(v)` has the sign of `v` (`floor(-0.0)` is
+/// `-0.0`, `floor(-0.5)` is `-1`).
+#[inline(always)]
+pub(crate) fn floor_to_i32(v: f32) -> (i32, f32) {
+    let t = v as i32;
+    let i = t - ((t as f32) > v) as i32;
+    (i, (i as f32).copysign(v))
+}
+
 /// The voxel `floor(p)` and the fractional offset `p - floor(p)` of an
-/// index-space point (shared by the tree lookup and the cached accessor so
-/// that both compute bit-identical results).
+/// index-space point with every `|p[a]| < 1e9` (shared by the tree lookup
+/// and the cached accessor so that both compute bit-identical results).
 #[inline(always)]
 pub(crate) fn split_index_point(p: [f32; 3]) -> ([i32; 3], [f32; 3]) {
-    let base = p.map(|v| v.floor());
-    let f = [p[0] - base[0], p[1] - base[1], p[2] - base[2]];
-    (base.map(|v| v as i32), f)
+    let [(i0, b0), (i1, b1), (i2, b2)] = p.map(floor_to_i32);
+    ([i0, i1, i2], [p[0] - b0, p[1] - b1, p[2] - b2])
 }
 
 /// Trilinear interpolation of 8 corner values ordered `(dx, dy, dz)` with
@@ -602,6 +619,39 @@ impl Bounds {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `floor_to_i32` equals `f32::floor` bit for bit (and its integer the
+    /// floor's value) on every 9973rd bit pattern below 1e9 in magnitude
+    /// (263,885 values: both signs, every exponent), every multiple of
+    /// 1/64 in [-300, 300], and the boundary cases (zeros of both signs,
+    /// integers and their neighbours, the largest values allowed).
+    #[test]
+    fn integer_floor_is_bit_identical_to_floorf() {
+        let check = |v: f32| {
+            if v.is_nan() || v.abs() >= 1.0e9 {
+                return 0;
+            }
+            let (i, f) = floor_to_i32(v);
+            assert_eq!(f.to_bits(), v.floor().to_bits(), "floor of {v:e} ({:#x})", v.to_bits());
+            assert_eq!(i as f32, v.floor(), "integer floor of {v:e}");
+            1
+        };
+        let mut n = 0;
+        for bits in (0..=u32::MAX).step_by(9973) {
+            n += check(f32::from_bits(bits));
+        }
+        assert_eq!(n, 263_885);
+        for k in -300 * 64..=300 * 64 {
+            check(k as f32 / 64.0);
+        }
+        let edges = [0.0f32, -0.0, 1.0, -1.0, 0.5, -0.5, 8388607.5, -8388607.5, 8388608.0, -8388609.0, 999_999_940.0];
+        for v in edges {
+            check(v);
+            check(-v);
+            check(f32::from_bits(v.to_bits().wrapping_add(1)));
+            check(f32::from_bits(v.to_bits().wrapping_sub(1)));
+        }
+    }
 
     /// The root table answers like a plain hash map below, at and above the
     /// size where it stops keeping the list of entries, replacements included.
