@@ -78,17 +78,38 @@ pub fn truncated_exponential_pdf(t: f32, sigma: f32, t_max: f32) -> f32 {
 /// proportional to `1 / (h^2 + (t - t_c)^2)`.
 #[inline]
 pub fn sample_equiangular(u: f32, t_a: f32, t_b: f32, t_c: f32, h: f32) -> f32 {
-    let theta_a = ((t_a - t_c) / h).atan();
-    let theta_b = ((t_b - t_c) / h).atan();
-    let theta = theta_a + u * (theta_b - theta_a);
-    (t_c + h * theta.tan()).clamp(t_a, t_b)
+    sample_equiangular_at_angles(u, t_a, t_b, t_c, h, equiangular_angles(t_a, t_b, t_c, h))
 }
 
 /// Density of [`sample_equiangular`] at `t`.
 #[inline]
 pub fn equiangular_pdf(t: f32, t_a: f32, t_b: f32, t_c: f32, h: f32) -> f32 {
-    let theta_a = ((t_a - t_c) / h).atan();
-    let theta_b = ((t_b - t_c) / h).atan();
+    equiangular_pdf_at_angles(t, t_c, h, equiangular_angles(t_a, t_b, t_c, h))
+}
+
+/// The angles (radians, in `(-pi/2, pi/2)`) under which the ends `t_a` and
+/// `t_b` are seen from the point of [`sample_equiangular`], measured from
+/// the perpendicular: what its sampling and density share (two `atan`s),
+/// to be computed once per interval.
+#[inline]
+pub fn equiangular_angles(t_a: f32, t_b: f32, t_c: f32, h: f32) -> (f32, f32) {
+    (((t_a - t_c) / h).atan(), ((t_b - t_c) / h).atan())
+}
+
+/// [`sample_equiangular`] with the interval's [`equiangular_angles`] given
+/// (the same bits).
+#[inline]
+pub fn sample_equiangular_at_angles(u: f32, t_a: f32, t_b: f32, t_c: f32, h: f32, angles: (f32, f32)) -> f32 {
+    let (theta_a, theta_b) = angles;
+    let theta = theta_a + u * (theta_b - theta_a);
+    (t_c + h * theta.tan()).clamp(t_a, t_b)
+}
+
+/// [`equiangular_pdf`] with the interval's [`equiangular_angles`] given
+/// (the same bits).
+#[inline]
+pub fn equiangular_pdf_at_angles(t: f32, t_c: f32, h: f32, angles: (f32, f32)) -> f32 {
+    let (theta_a, theta_b) = angles;
     let d = t - t_c;
     h / ((theta_b - theta_a) * (h * h + d * d))
 }

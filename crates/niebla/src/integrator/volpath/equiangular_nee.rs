@@ -26,6 +26,42 @@ pub(super) struct Segment<'a> {
     pub(super) t: f32,
     /// The medium of the segment.
     pub(super) medium: &'a Medium,
+    /// The equiangular targets [`equiangular_ld`] found on the segment.
+    pub(super) targets: &'a SegmentTargets,
+}
+
+/// Most equiangular targets a [`SegmentTargets`] keeps: one per light when
+/// next-event estimation samples every light.
+const MAX_SEGMENT_TARGETS: usize = super::nee::SAMPLE_ALL_LIGHTS_UP_TO;
+
+/// The equiangular intervals [`equiangular_ld`] found on one medium
+/// segment, by light (index into the scene's lights): the MIS weight of the
+/// light sample at the segment's free-flight vertex needs the same ones,
+/// and finding them again cost a cone intersection and two `atan`s per
+/// light. Lights not kept are found again ([`equiangular_target`]).
+#[derive(Clone, Copy, Default)]
+pub(super) struct SegmentTargets {
+    found: [Option<(usize, PointLightTarget)>; MAX_SEGMENT_TARGETS],
+}
+
+impl SegmentTargets {
+    /// Keep `target` of light `light_index` (dropped when full).
+    #[inline]
+    fn keep(&mut self, light_index: usize, target: PointLightTarget) {
+        if let Some(slot) = self.found.iter_mut().find(|slot| slot.is_none()) {
+            *slot = Some((light_index, target));
+        }
+    }
+
+    /// The target of light `light_index` on `[0, t_end)` of `ray`: the one
+    /// kept for it, else found.
+    #[inline]
+    fn get(&self, light_index: usize, light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget {
+        match self.found.iter().flatten().find(|(i, _)| *i == light_index) {
+            Some(&(_, target)) => target,
+            None => equiangular_target(light, ray, t_end),
+        }
+    }
 }
 
 /// Density (per unit length) with which free flight on the segment produces a
@@ -53,16 +89,17 @@ pub(super) fn point_light_count(scene: &Scene) -> usize {
 }
 
 /// Balance-heuristic weight of light sampling from a free-flight vertex
-/// (light chosen with probability 1/N) against equiangular sampling of the
+/// (light `light_index` chosen with probability 1/N) against equiangular sampling of the
 /// same vertex (point light chosen with probability 1/P); `None` when the
 /// light is not point-like or equiangular sampling cannot produce the vertex.
 pub(super) fn light_weight_against_equiangular(
     seg: Segment,
+    light_index: usize,
     light: &Light,
     lights: LightChoice,
     group: Channels,
 ) -> Option<f32> {
-    let PointLightTarget::Interval(e) = equiangular_target(light, seg.ray, seg.t_end) else {
+    let PointLightTarget::Interval(e) = seg.targets.get(light_index, light, seg.ray, seg.t_end) else {
         return None;
     };
     let p_eq = e.pdf(seg.t) * lights.point_pmf();
@@ -89,47 +126,53 @@ pub(super) struct EquiangularSegment<'a> {
 /// point or spot light, or one chosen uniformly ([`LightChoice`]), one point
 /// sampled equiangularly toward each (within the spot's cone), camera-side
 /// and light-side transmittance exact (homogeneous) or by ratio tracking.
+/// The intervals found are kept in `targets`.
 pub(super) fn equiangular_ld(
     scene: &Scene,
     segment: &EquiangularSegment,
     group: Channels,
     lights: LightChoice,
+    targets: &mut SegmentTargets,
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let count = lights.points;
     if count == 0 {
         return Rgb::ZERO;
     }
-    let mut point_lights = scene.lights.iter().filter(|l| l.point_position().is_some());
+    let mut point_lights = scene.lights.iter().enumerate().filter(|(_, l)| l.point_position().is_some());
     if lights.all() {
         let mut l = Rgb::ZERO;
-        for light in point_lights {
-            l += equiangular_ld_light(scene, segment, group, lights, light, sampler);
+        for (index, light) in point_lights {
+            l += equiangular_ld_light(scene, segment, group, lights, (index, light), targets, sampler);
         }
         return l;
     }
     segment.block.enter(sampler, layout::EQUIANGULAR_CHOICE);
     let u_light = sampler.next_1d();
     let k = ((u_light * count as f32) as usize).min(count - 1);
-    let Some(light) = point_lights.nth(k) else {
+    let Some((index, light)) = point_lights.nth(k) else {
         return Rgb::ZERO;
     };
-    equiangular_ld_light(scene, segment, group, lights, light, sampler)
+    equiangular_ld_light(scene, segment, group, lights, (index, light), targets, sampler)
 }
 
-/// [`equiangular_ld`] toward `light`, chosen with probability `lights.point_pmf()`.
+/// [`equiangular_ld`] toward `light` (with its index in the scene's
+/// lights), chosen with probability `lights.point_pmf()`.
 fn equiangular_ld_light(
     scene: &Scene,
     segment: &EquiangularSegment,
     group: Channels,
     lights: LightChoice,
-    light: &Light,
+    (index, light): (usize, &Light),
+    targets: &mut SegmentTargets,
     sampler: &mut PixelSampler,
 ) -> Rgb {
     let EquiangularSegment { ray, t_end, medium: m, id, throughput, block } = *segment;
     block.enter(sampler, layout::EQUIANGULAR);
     let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
-    let PointLightTarget::Interval(e) = equiangular_target(light, ray, t_end) else {
+    let target = equiangular_target(light, ray, t_end);
+    targets.keep(index, target);
+    let PointLightTarget::Interval(e) = target else {
         return Rgb::ZERO;
     };
     let t = e.sample(u_t);

@@ -75,7 +75,7 @@ pub(super) struct LightChoice {
 }
 
 /// Up to this many lights, next-event estimation samples each of them.
-const SAMPLE_ALL_LIGHTS_UP_TO: usize = 4;
+pub(super) const SAMPLE_ALL_LIGHTS_UP_TO: usize = 4;
 
 impl LightChoice {
     pub(super) fn new(scene: &Scene) -> LightChoice {
@@ -260,8 +260,8 @@ fn sample_ld_light(
     if ls.is_delta {
         // A point or spot light seen from a free-flight vertex: the same path can
         // come from equiangular sampling on the segment (`equiangular_ld`).
-        let weight =
-            segment.map_or(1.0, |seg| light_weight_against_equiangular(seg, light, lights, group).unwrap_or(1.0));
+        let weight = segment
+            .map_or(1.0, |seg| light_weight_against_equiangular(seg, light_index, light, lights, group).unwrap_or(1.0));
         beta * f_hat * t_ray * ls.li * weight / group.average(r_l)
     } else {
         // The density with which this vertex's own direction sampling draws

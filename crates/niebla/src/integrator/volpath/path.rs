@@ -13,7 +13,7 @@ use crate::tracking::{pass_through_weight, sample_t_maj, MajorantCollision};
 use crate::world::{PathRay, Scene};
 
 use super::channels::Channels;
-use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment};
+use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment, SegmentTargets};
 use super::forced::ForcedCollision;
 use super::guiding::{sample_bsdf, sample_phase};
 use super::layout::{self, Block, SegmentCounter};
@@ -89,11 +89,13 @@ impl VolPathIntegrator {
                 let m = scene.medium(id);
                 let block = *block.insert(segments.next(depth));
                 // Equiangular sampling toward point and spot lights along this
-                // segment, MIS-weighted against the free-flight vertices' NEE.
+                // segment, MIS-weighted against the free-flight vertices' NEE
+                // (which reuse its intervals).
+                let mut targets = SegmentTargets::default();
                 if depth < self.max_depth {
                     let throughput = beta / group.average(r_u);
                     let segment = EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput, block };
-                    let v = equiangular_ld(scene, &segment, group, lights, sampler);
+                    let v = equiangular_ld(scene, &segment, group, lights, &mut targets, sampler);
                     let at = if depth == 0 { FirstVertex::Medium } else { first };
                     l.add(v, || PathClass::of(at, depth + 1));
                 }
@@ -160,7 +162,7 @@ impl VolPathIntegrator {
                             return false;
                         }
                         let phase = m.phase();
-                        let segment = Segment { ray: &ray, t_end, t: c.t, medium: m };
+                        let segment = Segment { ray: &ray, t_end, t: c.t, medium: m, targets: &targets };
                         let vertex = NeeVertex {
                             p: c.p,
                             wo,
