@@ -143,7 +143,7 @@ pub const DEFAULT_EMITTER_GUIDE_FRACTION: f32 = 0.5;
 /// variance times CPU time, 16 renders of 32 spp per setting): there most
 /// of the smoke's variance came from paths that scatter in the smoke and
 /// then find the fire's own scattered light by phase sampling. 0.12, 0.25,
-/// 0.4 and 0.5 were 2.7x, 3.0x, 2.4x and 2.1x as efficient as none on the
+/// 0.4 and 0.5 were 2.6x, 3.0x, 2.3x and 2.1x as efficient as none on the
 /// smoke; the floor and the fire gained 1.1-1.2x.
 pub const DEFAULT_MEDIUM_EMITTER_GUIDE_FRACTION: f32 = 0.25;
 
