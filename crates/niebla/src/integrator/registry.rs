@@ -57,8 +57,9 @@ pub enum IntegratorSettings {
         /// Whether next-event estimation samples emissive media as lights
         /// (`volume_light_sampling`, default true).
         volume_light_sampling: bool,
-        /// Whether surface vertices mix BSDF sampling with directions toward
-        /// the emitting region when emissive media are sampled as lights
+        /// Whether surface vertices mix BSDF sampling, and medium vertices
+        /// phase sampling, with directions toward the emitting region when
+        /// emissive media are sampled as lights
         /// (`emitter_guiding`, default true; the mean is the same either way).
         emitter_guiding: bool,
     },
@@ -395,7 +396,7 @@ impl PreparedIntegrator {
                 PreparedIntegrator::VolPath(Box::new(if emitter_guiding {
                     integrator
                 } else {
-                    integrator.with_emitter_guide_fraction(0.0)
+                    integrator.with_emitter_guide_fraction(0.0).with_medium_emitter_guide_fraction(0.0)
                 }))
             }
             IntegratorSettings::Analytic => PreparedIntegrator::Analytic(AnalyticIntegrator::new()),

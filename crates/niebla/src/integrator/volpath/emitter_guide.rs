@@ -1,4 +1,4 @@
-//! `volpath`'s guide toward emissive media at surface vertices
+//! `volpath`'s guide toward emissive media at surface and medium vertices
 //! ([`EmitterGuide`]): directions toward uniform points of a few boxes
 //! around the emitting region, whose density in solid angle has a closed form.
 //!
@@ -65,7 +65,7 @@ impl GuideBox {
     }
 }
 
-/// Direction guiding toward emissive media at surface vertices.
+/// Direction guiding toward emissive media at surface and medium vertices.
 ///
 /// A surface lit by an emissive medium gets its light from the emission
 /// itself (sampled by next-event estimation toward the emitting cells) and
@@ -77,7 +77,10 @@ impl GuideBox {
 /// them with BSDF sampling by one-sample MIS, so every direction keeps the
 /// BSDF's share of the density. On the fire showcase a box twice the
 /// emitting region's size, alone or mixed with it, was less efficient on
-/// the floor than the emitting region's box alone.
+/// the floor than the emitting region's box alone. A scattering vertex in a
+/// medium around the emitter (smoke over a fire) is in the same position,
+/// with the phase function in place of the BSDF, and mixes the same guide
+/// in with a smaller share.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct EmitterGuide {
     boxes: [Option<GuideBox>; MAX_GUIDE_BOXES],

@@ -1,7 +1,7 @@
 //! Direction sampling at a `volpath` vertex mixed with a guide, toward
-//! lights inside media ([`LightGuide`]) or toward emissive media at surfaces
-//! ([`EmitterGuide`]): one-sample MIS of phase or BSDF sampling and guided
-//! directions.
+//! lights inside media ([`LightGuide`]) or toward emissive media
+//! ([`EmitterGuide`], at surface and medium vertices): one-sample MIS of
+//! phase or BSDF sampling and guided directions.
 
 use crate::bsdf::Bsdf;
 use crate::math::Vec3;
@@ -17,7 +17,7 @@ use super::light_guide::LightGuide;
 pub(super) enum GuideTarget<'a> {
     /// Point and spot lights inside media.
     Lamps(&'a LightGuide),
-    /// The emitting region of emissive media (surface vertices only).
+    /// The emitting region of emissive media.
     Emitters(&'a EmitterGuide),
 }
 

@@ -44,8 +44,18 @@ impl VolPathIntegrator {
         light_sampling: LightSampling,
         sampler: &mut PixelSampler,
     ) -> S {
-        let LightSampling { lights, guiding, emitter_guiding, volume, forced: forced_medium, lone: lone_medium } =
-            light_sampling;
+        let LightSampling {
+            lights,
+            guiding,
+            emitter_guiding,
+            medium_emitter_guiding,
+            volume,
+            forced: forced_medium,
+            lone: lone_medium,
+        } = light_sampling;
+        // Medium vertices: lamp guiding where it applies, else guiding
+        // toward the emissive media (when they are sampled as lights).
+        let medium_guiding = guiding.or(medium_emitter_guiding);
         // The hero channel cycles over the pixel's samples (stratified), so the
         // discrete choice adds no variance over each group of samples.
         let hero = group.nth(sampler.stratified_choice(group.len() as u64) as usize);
@@ -172,7 +182,7 @@ impl VolPathIntegrator {
                             beta,
                             r_p: r_u,
                             segment: Some(segment),
-                            guiding,
+                            guiding: medium_guiding,
                             block: Block::vertex(depth),
                             lone,
                         };
@@ -183,7 +193,7 @@ impl VolPathIntegrator {
                             let v = sample_volume_ld(scene, volume_lights, &vertex, group, hero, sampler);
                             l.add(v, || PathClass::of(first, depth));
                         }
-                        let Some(ps) = sample_phase(phase, c.p, wo, guiding, vertex.block, sampler) else {
+                        let Some(ps) = sample_phase(phase, c.p, wo, medium_guiding, vertex.block, sampler) else {
                             terminated = true;
                             return false;
                         };

@@ -18,9 +18,9 @@ struct VolPathFields {
     /// Whether emissive media are sampled as lights (default true).
     #[serde(default)]
     volume_light_sampling: Option<bool>,
-    /// Whether surface vertices mix BSDF sampling with directions toward
-    /// the emitting region, when emissive media are sampled as lights
-    /// (default true).
+    /// Whether surface vertices mix BSDF sampling, and medium vertices
+    /// phase sampling, with directions toward the emitting region, when
+    /// emissive media are sampled as lights (default true).
     #[serde(default)]
     emitter_guiding: Option<bool>,
 }
@@ -32,7 +32,7 @@ pub(crate) struct Parsed {
     pub(crate) max_depth: u32,
     /// Whether emissive media are sampled as lights.
     pub(crate) volume_light_sampling: bool,
-    /// Whether surface vertices guide directions toward emissive media.
+    /// Whether surface and medium vertices guide directions toward emissive media.
     pub(crate) emitter_guiding: bool,
 }
 
