@@ -354,7 +354,7 @@ mod tests {
         let one = AreaLight::new(AreaShape::Rectangle(Rectangle::new(t)), Rgb::splat(1.5), false).unwrap();
         assert!((one.area() - 24.0).abs() < 1e-4);
         assert!((one.power().g() - PI * 1.5 * 24.0).abs() < 1e-3);
-        let two = AreaLight { two_sided: true, ..one };
+        let two = AreaLight { two_sided: true, ..one.clone() };
         assert!((two.power().g() - 2.0 * PI * 1.5 * 24.0).abs() < 1e-3);
         assert!(AreaLight::new(one.shape, Rgb::new(1.0, -1.0, 0.0), false).is_err());
         let bad = AreaShape::Sphere(Sphere::new(Vec3::ZERO, 0.0));
