@@ -5,7 +5,7 @@
 (disk_roughplastic was made with `--renders 64 disk_roughplastic`, and
 aniso_dpdu with `--renders 64 aniso_dpdu`, cube_uv with `--renders 64 cube_uv`, smooth_normals with `--renders 64 smooth_normals`,
 smooth_normals_inward with `--renders 64 smooth_normals_inward`, sphere_turned with
-`--renders 64 sphere_turned`: their image means need the
+`--renders 64 sphere_turned`, mesh_emitters with `--renders 64 mesh_emitters`: their image means need the
 smaller standard error to be checked against 0.5%.)
 
 `--data` (re)writes the scenes' input files (scenes/mitsuba/data/sky.exr, a
@@ -53,7 +53,7 @@ BLOCK = 8
 NAMES = ["mesh_in_fog", "area_fog", "envmap_glass_medium", "grid_smoke", "chromatic_mis", "emitter_in_medium",
          "spot_rough_glass", "thin_boundaries", "tabphase_fog", "disk_roughplastic", "grid_albedo", "textured",
          "rough_textured", "rough_aniso_twosided", "aniso_dpdu", "cube_uv", "smooth_normals",
-         "smooth_normals_inward", "sphere_turned"]
+         "smooth_normals_inward", "sphere_turned", "mesh_emitters"]
 
 
 def write_data(mi):

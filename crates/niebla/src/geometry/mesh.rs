@@ -384,6 +384,16 @@ impl MeshInstance {
         s
     }
 
+    /// The point of triangle `prim` at barycentrics `(b1, b2)` (weights of
+    /// its second and third corners) with its geometric and shading normals,
+    /// as [`MeshInstance::surface_at`] gives them for a hit there (`t` 0,
+    /// not marked [`SurfaceHit::backside_ns`]).
+    #[inline]
+    pub fn surface_point(&self, prim: u32, b1: f32, b2: f32) -> SurfaceHit {
+        let hit = PrimitiveHit { t: 0.0, prim, b1, b2 };
+        self.surface_by(if self.identity { None } else { Some(&self.transform) }, &hit)
+    }
+
     /// [`MeshInstance::surface_at`] of a hit found by [`MeshInstance::hit_posed`] with `pose`.
     #[inline]
     pub fn surface_at_posed(&self, pose: &Transform, ray: &Ray, hit: &PrimitiveHit) -> SurfaceHit {

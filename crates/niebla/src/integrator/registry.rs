@@ -542,7 +542,9 @@ impl PreparedIntegrator {
     /// (analytic). Emission, single and volpath track at the sample's time.
     ///
     /// Likewise for a moving shape or area light (a shape with `motion`):
-    /// emission, single and volpath intersect each ray at its time.
+    /// emission, single and volpath intersect each ray at its time. And an
+    /// error for an emitting mesh under hegeman or zhou, whose light models
+    /// hold rectangles, disks and spheres only.
     fn check_motion(&self, scene: &Scene) -> Result<(), RenderError> {
         let name = match self {
             PreparedIntegrator::Emission(_) | PreparedIntegrator::Single(_) | PreparedIntegrator::VolPath(_) => {
@@ -555,6 +557,19 @@ impl PreparedIntegrator {
             PreparedIntegrator::Ppm(_) => "ppm",
             PreparedIntegrator::Ppb(_) => "ppb",
         };
+        if matches!(self, PreparedIntegrator::Hegeman(_) | PreparedIntegrator::Zhou(_)) {
+            let mesh = scene.lights.iter().position(|l| matches!(l, crate::light::Light::Area(a) if a.shape.is_mesh()));
+            if let Some(index) = mesh {
+                return Err(RenderError::Unsupported {
+                    integrator: name,
+                    reason: format!(
+                        "lights[{index}] is an emitting mesh, which its light model does not hold (area lights \
+                         there are rectangles, disks and spheres); render it with volpath, single, emission, \
+                         analytic or photon"
+                    ),
+                });
+            }
+        }
         if let Some(shape) = scene.moving_shape_name() {
             return Err(RenderError::Unsupported {
                 integrator: name,

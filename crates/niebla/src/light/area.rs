@@ -5,13 +5,18 @@
 //! Front sides: a rectangle's local +z side (the unit square `[-1, 1]^2` of
 //! the local xy plane placed by its `Transform`, see
 //! [`crate::geometry::Rectangle`]), and likewise a disk's
-//! ([`crate::geometry::Disk`]); a sphere's outside. A two-sided light emits
-//! `L` from both sides.
+//! ([`crate::geometry::Disk`]); a sphere's outside; a mesh's shading-normal
+//! side ([`MeshLight`]: the interpolated vertex normal, else the winding's
+//! geometric normal, as Mitsuba 3). A two-sided light emits `L` from both
+//! sides.
 //!
 //! Directions follow the crate convention: `wi` points from the receiver
 //! toward the light, `w_out` leaves the emitting surface (toward the
 //! receiver, so `w_out = -wi`).
 
+use std::sync::Arc;
+
+use super::mesh_light::MeshLight;
 use super::LightError;
 use crate::color::Rgb;
 use crate::geometry::{sphere_at, Disk, Rectangle, Sphere, SurfaceHit, TransformMotion};
@@ -19,7 +24,7 @@ use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, PI};
 use crate::sampling::sample_uniform_sphere;
 
 /// The emitting shape of an [`AreaLight`] (world space).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub enum AreaShape {
     /// A parallelogram: the transformed square `[-1, 1]^2`, front side local +z.
     Rectangle(Rectangle),
@@ -27,6 +32,9 @@ pub enum AreaShape {
     Disk(Disk),
     /// A sphere, front side outside.
     Sphere(Sphere),
+    /// A triangle mesh, front side that of its shading normal (shared: the
+    /// mesh's triangle distribution is built once).
+    Mesh(Arc<MeshLight>),
 }
 
 impl AreaShape {
@@ -37,18 +45,38 @@ impl AreaShape {
             AreaShape::Rectangle(r) => r.area(),
             AreaShape::Disk(d) => d.area(),
             AreaShape::Sphere(s) => 4.0 * PI * s.radius * s.radius,
+            AreaShape::Mesh(m) => m.area(),
         }
     }
 
     /// Nearest intersection with `t` in `(t_min, t_max)`; the normal is the
-    /// front-side normal (rectangle and disk local +z, sphere outward).
+    /// front-side normal (rectangle and disk local +z, sphere outward; a
+    /// mesh's geometric normal `n`, its front-side normal is `ns`).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
         match self {
             AreaShape::Rectangle(r) => r.intersect(ray, t_min, t_max),
             AreaShape::Disk(d) => d.intersect(ray, t_min, t_max),
             AreaShape::Sphere(s) => s.intersect(ray, t_min, t_max),
+            AreaShape::Mesh(m) => m.intersect(ray, t_min, t_max),
         }
+    }
+
+    /// The front-side normal of a hit `hit` on this shape: the shading
+    /// normal `ns` of a mesh (Mitsuba 3's emitting side), else `n`.
+    #[inline]
+    pub fn front_normal(&self, hit: &SurfaceHit) -> Vec3 {
+        match self {
+            AreaShape::Mesh(_) => hit.ns,
+            _ => hit.n,
+        }
+    }
+
+    /// True for a mesh, which may hide parts of itself from a receiver (a
+    /// shadow ray toward one of its points must test the mesh itself).
+    #[inline]
+    pub fn is_mesh(&self) -> bool {
+        matches!(self, AreaShape::Mesh(_))
     }
 }
 
@@ -124,7 +152,7 @@ impl AreaLight {
                 return Err(LightError::InvalidParameter { source_name: source_name(), name: "radiance", value });
             }
         }
-        if let AreaShape::Sphere(s) = shape {
+        if let AreaShape::Sphere(s) = &shape {
             if !(s.radius > 0.0) || !s.radius.is_finite() {
                 return Err(LightError::InvalidParameter {
                     source_name: source_name(),
@@ -150,7 +178,7 @@ impl AreaLight {
             (AreaMotion::Transform(m), AreaShape::Rectangle(_)) => AreaShape::Rectangle(Rectangle::new(m.at(time))),
             (AreaMotion::Transform(m), AreaShape::Disk(_)) => AreaShape::Disk(Disk::new(m.at(time))),
             // The scene builder pairs motions with their shapes only.
-            _ => self.shape,
+            _ => self.shape.clone(),
         };
         Some(AreaLight { shape, radiance: self.radiance, two_sided: self.two_sided, motion: None })
     }
@@ -183,7 +211,9 @@ impl AreaLight {
     /// Sample a point on the light as seen from `p_ref` with `u` in [0, 1)^2.
     /// Sphere, `p_ref` outside: uniform over the cone of directions that see
     /// the sphere (pbrt-v4 spherical-cap sampling); inside: uniform by area.
-    /// Rectangle and disk: uniform by area. The pdf is converted to solid angle.
+    /// Rectangle, disk and mesh: uniform by area (a mesh's triangle chosen by
+    /// area). The pdf is converted to solid angle with the cosine to the
+    /// front-side normal (a mesh's shading normal).
     /// `None` when the point emits nothing toward `p_ref` (its back side of a
     /// one-sided light) or the density is degenerate.
     pub fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<AreaLightSample> {
@@ -234,7 +264,7 @@ impl AreaLight {
         let Some(hit) = self.shape.intersect(&Ray::new(p_ref, wi), 0.0, f32::INFINITY) else {
             return 0.0;
         };
-        let cos_light = hit.n.dot(wi).abs();
+        let cos_light = self.shape.front_normal(&hit).dot(wi).abs();
         if cos_light == 0.0 {
             return 0.0;
         }
@@ -255,6 +285,7 @@ impl AreaLight {
                 let n = sample_uniform_sphere(u);
                 (s.center + s.radius * n, n)
             }
+            AreaShape::Mesh(m) => m.sample_area(u),
         }
     }
 }
@@ -323,7 +354,7 @@ mod tests {
         let one = AreaLight::new(AreaShape::Rectangle(Rectangle::new(t)), Rgb::splat(1.5), false).unwrap();
         assert!((one.area() - 24.0).abs() < 1e-4);
         assert!((one.power().g() - PI * 1.5 * 24.0).abs() < 1e-3);
-        let two = AreaLight { two_sided: true, ..one };
+        let two = AreaLight { two_sided: true, ..one.clone() };
         assert!((two.power().g() - 2.0 * PI * 1.5 * 24.0).abs() < 1e-3);
         assert!(AreaLight::new(one.shape, Rgb::new(1.0, -1.0, 0.0), false).is_err());
         let bad = AreaShape::Sphere(Sphere::new(Vec3::ZERO, 0.0));

@@ -7,10 +7,12 @@
 mod area;
 mod emitted_rays;
 mod envmap;
+mod mesh_light;
 
 pub use area::{AreaLight, AreaLightSample, AreaMotion, AreaShape};
 pub use emitted_rays::{spot_falloff_solid_angle, EmittedRay, SceneSphere};
 pub use envmap::{latlong_direction, latlong_uv, EnvironmentMap, EnvironmentSample, LightError};
+pub use mesh_light::MeshLight;
 
 use crate::color::Rgb;
 use crate::math::{Frame, Vec2, Vec3};
@@ -27,8 +29,8 @@ pub enum Light {
     Directional(DirectionalLight),
     /// Uniform environment of constant radiance.
     Constant(ConstantLight),
-    /// Emitting rectangle, disk or sphere of uniform radiance (its shape is also a
-    /// scene object, which rays hit).
+    /// Emitting rectangle, disk, sphere or triangle mesh of uniform radiance
+    /// (its shape is also a scene object, which rays hit).
     Area(AreaLight),
     /// Lat-long environment map, importance sampled.
     Environment(std::sync::Arc<EnvironmentMap>),
@@ -155,7 +157,17 @@ impl Light {
                     None => a.sample_li(p, u)?,
                 };
                 // Stop shadow rays just short of the emitting surface itself.
-                let distance = s.distance * (1.0 - 1e-4);
+                let mut distance = s.distance * (1.0 - 1e-4);
+                if a.shape.is_mesh() {
+                    // A mesh's shadow rays test the mesh itself (other parts
+                    // of it may hide the point): a ray leaving a surface
+                    // starts up to `surface_epsilon(p)` off `p`, which moves
+                    // its end by as much; pulled back by twice that over the
+                    // light's |cos|, the end stays in front of the sampled
+                    // triangle (at least half the distance is kept).
+                    let cos_light = s.n.dot(s.wi).abs().max(1e-3);
+                    distance = (distance - 2.0 * crate::world::surface_epsilon(p) / cos_light).max(0.5 * s.distance);
+                }
                 Some(LightSample { wi: s.wi, distance, li: s.li, pdf: s.pdf, is_delta: false })
             }
             Light::Environment(e) => {

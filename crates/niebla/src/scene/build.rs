@@ -16,7 +16,8 @@ use crate::geometry::{
 };
 use crate::integrator::IntegratorSettings;
 use crate::light::{
-    AreaLight, AreaMotion, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, PointLight, SpotLight,
+    AreaLight, AreaMotion, AreaShape, ConstantLight, DirectionalLight, EnvironmentMap, Light, MeshLight, PointLight,
+    SpotLight,
 };
 use crate::math::{Frame, Vec3};
 use crate::medium::MediumId;
@@ -284,8 +285,22 @@ fn build_with_loaders(
                         })?;
                         AreaShape::Disk(Disk::new(t))
                     }
-                    GeometryDesc::Box(_) | GeometryDesc::Mesh(_) => {
-                        return Err(err(&shape_path, "an area light is a rectangle, a disk or a sphere".into()))
+                    GeometryDesc::Mesh(d) => {
+                        let t = build_transform(&d.to_world).ok_or_else(|| {
+                            err(&format!("{shape_path}.to_world"), "transform is singular (zero scale?)".into())
+                        })?;
+                        let instance = meshes.instance(d, t, false, &shape_path, source, base_dir, &mut budget)?;
+                        let what = d.file.as_ref().map_or(String::new(), |f| format!("{f}: "));
+                        let mesh = MeshLight::new(instance).ok_or_else(|| {
+                            err(
+                                &shape_path,
+                                format!("{what}an emitting mesh must have a positive, finite area (all its triangles are degenerate)"),
+                            )
+                        })?;
+                        AreaShape::Mesh(std::sync::Arc::new(mesh))
+                    }
+                    GeometryDesc::Box(_) => {
+                        return Err(err(&shape_path, "an area light is a rectangle, a disk, a sphere or a mesh".into()))
                     }
                 };
                 let mut light = AreaLight::new(area_shape, a.radiance.to_rgb(), a.two_sided)
@@ -295,6 +310,7 @@ fn build_with_loaders(
                     AreaShape::Sphere(s) => Shape::Sphere(*s),
                     AreaShape::Rectangle(r) => Shape::Rectangle(*r),
                     AreaShape::Disk(d) => Shape::Disk(*d),
+                    AreaShape::Mesh(m) => Shape::Mesh(m.instance.clone()),
                 };
                 // A moving emitter: the surface rays hit and the light
                 // sampled move together (the same poses).
@@ -307,7 +323,7 @@ fn build_with_loaders(
                                 Motion::Sphere { end, .. } => AreaMotion::Sphere(*end),
                                 Motion::Rectangle(t) | Motion::Disk(t) => AreaMotion::Transform(*t),
                                 Motion::Box { .. } | Motion::Mesh(..) => {
-                                    unreachable!("area lights are not boxes or meshes")
+                                    unreachable!("area lights are not boxes, and validation refuses moving meshes")
                                 }
                             }));
                             // Sampling uses the interpolated pose from time 0.
@@ -316,7 +332,7 @@ fn build_with_loaders(
                                     Shape::Sphere(s) => AreaShape::Sphere(s),
                                     Shape::Rectangle(r) => AreaShape::Rectangle(r),
                                     Shape::Disk(d) => AreaShape::Disk(d),
-                                    _ => light.shape,
+                                    _ => light.shape.clone(),
                                 };
                             }
                         }

@@ -18,7 +18,7 @@ use crate::math::{Vec2, Vec3};
 
 /// What makes two mesh shapes share their mesh: the file, the OBJ object
 /// and the two options that change the data.
-type MeshKey = (PathBuf, Option<String>, bool, bool, bool);
+type MeshKey = (PathBuf, Option<String>, bool, bool, bool, bool);
 
 /// A loaded mesh and whether it is closed (checked once per mesh).
 #[derive(Clone)]
@@ -68,8 +68,14 @@ impl MeshLoader {
         let loaded = match &desc.file {
             Some(file) => {
                 let full = base_dir.join(file);
-                let key =
-                    (full.clone(), desc.object.clone(), desc.flip_normals, desc.face_normals, desc.flip_tex_coords);
+                let key = (
+                    full.clone(),
+                    desc.object.clone(),
+                    desc.flip_normals,
+                    desc.face_normals,
+                    desc.flip_tex_coords,
+                    desc.compute_normals,
+                );
                 let field = format!("{path}.file");
                 match self.cache.get(&key) {
                     Some(l) => {
@@ -140,10 +146,38 @@ fn inline_error(e: niebla_mesh::MeshError, path: &str, source: &str) -> SceneErr
     }
 }
 
+/// Vertex normals from the triangles around each vertex, weighted by the
+/// triangle's angle at the vertex (Thuermer and Wuethrich 1998), the winding's
+/// unit normal `(p1 - p0) x (p2 - p0)` of each triangle with area; a vertex
+/// without any gets `(1, 0, 0)` (Mitsuba 3's `recompute_vertex_normals`).
+fn angle_weighted_normals(positions: &[[f32; 3]], indices: &[[u32; 3]]) -> Vec<[f32; 3]> {
+    use glam::DVec3;
+    let p = |i: u32| DVec3::from(positions[i as usize].map(f64::from));
+    let mut sums = vec![DVec3::ZERO; positions.len()];
+    for tri in indices {
+        let v = tri.map(p);
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        if !(n.length_squared() > 0.0) || !n.is_finite() {
+            continue;
+        }
+        let n = n.normalize();
+        for j in 0..3 {
+            let (a, b) = ((v[(j + 1) % 3] - v[j]).normalize(), (v[(j + 2) % 3] - v[j]).normalize());
+            let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+            sums[tri[j] as usize] += n * angle;
+        }
+    }
+    sums.into_iter()
+        .map(|s| if s.length_squared() > 0.0 { s.normalize().as_vec3().to_array() } else { [1.0, 0.0, 0.0] })
+        .collect()
+}
+
 /// The renderer's mesh from checked mesh data, with the shape's options.
 fn load(mut data: MeshData, desc: &MeshDesc, bytes: u64) -> Result<Loaded, String> {
     if desc.face_normals {
         data.normals = None;
+    } else if desc.compute_normals && data.normals.is_none() {
+        data.normals = Some(angle_weighted_normals(&data.positions, &data.indices));
     }
     if desc.flip_tex_coords {
         if let Some(uvs) = &mut data.uvs {

@@ -1037,13 +1037,13 @@ fn validate_light(desc: &SceneDesc, base: &str, light: &LightDesc) -> Check {
         LightDesc::Area(a) => {
             let shape = format!("{base}.shape");
             if matches!(a.shape.geometry, GeometryDesc::Box(_)) {
-                return fail(format!("{shape}.type"), "an area light is a rectangle or a sphere, got box");
-            }
-            if matches!(a.shape.geometry, GeometryDesc::Mesh(_)) {
                 return fail(
                     format!("{shape}.type"),
-                    "an area light is a rectangle or a sphere, got mesh (emitting meshes are not supported yet)",
+                    "an area light is a rectangle, a disk, a sphere or a mesh, got box (write it as a mesh)",
                 );
+            }
+            if matches!(a.shape.geometry, GeometryDesc::Mesh(_)) && a.shape.motion.is_some() {
+                return fail(format!("{shape}.motion"), "an emitting mesh cannot move (motion is not supported there)");
             }
             if a.shape.interior.is_some() || a.shape.exterior.is_some() || a.shape.bsdf != BsdfDesc::Null {
                 return fail(shape, "an area light's shape takes no `interior`, `exterior` or `bsdf` (it is black)");

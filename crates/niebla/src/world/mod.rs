@@ -244,9 +244,17 @@ impl Scene {
     }
 
     /// The object that is the surface of area light `light` (an index into
-    /// [`Scene::lights`]), if any.
+    /// [`Scene::lights`]), which a shadow ray toward a sampled point of that
+    /// light may pass through; `None` for other lights and for a mesh light,
+    /// whose other parts can hide a sampled point (so its shadow rays test
+    /// it like any surface and stop just short of the point).
     #[inline]
     pub fn light_object(&self, light: usize) -> Option<u32> {
+        if let Some(crate::light::Light::Area(a)) = self.lights.get(light) {
+            if a.shape.is_mesh() {
+                return None;
+            }
+        }
         self.objects.iter().position(|o| o.emitter == Some(light as u32)).map(|i| i as u32)
     }
 
@@ -308,7 +316,7 @@ impl Scene {
     pub fn emitted_radiance(&self, hit: &Hit, w_out: Vec3) -> Option<(Rgb, u32)> {
         let index = self.object(hit).emitter?;
         match &self.lights[index as usize] {
-            crate::light::Light::Area(a) => Some((a.le(hit.surface.n, w_out), index)),
+            crate::light::Light::Area(a) => Some((a.le(a.shape.front_normal(&hit.surface), w_out), index)),
             _ => None,
         }
     }

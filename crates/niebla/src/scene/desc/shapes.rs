@@ -134,6 +134,14 @@ pub struct MeshDesc {
     /// normals (Mitsuba 3's `face_normals`). Default false.
     #[serde(default)]
     pub face_normals: bool,
+    /// Give a mesh without vertex normals (and without `face_normals`)
+    /// smooth ones: at each vertex the unit normals of the triangles
+    /// around it weighted by their angles there (Thuermer and Wuethrich
+    /// 1998, "Computing vertex normals from polygonal facets"), computed in
+    /// object space from the file's winding before `flip_normals`, as Mitsuba
+    /// 3 does for OBJ and PLY files without normals. Default false.
+    #[serde(default)]
+    pub compute_normals: bool,
     /// Replace every vertex uv `(u, v)` by `(u, 1 - v)` (Mitsuba 3's
     /// `flip_tex_coords`; meshes without uvs are unaffected). Default false.
     #[serde(default)]

@@ -1,7 +1,7 @@
 //! `<shape>`: `sphere`, `cube`, `rectangle`, `disk`, `obj`, `ply` (with their
 //! `to_world`, bsdf, `interior`/`exterior` media and an `area` emitter) into
-//! niebla shapes, or into an area light for an emitting rectangle, disk or
-//! sphere.
+//! niebla shapes, or into an area light for an emitting shape (an `obj`,
+//! `ply` or `cube` becomes a mesh light).
 
 use serde_json::{json, Map, Value};
 
@@ -102,6 +102,8 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     let mut shape = Map::new();
     // Mitsuba's flip_tex_coords (default true for OBJ, false for PLY).
     let mut flip_tex_coords = false;
+    // An obj or ply file read by the importer (its full path).
+    let mut mesh_file = None;
     match t {
         "sphere" => {
             let center = p.vec3("center")?.unwrap_or([0.0; 3]);
@@ -140,7 +142,8 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             }
         }
         "obj" | "ply" => {
-            let (file, _) = c.file(&p, "filename")?;
+            let (file, full) = c.file(&p, "filename")?;
+            mesh_file = Some(full);
             shape.insert("type".into(), json!("mesh"));
             shape.insert("file".into(), json!(file));
             if !is_identity(&m) {
@@ -155,6 +158,8 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
                 // Vertex normals (if the file has them) shade as in Mitsuba 3:
                 // about the shading normal also where `wo` lies behind it.
                 shape.insert("shading_normal_backside".into(), json!("mitsuba"));
+                // A file without normals gets Mitsuba's angle-weighted ones.
+                shape.insert("compute_normals".into(), json!(true));
             }
             flip_tex_coords = p.boolean("flip_tex_coords")?.unwrap_or(t == "obj");
         }
@@ -204,7 +209,7 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             if flip {
                 shape.insert("flip_normals".into(), json!(true));
             }
-        } else if is_axis_aligned(&m) && !flip {
+        } else if is_axis_aligned(&m) && !flip && emitters.is_empty() {
             shape.insert("type".into(), json!("box"));
             shape.insert("min".into(), json!(point(&m, [-1.0; 3])));
             shape.insert("max".into(), json!(point(&m, [1.0; 3])));
@@ -239,11 +244,14 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         }
         let radiance = ep.color("radiance")?.unwrap_or([1.0; 3]);
         ep.finish()?;
-        if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "disk" | "sphere")) {
-            return Err(p.error(
-                "an area emitter on this shape is not supported (niebla's area lights are rectangles, disks and \
-                 spheres)",
-            ));
+        if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "disk" | "sphere" | "mesh")) {
+            return Err(p.error("an area emitter on this shape is not supported"));
+        }
+        // The surface's options do not apply to a light.
+        shape.remove("tangent_frame");
+        shape.remove("flip_tex_coords");
+        if let Some(full) = &mesh_file {
+            check_emitting_mesh(&p, full, &m)?;
         }
         let black = bsdf == json!({"type": "diffuse", "reflectance": 0.0});
         if !black {
@@ -268,6 +276,42 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
     shape.extend(media);
     shape.insert("bsdf".into(), bsdf);
     c.shapes.push(Value::Object(shape));
+    Ok(())
+}
+
+/// Files larger than this (estimated bytes in memory) are not read by the
+/// importer's area check; the scene builder still refuses them without area.
+const EMITTING_MESH_CHECK_BYTES: u64 = 256 << 20;
+
+/// An error at the shape's line when the emitting mesh file `full` cannot be
+/// read or has no area once placed by `m` (Mitsuba 3 would sample nothing).
+fn check_emitting_mesh(p: &Props, full: &std::path::Path, m: &Mat4) -> Result<(), SceneError> {
+    let options = niebla_mesh::MeshReadOptions { object: None, max_bytes: Some(EMITTING_MESH_CHECK_BYTES) };
+    let data = match niebla_mesh::read_mesh(full, &options) {
+        Ok(data) => data,
+        Err(niebla_mesh::MeshError::TooLarge { .. }) => return Ok(()),
+        Err(e) => return Err(p.error(format!("the emitting mesh cannot be read: {e}"))),
+    };
+    let world = |i: u32| point(m, data.positions[i as usize].map(f64::from));
+    let area: f64 = data
+        .indices
+        .iter()
+        .map(|&[a, b, c]| {
+            let (a, b, c) = (world(a), world(b), world(c));
+            let (e1, e2) = ([0, 1, 2].map(|k| b[k] - a[k]), [0, 1, 2].map(|k| c[k] - a[k]));
+            let cross = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+            0.5 * norm(cross)
+        })
+        .filter(|a| a.is_finite())
+        .sum();
+    if !(area > 0.0) {
+        return Err(p.error(format!(
+            "an area emitter needs a mesh with a positive area; {} has {} triangles, all without area once placed \
+             by to_world",
+            full.display(),
+            data.indices.len()
+        )));
+    }
     Ok(())
 }
 

@@ -821,3 +821,44 @@ fn rotate_keeps_a_non_unit_axis_as_mitsuba() {
     assert_eq!(placed(r#"y="1""#), json!({"rotate_y": 30.0}));
     assert!(placed(r#"y="2""#).get("matrix").is_some());
 }
+
+/// An `area` emitter on an `obj` becomes a mesh light (Mitsuba's normals
+/// computed where the file has none); on one whose triangles have no area
+/// it is an error at the shape's line; a `cube` emitter is a 12-triangle
+/// mesh light (not a box).
+#[test]
+fn emitting_meshes_become_mesh_lights() {
+    let dir = std::env::temp_dir().join(format!("niebla_mitsuba_meshemit_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(dir.join("flat.obj"), "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n").unwrap();
+    let run = |shape: &str| {
+        let text = format!("<scene version=\"3.0.0\">\n{SENSOR}\n{shape}\n</scene>");
+        import_mitsuba_str(&text, "t.xml", &dir, &[])
+    };
+    let s =
+        run(r#"<shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_normals" value="true"/>
+        <emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>"#)
+        .unwrap()
+        .scene;
+    let light = &s["lights"][0];
+    assert_eq!(light["type"], json!("area"));
+    assert_eq!(light["radiance"], json!([1.0, 2.0, 3.0]));
+    assert_eq!(light["shape"]["type"], json!("mesh"));
+    assert_eq!(light["shape"]["flip_normals"], json!(true));
+    assert_eq!(light["shape"]["compute_normals"], json!(true));
+    assert!(s["shapes"].as_array().is_none_or(|a| a.is_empty()));
+    crate::scene::build_scene(&crate::scene::parse_scene_str(&s.to_string(), "t").unwrap(), "t", &dir).unwrap();
+    let e = run(r#"<shape type="obj"><string name="filename" value="flat.obj"/>
+        <emitter type="area"/></shape>"#)
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("t.xml:8: <shape type=\"obj\">") && e.contains("positive area") && e.contains("flat.obj"),
+        "{e}"
+    );
+    let s = run(r#"<shape type="cube"><emitter type="area"/></shape>"#).unwrap().scene;
+    assert_eq!(s["lights"][0]["shape"]["type"], json!("mesh"));
+    assert_eq!(s["lights"][0]["shape"]["indices"].as_array().unwrap().len(), 12);
+    let _ = std::fs::remove_dir_all(&dir);
+}
