@@ -128,6 +128,16 @@ pub fn run(scene: Option<&Path>, defines: &[(String, String)]) -> Result<(), Cli
     Ok(())
 }
 
+/// `x` with four decimals, without the sign of a value that rounds to zero
+/// (so a rotation's zero entries print `0.0000`, not `-0.0000`).
+fn fixed4(x: f32) -> String {
+    let text = format!("{x:.4}");
+    match text.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+        _ => text,
+    }
+}
+
 /// How `niebla info` names a shape: its type, with a mesh's sizes and a
 /// sphere's rotation (row-major, local to world) if it has one; a moving
 /// shape as "moving" and its type (its bounds cover the shutter).
@@ -140,7 +150,7 @@ fn shape_kind(shape: &niebla::geometry::Shape) -> String {
                 let rows = (0..3)
                     .map(|i| {
                         let row = r.row(i);
-                        format!("[{:.4}, {:.4}, {:.4}]", row.x, row.y, row.z)
+                        format!("[{}, {}, {}]", fixed4(row.x), fixed4(row.y), fixed4(row.z))
                     })
                     .collect::<Vec<_>>();
                 format!("sphere (uv frame turned by rotation [{}])", rows.join(", "))
@@ -159,5 +169,19 @@ fn shape_kind(shape: &niebla::geometry::Shape) -> String {
             niebla::limits::format_bytes(m.mesh.memory_bytes() as u64)
         ),
         Shape::Moving(m) => format!("moving {} (bounds over the shutter)", shape_kind(&m.at_zero)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fixed4;
+
+    #[test]
+    fn values_that_round_to_zero_print_without_a_sign() {
+        assert_eq!(fixed4(-0.0), "0.0000");
+        assert_eq!(fixed4(-4e-5), "0.0000");
+        assert_eq!(fixed4(-6e-5), "-0.0001");
+        assert_eq!(fixed4(0.5), "0.5000");
+        assert_eq!(fixed4(-1.0), "-1.0000");
     }
 }

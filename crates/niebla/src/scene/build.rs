@@ -406,7 +406,10 @@ fn build_with_loaders(
         scene,
         settings,
         integrator_spec: desc.render.integrator.clone(),
-        warnings: unused_media_warnings(desc, source),
+        warnings: unused_media_warnings(desc, source)
+            .into_iter()
+            .chain(light_rotation_warnings(desc, source))
+            .collect(),
     })
 }
 
@@ -596,6 +599,26 @@ pub fn unused_media_warnings(desc: &SceneDesc, source: &str) -> Vec<String> {
         .collect()
 }
 
+/// Warnings (file, field) for area lights whose sphere has a `"rotation"`:
+/// it turns only the sphere's uv frame, which a light's uniform radiance
+/// does not use, so it changes nothing in the image.
+fn light_rotation_warnings(desc: &SceneDesc, source: &str) -> Vec<String> {
+    desc.lights
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| match l {
+            LightDesc::Area(a) => match &a.shape.geometry {
+                GeometryDesc::Sphere(s) if s.rotation.is_some() => Some(format!(
+                    "{source}: lights[{i}].shape.rotation: has no effect on an area light (the rotation turns only a \
+                     sphere's uv frame, and a light's radiance is uniform); it can be removed"
+                )),
+                _ => None,
+            },
+            _ => None,
+        })
+        .collect()
+}
+
 /// Give each medium-bounding shape without an explicit `exterior` the medium
 /// of the innermost other closed shape that contains its whole bounding box,
 /// else the ambient medium (the same rule that places the camera; see
@@ -725,4 +748,34 @@ pub(super) fn build_phase(
         PhaseDesc::Fog => PhaseFunction::fog(),
         PhaseDesc::MieFog => PhaseFunction::mie_fog(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::parse_scene_str;
+
+    /// A turned sphere light renders as an unturned one and is named in a
+    /// warning; a light without `rotation` gets none.
+    #[test]
+    fn a_sphere_lights_rotation_is_named_in_a_warning() {
+        let scene = |rotation: &str| {
+            format!(
+                r#"{{"version": 1,
+                "camera": {{"type": "perspective", "position": [0, 0, 5], "target": [0, 0, 0], "width": 8, "height": 8}},
+                "lights": [{{"type": "area", "radiance": 1,
+                             "shape": {{"type": "sphere", "center": [0, 0, 0], "radius": 1{rotation}}}}}]}}"#
+            )
+        };
+        let turned = scene(r#", "rotation": {"rotate_x": 30}"#);
+        let built = build_scene(&parse_scene_str(&turned, "s.json").unwrap(), "s.json", ".".as_ref()).unwrap();
+        assert_eq!(built.warnings.len(), 1, "{:?}", built.warnings);
+        assert!(
+            built.warnings[0].starts_with("s.json: lights[0].shape.rotation: has no effect"),
+            "{:?}",
+            built.warnings
+        );
+        let plain = build_scene(&parse_scene_str(&scene(""), "s.json").unwrap(), "s.json", ".".as_ref()).unwrap();
+        assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
+    }
 }

@@ -24,10 +24,13 @@ impl LightDesc {
     pub const TYPES: &'static [&'static str] = &["point", "spot", "directional", "constant", "area", "envmap"];
 }
 
-/// An area light: a `rectangle`, `disk` or `sphere` (the shape syntax of
-/// `shapes`, without media or bsdf) emitting uniform `radiance` (W/(sr m^2))
-/// from its front (a rectangle's or disk's local +z side, a sphere's
-/// outside), or from both sides of a rectangle or disk with `two_sided`. Its surface is black: it absorbs what hits it.
+/// An area light: a `rectangle`, `disk`, `sphere` or `mesh` (the shape
+/// syntax of `shapes`, without media or bsdf) emitting uniform `radiance`
+/// (W/(sr m^2)) from its front (a rectangle's or disk's local +z side, a
+/// sphere's outside, a mesh's shading-normal side as in Mitsuba 3), or from
+/// both sides of a rectangle or disk with `two_sided`. Its surface is black:
+/// it absorbs what hits it. A sphere's `rotation` has no effect here (a
+/// warning says so).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AreaLightDesc {
     /// The emitting shape.

@@ -247,9 +247,11 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
         if !matches!(shape.get("type").and_then(Value::as_str), Some("rectangle" | "disk" | "sphere" | "mesh")) {
             return Err(p.error("an area emitter on this shape is not supported"));
         }
-        // The surface's options do not apply to a light.
+        // The surface's options do not apply to a light (nor a sphere's uv
+        // rotation: a light's radiance is uniform).
         shape.remove("tangent_frame");
         shape.remove("flip_tex_coords");
+        shape.remove("rotation");
         if let Some(full) = &mesh_file {
             check_emitting_mesh(&p, full, &m)?;
         }
