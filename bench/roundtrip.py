@@ -84,6 +84,12 @@ def structural_differences(orig: dict, conv: dict) -> list:
             for k in ("min", "max", "center", "radius"):
                 if k in a:
                     same(a[k], b[k], f"shapes[{i}].{k}")
+            ra, rb = a.get("rotation") or {}, b.get("rotation") or {}
+            if set(ra) != set(rb):
+                out.append(f"shapes[{i}].rotation: {ra} vs {rb}")
+            else:
+                for k in ra:
+                    same(ra[k], rb[k], f"shapes[{i}].rotation.{k}")
             if "to_world" in a:
                 ta, tb = a["to_world"], b.get("to_world", {})
                 for k in set(ta) | set(tb):
@@ -95,11 +101,49 @@ def structural_differences(orig: dict, conv: dict) -> list:
         for i, (a, b) in enumerate(zip(ol, cl)):
             for k in set(a) - {"type"}:
                 va, vb = a[k], b.get(k)
+                if k == "shape":
+                    out += _light_shape_differences(va, vb, f"lights[{i}].shape")
+                    continue
+                if k == "two_sided":
+                    if bool(va) != bool(vb):
+                        out.append(f"lights[{i}].two_sided: {va} vs {vb}")
+                    continue
                 if isinstance(va, (int, float)) and isinstance(vb, list):
                     va = [va] * 3
                 if isinstance(vb, (int, float)) and isinstance(va, list):
                     vb = [vb] * 3
                 same(va, vb, f"lights[{i}].{k}")
+    return out
+
+
+def _light_shape_differences(a: dict, b: dict, where: str) -> list:
+    """What differs between an area light's shape and the one read back
+    (type, sphere center and radius, to_world, a mesh's file name and its
+    flip_normals and face_normals; a sphere light's `rotation` has no effect
+    and is not written)."""
+    out = []
+    f32 = lambda v: np.array(v, dtype=np.float32)
+    if a["type"] != b["type"]:
+        return [f"{where}.type: {a['type']} vs {b['type']}"]
+    for k in ("center", "radius"):
+        if k in a and not np.array_equal(f32(a[k]), f32(b.get(k))):
+            out.append(f"{where}.{k}: {a[k]} vs {b.get(k)}")
+    ta, tb = a.get("to_world") or {}, b.get("to_world") or {}
+    for k in set(ta) | set(tb):
+        default = 1.0 if k == "scale" else 0.0
+        va, vb = f32(ta.get(k, default)), f32(tb.get(k, default))
+        if k == "scale":
+            va, vb = np.broadcast_to(va, 3), np.broadcast_to(vb, 3)
+        if k == "translate":
+            va, vb = np.broadcast_to(va, 3), np.broadcast_to(vb, 3)
+        if not np.array_equal(va, vb):
+            out.append(f"{where}.to_world.{k}: {ta.get(k)} vs {tb.get(k)}")
+    if a["type"] == "mesh":
+        if os.path.basename(a["file"]) != os.path.basename(b.get("file", "")):
+            out.append(f"{where}.file: {a['file']} vs {b.get('file')}")
+        for k in ("flip_normals", "face_normals"):
+            if bool(a.get(k)) != bool(b.get(k)):
+                out.append(f"{where}.{k}: {a.get(k)} vs {b.get(k)}")
     return out
 
 
