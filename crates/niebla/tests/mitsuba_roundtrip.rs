@@ -761,7 +761,7 @@ const AREA_JSON: &str = r#"{
    "radiance": [2, 4, 6]},
   {"type": "area", "shape": {"type": "sphere", "center": [0.1, 1.6, -0.3], "radius": 0.12}, "radiance": 20},
   {"type": "area", "shape": {"type": "mesh", "file": "tent.obj", "flip_normals": true, "compute_normals": true,
-   "to_world": {"scale": 0.6, "rotate_y": 20, "translate": [0.2, 2.4, 0.4]}}, "radiance": [5, 5, 4]},
+   "to_world": {"scale": 0.6, "rotate_y": 20, "translate": [0.2, 2.1, 0.4]}}, "radiance": [5, 5, 4]},
   {"type": "area", "shape": {"type": "mesh", "file": "lowpoly_sphere.obj", "face_normals": true,
    "to_world": {"scale": 0.2, "rotate_x": -70, "translate": [-1.6, 1.3, 0.6]}}, "radiance": [3, 2, 1]},
   {"type": "area", "shape": {"type": "mesh", "file": "lowpoly_sphere.obj",
@@ -904,7 +904,7 @@ const AREA_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
     <transform name="to_world">
       <scale value="0.6, 0.6, 0.6"/>
       <rotate x="0.0" y="1.0" z="0.0" angle="20.0"/>
-      <translate value="0.2, 2.4, 0.4"/>
+      <translate value="0.2, 2.1, 0.4"/>
     </transform>
     <boolean name="flip_normals" value="true"/>
     <bsdf type="diffuse">
