@@ -36,6 +36,9 @@ an error rather than a silent approximation:
   media by reference;
 - lights: `point`, `spot` (look_at from position to target), `directional`,
   `constant`: the same parameters, since niebla follows Mitsuba's radiometry;
+  `area` lights (`rectangle`, `disk`, `sphere`, or a `mesh` from an OBJ or
+  PLY file) as the shape with a black `diffuse` bsdf and an `area` emitter
+  (see `area_light`; not `two_sided`, which Mitsuba's emitter lacks);
 - the camera's medium: niebla finds it (innermost closed shape with an
   interior containing the camera, else `ambient_medium`); Mitsuba needs it on
   the sensor, so it is computed the same way here.
@@ -167,15 +170,22 @@ def niebla_transform_ops(t):
 def _sphere_ops(s):
     """A sphere with a `rotation` (which turns its uvs and dp/du) as Mitsuba's
     unit sphere placed by scale (its radius), the rotation (about x, then y,
-    then z, or its 3x3 matrix) and translate (its center)."""
+    then z, or its 3x3 matrix) and translate (its center). niebla's importer
+    reads the angles back as written (niebla composes them in float32 as
+    from the JSON file) and a matrix as the same float32 rows."""
     r, ops = float(s["radius"]), []
-    ops.append(("scale", [r, r, r]))
     rot = s["rotation"]
     if "matrix" in rot:
+        # niebla's float32 radius and rows: the importer divides the f64
+        # matrix by its scale (a few f64 rounding steps), which rounds back
+        # to exactly these float32 values.
+        r = float(np.float32(r))
+        ops.append(("scale", [r, r, r]))
         m = np.eye(4)
-        m[:3, :3] = np.array(rot["matrix"], dtype=float)
+        m[:3, :3] = np.array(rot["matrix"], dtype=np.float32).astype(float)
         ops.append(("matrix", m))
     else:
+        ops.append(("scale", [r, r, r]))
         for axis, v in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0]), ("z", [0.0, 0.0, 1.0])):
             deg = rot.get("rotate_" + axis, 0.0)
             if deg:
@@ -495,6 +505,79 @@ def bsdf(mi, b, scene_dir, field, shape, nested=False):
     raise Unsupported(f"{field}: bsdf {kind!r}")
 
 
+def _mesh_has_normals(path):
+    """Whether an OBJ (`vn` lines) or PLY (an `nx` vertex property) file
+    holds vertex normals."""
+    with open(path, "rb") as f:
+        if path.lower().endswith(".ply"):
+            header = b""
+            for line in f:
+                header += line
+                if line.strip() == b"end_header":
+                    break
+            return b" nx" in header
+        return any(line.startswith(b"vn ") for line in f)
+
+
+def _mesh_light_shape(mi, s, scene_dir, field):
+    """A niebla mesh (from an `.obj` or `.ply` file) as Mitsuba's `obj` or
+    `ply` shape that niebla's importer reads back as the same mesh: the file,
+    `to_world`, `flip_normals` and `face_normals`. The importer gives a mesh
+    without `face_normals` Mitsuba's computed vertex normals
+    (`compute_normals`), so a niebla mesh without them is converted only when
+    its file has vertex normals of its own (where the key changes nothing)."""
+    if s.get("file") is None:
+        raise Unsupported(f"{field}: an inline mesh (Mitsuba's XML reads meshes from files)")
+    for k in ("object", "uvs", "allow_open", "motion"):
+        if s.get(k):
+            raise Unsupported(f"{field}.{k} on an emitting mesh")
+    path = os.path.join(scene_dir, s["file"])
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in (".obj", ".ply"):
+        raise Unsupported(f"{field}.file: {s['file']!r} is neither .obj nor .ply")
+    face_normals = bool(s.get("face_normals", False))
+    if not face_normals and not s.get("compute_normals", False) and not _mesh_has_normals(path):
+        raise Unsupported(f"{field}: a mesh without vertex normals and without \"compute_normals\": true "
+                          "(Mitsuba computes vertex normals for it)")
+    d = {"type": ext[1:], "filename": path}
+    if s.get("to_world"):
+        d["to_world"] = placement(mi, niebla_transform_ops(s["to_world"]))
+    if s.get("flip_normals"):
+        d["flip_normals"] = True
+    if face_normals:
+        d["face_normals"] = True
+    return d
+
+
+def area_light(mi, l, scene_dir, field):
+    """A niebla `area` light as a Mitsuba shape holding an `area` emitter
+    with the same `radiance` (both renderers emit from the shape's front:
+    a rectangle's or disk's local +z side, a sphere's outside, a mesh's
+    shading-normal side). The shape's bsdf is black `diffuse`, the surface
+    of niebla's lights (which absorb what reaches them). A sphere's
+    `rotation` is left out (it has no effect on a light). `two_sided` has
+    no Mitsuba counterpart (its area emitter emits from the front only)."""
+    if l.get("two_sided"):
+        raise Unsupported(f"{field}.two_sided (Mitsuba's area emitter emits from the front only)")
+    s = l["shape"]
+    t = s["type"]
+    if s.get("motion"):
+        raise Unsupported(f"{field}.shape.motion")
+    if t == "sphere":
+        d = {"type": "sphere", "center": [float(x) for x in s["center"]], "radius": float(s["radius"])}
+    elif t in ("rectangle", "disk"):
+        d = {"type": t}
+        if s.get("to_world"):
+            d["to_world"] = placement(mi, niebla_transform_ops(s["to_world"]))
+    elif t == "mesh":
+        d = _mesh_light_shape(mi, s, scene_dir, f"{field}.shape")
+    else:
+        raise Unsupported(f"{field}.shape: type {t!r}")
+    d["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}
+    d["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": _color(l["radiance"])}}
+    return d
+
+
 def _inside(shape, p):
     t = shape["type"]
     if t == "box":
@@ -620,6 +703,8 @@ def convert(desc: dict, scene_dir: str, spp: int = 16, integrator: str = "auto",
             d = {"type": "directional", "direction": l["direction"], "irradiance": {"type": "rgb", "value": _color(l["irradiance"])}}
         elif t == "constant":
             d = {"type": "constant", "radiance": {"type": "rgb", "value": _color(l["radiance"])}}
+        elif t == "area":
+            d = area_light(mi, l, scene_dir, f"lights[{i}]")
         else:
             raise Unsupported(f"lights[{i}]: type {t!r}")
         out[f"light_{i}"] = d

@@ -3,6 +3,7 @@ bench/mitsuba_xml.py) -> niebla's XML importer, rendered against the
 original.
 
     /work/main/bench/.venv/bin/python bench/roundtrip.py [--niebla PATH] [--spp 16] [--size 32]
+        [--only NAME ...] [--mitsuba N [--mitsuba-spp 256]]
 
 For every scene in bench/scenes/ and scenes/ the converter accepts, writes
 the XML to bench/out/roundtrip/, renders the JSON and the XML with the same
@@ -13,7 +14,10 @@ requires the two images to be bit-identical. It also converts the XML back
 to niebla JSON (`niebla convert`) and requires the camera, depth, media
 coefficients (niebla's float32 sigma_a and sigma_s), phase functions,
 shapes and lights to be the same float32 values as the original's. Scenes
-the converter refuses are listed with its reason. Exit status 1 when a
+the converter refuses are listed with its reason. With `--mitsuba N` each
+converted XML is also rendered N times by Mitsuba 3 (llvm_ad_rgb) and the
+JSON N times by niebla, and the image means are printed with z-scores: the
+converted scene means the same in Mitsuba. Exit status 1 when a
 converted scene fails to load, differs structurally, or renders a different
 image.
 
@@ -84,6 +88,12 @@ def structural_differences(orig: dict, conv: dict) -> list:
             for k in ("min", "max", "center", "radius"):
                 if k in a:
                     same(a[k], b[k], f"shapes[{i}].{k}")
+            ra, rb = a.get("rotation") or {}, b.get("rotation") or {}
+            if set(ra) != set(rb):
+                out.append(f"shapes[{i}].rotation: {ra} vs {rb}")
+            else:
+                for k in ra:
+                    same(ra[k], rb[k], f"shapes[{i}].rotation.{k}")
             if "to_world" in a:
                 ta, tb = a["to_world"], b.get("to_world", {})
                 for k in set(ta) | set(tb):
@@ -95,11 +105,49 @@ def structural_differences(orig: dict, conv: dict) -> list:
         for i, (a, b) in enumerate(zip(ol, cl)):
             for k in set(a) - {"type"}:
                 va, vb = a[k], b.get(k)
+                if k == "shape":
+                    out += _light_shape_differences(va, vb, f"lights[{i}].shape")
+                    continue
+                if k == "two_sided":
+                    if bool(va) != bool(vb):
+                        out.append(f"lights[{i}].two_sided: {va} vs {vb}")
+                    continue
                 if isinstance(va, (int, float)) and isinstance(vb, list):
                     va = [va] * 3
                 if isinstance(vb, (int, float)) and isinstance(va, list):
                     vb = [vb] * 3
                 same(va, vb, f"lights[{i}].{k}")
+    return out
+
+
+def _light_shape_differences(a: dict, b: dict, where: str) -> list:
+    """What differs between an area light's shape and the one read back
+    (type, sphere center and radius, to_world, a mesh's file name and its
+    flip_normals and face_normals; a sphere light's `rotation` has no effect
+    and is not written)."""
+    out = []
+    f32 = lambda v: np.array(v, dtype=np.float32)
+    if a["type"] != b["type"]:
+        return [f"{where}.type: {a['type']} vs {b['type']}"]
+    for k in ("center", "radius"):
+        if k in a and not np.array_equal(f32(a[k]), f32(b.get(k))):
+            out.append(f"{where}.{k}: {a[k]} vs {b.get(k)}")
+    ta, tb = a.get("to_world") or {}, b.get("to_world") or {}
+    for k in set(ta) | set(tb):
+        default = 1.0 if k == "scale" else 0.0
+        va, vb = f32(ta.get(k, default)), f32(tb.get(k, default))
+        if k == "scale":
+            va, vb = np.broadcast_to(va, 3), np.broadcast_to(vb, 3)
+        if k == "translate":
+            va, vb = np.broadcast_to(va, 3), np.broadcast_to(vb, 3)
+        if not np.array_equal(va, vb):
+            out.append(f"{where}.to_world.{k}: {ta.get(k)} vs {tb.get(k)}")
+    if a["type"] == "mesh":
+        if os.path.basename(a["file"]) != os.path.basename(b.get("file", "")):
+            out.append(f"{where}.file: {a['file']} vs {b.get('file')}")
+        for k in ("flip_normals", "face_normals"):
+            if bool(a.get(k)) != bool(b.get(k)):
+                out.append(f"{where}.{k}: {a.get(k)} vs {b.get(k)}")
     return out
 
 
@@ -109,6 +157,11 @@ def main():
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--size", type=int, default=32)
     ap.add_argument("--samplers", nargs="+", default=["independent", "sobol"], choices=["independent", "sobol"])
+    ap.add_argument("--only", nargs="+", metavar="NAME", help="only these scenes (file names without .json)")
+    ap.add_argument("--mitsuba", type=int, default=0, metavar="N",
+                    help="also render each converted XML N times with Mitsuba 3 (llvm_ad_rgb) and the JSON N times "
+                         "with niebla, at --mitsuba-spp each, and print the image means with their z-scores")
+    ap.add_argument("--mitsuba-spp", type=int, default=256)
     a = ap.parse_args()
     import llvm
 
@@ -126,6 +179,8 @@ def main():
     failed = False
     for path in sorted(glob.glob(os.path.join(HERE, "scenes", "*.json")) + glob.glob(os.path.join(ROOT, "scenes", "*.json"))):
         name = os.path.splitext(os.path.basename(path))[0]
+        if a.only and name not in a.only:
+            continue
         try:
             d = n2m.load(path, spp=a.spp)
         except n2m.Unsupported as e:
@@ -186,9 +241,53 @@ def main():
                     print(f"{name}: {sampler}: NOT bit-identical: {100 * same:.1f}% of pixels equal, largest per-pixel "
                           f"relative difference {rel.max():.2e}; image means differ by {100 * mean_rel:.4f}%")
                     failed = True
+            if a.mitsuba:
+                mitsuba_means(a, name, js, xml, out)
         finally:
             os.remove(js)
     sys.exit(1 if failed else 0)
+
+
+MITSUBA_RENDER = """
+import json, sys
+import numpy as np
+sys.path.insert(0, {here!r})
+import llvm
+llvm.use_newest_llvm()
+import mitsuba as mi
+mi.set_variant("llvm_ad_rgb")
+scene = mi.load_file({xml!r})
+means = [np.array(mi.render(scene, spp={spp}, seed=1000 + i), dtype=np.float64)[:, :, :3].mean(axis=(0, 1)).tolist()
+         for i in range({n})]
+print(json.dumps(means))
+"""
+
+
+def mitsuba_means(a, name, js, xml, out):
+    """Image means of `a.mitsuba` Mitsuba renders of the converted XML
+    (another process: llvm_ad_rgb) and as many niebla renders of the JSON,
+    each at `a.mitsuba_spp`, with the z-score of their difference per
+    channel (both sides' standard errors from the spread of the renders)."""
+    code = MITSUBA_RENDER.format(here=HERE, xml=xml, spp=a.mitsuba_spp, n=a.mitsuba)
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    if r.returncode != 0:
+        print(f"{name}: Mitsuba failed: {r.stderr.strip()[-2000:]}")
+        return
+    mit = np.array(json.loads(r.stdout.strip().splitlines()[-1]))
+    nie = []
+    for i in range(a.mitsuba):
+        exr = os.path.join(out, f"{name}_mean_{i}.exr")
+        subprocess.run([a.niebla, "render", js, "--spp", str(a.mitsuba_spp), "--seed", str(i), "--quiet", "-o", exr],
+                       check=True, capture_output=True)
+        nie.append(read_exr(exr).mean(axis=(0, 1)))
+    nie = np.array(nie)
+    n = a.mitsuba
+    se = np.sqrt(mit.var(axis=0, ddof=1) / n + nie.var(axis=0, ddof=1) / n)
+    rel = nie.mean(axis=0) / mit.mean(axis=0) - 1
+    z = (nie.mean(axis=0) - mit.mean(axis=0)) / se
+    print(f"{name}: image means over {n} x {a.mitsuba_spp} spp: niebla (JSON) {np.round(nie.mean(axis=0), 5).tolist()}, "
+          f"Mitsuba (XML) {np.round(mit.mean(axis=0), 5).tolist()}: niebla/Mitsuba - 1 = "
+          f"{' '.join(f'{100 * x:+.2f}%' for x in rel)} (z {' '.join(f'{x:+.2f}' for x in z)})")
 
 
 if __name__ == "__main__":

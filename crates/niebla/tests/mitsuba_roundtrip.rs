@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use niebla::render::{render, RenderOptions};
 use niebla::sampling::SamplerKind;
-use niebla::scene::{build_scene, read_scene_source};
+use niebla::scene::{build_scene, read_scene_source, GeometryDesc, LightDesc, ShadingBacksideDesc};
 
 const SCENE_JSON: &str = r#"{
  "version": 1,
@@ -725,6 +725,227 @@ const ROUGH_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
 </scene>
 "#;
 
+/// Area lights of every shape and turned spheres: a rectangle, a disk, a
+/// sphere and three meshes from OBJ files (an open roof without normals,
+/// turned to emit downward by `flip_normals`, with `compute_normals`; a
+/// sphere mesh with `face_normals`; the same mesh with its file's vertex
+/// normals), a point light between them (the lights keep their order), in
+/// fog; two checkerboarded spheres turned by their `rotation`, one by angles
+/// and one by a matrix (the rotation turns their uvs, so a rotation read
+/// back in other bits would show).
+const AREA_JSON: &str = r#"{
+ "version": 1,
+ "camera": {"type": "perspective", "position": [0.2, 1.5, 4.4], "target": [0.0, 0.9, 0.0], "up": [0, 1, 0],
+            "fov_y": 45, "width": 16, "height": 12},
+ "media": {
+  "fog": {"type": "homogeneous", "sigma_a": 0.03, "sigma_s": 0.25, "phase": {"type": "hg", "g": 0.3}}
+ },
+ "shapes": [
+  {"type": "box", "min": [-2.5, -0.1, -2.0], "max": [2.5, 2.6, 2.0], "interior": "fog", "bsdf": {"type": "null"}},
+  {"type": "rectangle", "to_world": {"scale": 2.4, "rotate_x": -90, "rotate_y": 10, "translate": [0, 0, 0]},
+   "bsdf": {"type": "diffuse", "reflectance": [0.6, 0.55, 0.5]}},
+  {"type": "sphere", "center": [-0.7, 0.4, 0.3], "radius": 0.4,
+   "rotation": {"rotate_x": -63.7, "rotate_y": 21.3, "rotate_z": 117.9},
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "checkerboard", "color0": [0.8, 0.2, 0.1], "color1": 0.6,
+            "scale": [6, 3]}}},
+  {"type": "sphere", "center": [0.7, 0.35, 0.5], "radius": 0.35,
+   "rotation": {"matrix": [[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]]},
+   "bsdf": {"type": "diffuse", "reflectance": {"type": "checkerboard", "color0": 0.9, "color1": [0.1, 0.3, 0.7],
+            "scale": [8, 4]}}}
+ ],
+ "lights": [
+  {"type": "area", "shape": {"type": "rectangle", "to_world": {"scale": [0.5, 0.3, 1], "rotate_x": 100,
+   "rotate_y": -20, "translate": [-0.9, 2.2, -0.6]}}, "radiance": [6, 5, 4]},
+  {"type": "point", "position": [1.2, 1.8, 1.0], "intensity": [0.6, 0.7, 0.9]},
+  {"type": "area", "shape": {"type": "disk", "to_world": {"scale": 0.3, "rotate_y": -35, "translate": [1.3, 1.2, -1.5]}},
+   "radiance": [2, 4, 6]},
+  {"type": "area", "shape": {"type": "sphere", "center": [0.1, 1.6, -0.3], "radius": 0.12}, "radiance": 20},
+  {"type": "area", "shape": {"type": "mesh", "file": "tent.obj", "flip_normals": true, "compute_normals": true,
+   "to_world": {"scale": 0.6, "rotate_y": 20, "translate": [0.2, 2.1, 0.4]}}, "radiance": [5, 5, 4]},
+  {"type": "area", "shape": {"type": "mesh", "file": "lowpoly_sphere.obj", "face_normals": true,
+   "to_world": {"scale": 0.2, "rotate_x": -70, "translate": [-1.6, 1.3, 0.6]}}, "radiance": [3, 2, 1]},
+  {"type": "area", "shape": {"type": "mesh", "file": "lowpoly_sphere.obj",
+   "to_world": {"scale": 0.15, "rotate_y": 30, "translate": [1.6, 0.6, 0.9]}}, "radiance": [1, 3, 2]}
+ ],
+ "render": {"spp": 4, "integrator": {"type": "volpath", "max_depth": 8}}
+}"#;
+
+/// The converter's output for `AREA_JSON` (mesh paths made relative): each
+/// light a shape with a black `diffuse` bsdf and an `area` emitter; the
+/// turned spheres as unit spheres placed by scale, the rotation (`<rotate>`
+/// steps, or a `<matrix>` of niebla's float32 rows) and translate.
+const AREA_XML: &str = r#"<?xml version="1.0" encoding="utf-8"?>
+<scene version="3.0.0">
+  <medium type="homogeneous" id="medium_fog">
+    <phase type="hg">
+      <float name="g" value="0.3"/>
+    </phase>
+    <float name="albedo" value="0.8928571449953835"/>
+    <boolean name="has_spectral_extinction" value="false"/>
+    <float name="sigma_t" value="0.27999999932944775"/>
+  </medium>
+  <integrator type="volpath">
+    <integer name="max_depth" value="9"/>
+  </integrator>
+  <sensor type="perspective">
+    <float name="fov" value="45.0"/>
+    <string name="fov_axis" value="y"/>
+    <transform name="to_world">
+      <lookat origin="0.2, 1.5, 4.4" target="0.0, 0.9, 0.0" up="0.0, 1.0, 0.0"/>
+    </transform>
+    <film type="hdrfilm">
+      <integer name="width" value="16"/>
+      <integer name="height" value="12"/>
+      <rfilter type="box">
+      </rfilter>
+      <string name="pixel_format" value="rgb"/>
+    </film>
+    <sampler type="independent">
+      <integer name="sample_count" value="4"/>
+      <integer name="seed" value="0"/>
+    </sampler>
+  </sensor>
+  <shape type="cube">
+    <transform name="to_world">
+      <matrix value="2.5 0.0 0.0 0.0 0.0 1.35 0.0 1.25 0.0 0.0 2.0 0.0 0.0 0.0 0.0 1.0"/>
+    </transform>
+    <bsdf type="null">
+    </bsdf>
+    <ref name="interior" id="medium_fog"/>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="2.4, 2.4, 2.4"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="-90.0"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="10.0"/>
+      <translate value="0.0, 0.0, 0.0"/>
+    </transform>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.6, 0.55, 0.5"/>
+    </bsdf>
+  </shape>
+  <shape type="sphere">
+    <transform name="to_world">
+      <scale value="0.4, 0.4, 0.4"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="-63.7"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="21.3"/>
+      <rotate x="0.0" y="0.0" z="1.0" angle="117.9"/>
+      <translate value="-0.7, 0.4, 0.3"/>
+    </transform>
+    <bsdf type="diffuse">
+      <texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.8, 0.2, 0.1"/>
+        <rgb name="color1" value="0.6, 0.6, 0.6"/>
+        <transform name="to_uv">
+          <matrix value="3.0 0.0 0.0 0.0 0.0 1.5 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="sphere">
+    <transform name="to_world">
+      <scale value="0.3499999940395355, 0.3499999940395355, 0.3499999940395355"/>
+      <matrix value="0.36000001430511475 0.47999998927116394 -0.800000011920929 0.0 -0.800000011920929 0.6000000238418579 0.0 0.0 0.47999998927116394 0.6399999856948853 0.6000000238418579 0.0 0.0 0.0 0.0 1.0"/>
+      <translate value="0.7, 0.35, 0.5"/>
+    </transform>
+    <bsdf type="diffuse">
+      <texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.9, 0.9, 0.9"/>
+        <rgb name="color1" value="0.1, 0.3, 0.7"/>
+        <transform name="to_uv">
+          <matrix value="4.0 0.0 0.0 0.0 0.0 2.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0"/>
+        </transform>
+      </texture>
+    </bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world">
+      <scale value="0.5, 0.3, 1.0"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="100.0"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="-20.0"/>
+      <translate value="-0.9, 2.2, -0.6"/>
+    </transform>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="6.0, 5.0, 4.0"/>
+    </emitter>
+  </shape>
+  <emitter type="point">
+    <point name="position" value="1.2, 1.8, 1.0"/>
+    <rgb name="intensity" value="0.6, 0.7, 0.9"/>
+  </emitter>
+  <shape type="disk">
+    <transform name="to_world">
+      <scale value="0.3, 0.3, 0.3"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="-35.0"/>
+      <translate value="1.3, 1.2, -1.5"/>
+    </transform>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="2.0, 4.0, 6.0"/>
+    </emitter>
+  </shape>
+  <shape type="sphere">
+    <point name="center" value="0.1, 1.6, -0.3"/>
+    <float name="radius" value="0.12"/>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="20.0, 20.0, 20.0"/>
+    </emitter>
+  </shape>
+  <shape type="obj">
+    <string name="filename" value="tent.obj"/>
+    <transform name="to_world">
+      <scale value="0.6, 0.6, 0.6"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="20.0"/>
+      <translate value="0.2, 2.1, 0.4"/>
+    </transform>
+    <boolean name="flip_normals" value="true"/>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="5.0, 5.0, 4.0"/>
+    </emitter>
+  </shape>
+  <shape type="obj">
+    <string name="filename" value="lowpoly_sphere.obj"/>
+    <transform name="to_world">
+      <scale value="0.2, 0.2, 0.2"/>
+      <rotate x="1.0" y="0.0" z="0.0" angle="-70.0"/>
+      <translate value="-1.6, 1.3, 0.6"/>
+    </transform>
+    <boolean name="face_normals" value="true"/>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="3.0, 2.0, 1.0"/>
+    </emitter>
+  </shape>
+  <shape type="obj">
+    <string name="filename" value="lowpoly_sphere.obj"/>
+    <transform name="to_world">
+      <scale value="0.15, 0.15, 0.15"/>
+      <rotate x="0.0" y="1.0" z="0.0" angle="30.0"/>
+      <translate value="1.6, 0.6, 0.9"/>
+    </transform>
+    <bsdf type="diffuse">
+      <rgb name="reflectance" value="0.0, 0.0, 0.0"/>
+    </bsdf>
+    <emitter type="area">
+      <rgb name="radiance" value="1.0, 3.0, 2.0"/>
+    </emitter>
+  </shape>
+</scene>
+"#;
+
 /// A 6^3 density grid over the smoke box, Mitsuba's `.vol` layout (x fastest).
 fn write_vol(path: &Path) {
     let n = 6u32;
@@ -818,5 +1039,62 @@ fn converted_rough_textured_xml_renders_bit_identically() {
         println!("rough {sampler:?}: image mean {mean:.6}, {differ} of {} pixels differ", a.len());
         assert_eq!(differ, 0, "{sampler:?}: {differ} pixels differ between the rough JSON and its XML");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn converted_area_lights_and_turned_spheres_render_bit_identically() {
+    let dir = temp_dir("area");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mitsuba/data");
+    for f in ["tent.obj", "lowpoly_sphere.obj"] {
+        std::fs::copy(data.join(f), dir.join(f)).unwrap();
+    }
+    std::fs::write(dir.join("scene.json"), AREA_JSON).unwrap();
+    std::fs::write(dir.join("scene.xml"), AREA_XML).unwrap();
+    // The importer reads back seven lights in the JSON's order, and the
+    // spheres' rotations as angles and as a matrix.
+    let source = read_scene_source(&dir.join("scene.xml"), &[]).unwrap_or_else(|e| panic!("{e}"));
+    let json = read_scene_source(&dir.join("scene.json"), &[]).unwrap_or_else(|e| panic!("{e}"));
+    // (The importer gives every mesh without `face_normals` Mitsuba's
+    // normal options; on these lights, whose file has vertex normals or
+    // whose JSON asks for computed ones, they change nothing.)
+    let mitsuba_mesh_options = |mut lights: Vec<LightDesc>| {
+        for light in &mut lights {
+            if let LightDesc::Area(a) = light {
+                if let GeometryDesc::Mesh(m) = &mut a.shape.geometry {
+                    if !m.face_normals {
+                        m.compute_normals = true;
+                        m.shading_normal_backside = ShadingBacksideDesc::Mitsuba;
+                    }
+                }
+            }
+        }
+        lights
+    };
+    assert_eq!(source.desc.lights, mitsuba_mesh_options(json.desc.lights.clone()), "lights read back from the XML");
+    for i in [2, 3] {
+        let (a, b) = (&source.desc.shapes[i].geometry, &json.desc.shapes[i].geometry);
+        assert_eq!(a, b, "shapes[{i}] (a turned sphere) read back from the XML");
+    }
+    for sampler in [SamplerKind::Independent, SamplerKind::Sobol] {
+        let a = render_file(&dir.join("scene.json"), sampler, (16, 12));
+        let b = render_file(&dir.join("scene.xml"), sampler, (16, 12));
+        let mean = a.iter().flatten().map(|&v| v as f64).sum::<f64>() / (3 * a.len()) as f64;
+        assert!(mean > 0.01, "{sampler:?}: the image is (nearly) black: mean {mean}");
+        let differ = a.iter().zip(&b).filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits)).count();
+        println!("area {sampler:?}: image mean {mean:.6}, {differ} of {} pixels differ", a.len());
+        assert_eq!(differ, 0, "{sampler:?}: {differ} pixels differ between the area-light JSON and its XML");
+    }
+    // The turned spheres' rotations show in the image: without them it differs.
+    let unturned = AREA_JSON
+        .replace(r#""rotation": {"rotate_x": -63.7, "rotate_y": 21.3, "rotate_z": 117.9},"#, "")
+        .replace(r#""rotation": {"matrix": [[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]]},"#, "");
+    assert_eq!(unturned.matches("rotation").count(), 0);
+    std::fs::write(dir.join("unturned.json"), unturned).unwrap();
+    let a = render_file(&dir.join("scene.json"), SamplerKind::Independent, (16, 12));
+    let c = render_file(&dir.join("unturned.json"), SamplerKind::Independent, (16, 12));
+    let differ = a.iter().zip(&c).filter(|(p, q)| p != q).count();
+    println!("area: {differ} of {} pixels differ without the spheres' rotations", a.len());
+    assert!(differ > 0, "the spheres' rotations do not show in the image");
     std::fs::remove_dir_all(&dir).ok();
 }

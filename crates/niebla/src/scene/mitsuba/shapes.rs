@@ -121,13 +121,33 @@ pub(super) fn convert_shape<'a>(c: &mut Converter<'a>, node: &'a Node) -> Result
             }
             shape.insert("type".into(), json!("sphere"));
             shape.insert("center".into(), json!(point(&m, center)));
-            shape.insert("radius".into(), json!(radius * s));
             // Mitsuba keeps the rotation of the sphere's to_world: it turns
             // the uvs and dp/du (niebla's "rotation"; the surface is the same).
-            let r = |i: usize, j: usize| m[i][j] / s;
-            if (0..3).any(|i| (0..3).any(|j| (r(i, j) - if i == j { 1.0 } else { 0.0 }).abs() > 1e-6)) {
-                let rows: Vec<[f64; 3]> = (0..3).map(|i| [r(i, 0), r(i, 1), r(i, 2)]).collect();
-                shape.insert("rotation".into(), json!({ "matrix": rows }));
+            // Written as niebla's angles where the XML spells them in niebla's
+            // order (niebla then composes them in f32, as from a JSON scene),
+            // else as the matrix.
+            match sphere_components(&form) {
+                Some((scale, angles)) => {
+                    shape.insert("radius".into(), json!(radius * scale));
+                    if angles.iter().any(|a| *a != 0.0) {
+                        let keys = ["rotate_x", "rotate_y", "rotate_z"];
+                        let rotation: Map<String, Value> = keys
+                            .iter()
+                            .zip(angles)
+                            .filter(|(_, a)| *a != 0.0)
+                            .map(|(k, a)| ((*k).to_string(), json!(a)))
+                            .collect();
+                        shape.insert("rotation".into(), Value::Object(rotation));
+                    }
+                }
+                None => {
+                    shape.insert("radius".into(), json!(radius * s));
+                    let r = |i: usize, j: usize| m[i][j] / s;
+                    if (0..3).any(|i| (0..3).any(|j| (r(i, j) - if i == j { 1.0 } else { 0.0 }).abs() > 1e-6)) {
+                        let rows: Vec<[f64; 3]> = (0..3).map(|i| [r(i, 0), r(i, 1), r(i, 2)]).collect();
+                        shape.insert("rotation".into(), json!({ "matrix": rows }));
+                    }
+                }
             }
         }
         // Its geometry depends on the bsdf (below).
@@ -315,6 +335,20 @@ fn check_emitting_mesh(p: &Props, full: &std::path::Path, m: &Mat4) -> Result<()
         )));
     }
     Ok(())
+}
+
+/// A sphere's `to_world` spelled in niebla's order (`<scale>` with one
+/// positive factor, `<rotate>` about x, y, z, `<translate>`; each optional):
+/// the scale factor and the three angles (degrees, 0 where absent), as
+/// written.
+fn sphere_components(form: &Form) -> Option<(f64, [f64; 3])> {
+    let Form::Components(Value::Object(c)) = form else { return None };
+    let scale = match c.get("scale") {
+        None => 1.0,
+        Some(v) => v.as_f64().filter(|s| *s > 0.0)?,
+    };
+    let angle = |k: &str| c.get(k).map_or(Some(0.0), Value::as_f64);
+    Some((scale, [angle("rotate_x")?, angle("rotate_y")?, angle("rotate_z")?]))
 }
 
 /// `s` when the 3x3 part of `m` is `s` times a rotation (within 1e-6 relative).

@@ -487,37 +487,51 @@ fn anisotropic_roughness_takes_mitsubas_frame() {
 }
 
 /// A sphere's to_world (uniform scale, rotation, translation) becomes its
-/// center, radius and `rotation` (the to_world's linear part over its
-/// scale, row-major): here 2 x a quarter turn about z, moved by (1, 2, 3);
-/// a textured one is imported too. An unturned sphere has no `rotation`.
+/// center, radius and `rotation`: niebla's angles as written when the XML
+/// spells the to_world in niebla's order (scale, rotate about x, y, z,
+/// translate; here a quarter turn about z), else the to_world's linear part
+/// over its scale, row-major (here 2 x an eighth turn about z); both moved
+/// by (1, 2, 3) and textured. An unturned sphere has no `rotation`.
 #[test]
 fn turned_sphere_keeps_its_rotation() {
-    let s = import_with_png(
-        "<shape type=\"sphere\"><point name=\"center\" x=\"1\" y=\"0\" z=\"0\"/><float name=\"radius\" value=\"0.5\"/>\
-         <transform name=\"to_world\"><scale value=\"2\"/><rotate z=\"1\" angle=\"90\"/><translate x=\"1\" y=\"2\" \
-         z=\"3\"/></transform><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/></bsdf></shape>",
-    )
-    .unwrap()
-    .scene;
-    let sphere = &s["shapes"][0];
+    let sphere = |rotate: &str| {
+        import_with_png(&format!(
+            "<shape type=\"sphere\"><point name=\"center\" x=\"1\" y=\"0\" z=\"0\"/><float name=\"radius\" \
+             value=\"0.5\"/><transform name=\"to_world\"><scale value=\"2\"/>{rotate}<translate x=\"1\" y=\"2\" \
+             z=\"3\"/></transform><bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\"/></bsdf>\
+             </shape>"
+        ))
+        .unwrap()
+        .scene
+    };
     let num = |v: &serde_json::Value| v.as_f64().unwrap();
-    let center: Vec<f64> = sphere["center"].as_array().unwrap().iter().map(num).collect();
-    for (a, b) in center.iter().zip([1.0, 4.0, 3.0]) {
-        assert!((a - b).abs() < 1e-12, "{center:?}");
+    let eighth = "<rotate z=\"1\" angle=\"45\"/>";
+    let (scene_angles, scene_matrix) = (sphere("<rotate z=\"1\" angle=\"90\"/>"), sphere(&format!("{eighth}{eighth}")));
+    let (by_angles, by_matrix) = (&scene_angles["shapes"][0], &scene_matrix["shapes"][0]);
+    for s in [by_angles, by_matrix] {
+        let center: Vec<f64> = s["center"].as_array().unwrap().iter().map(num).collect();
+        for (a, b) in center.iter().zip([1.0, 4.0, 3.0]) {
+            assert!((a - b).abs() < 1e-12, "{center:?}");
+        }
+        assert!((num(&s["radius"]) - 1.0).abs() < 1e-15, "{s}");
     }
-    assert_eq!(num(&sphere["radius"]), 1.0);
+    assert_eq!(by_angles["rotation"], json!({"rotate_z": 90.0}));
     let expected = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
     for (i, row) in expected.iter().enumerate() {
         for (j, x) in row.iter().enumerate() {
-            assert!((num(&sphere["rotation"]["matrix"][i][j]) - x).abs() < 1e-12, "{sphere}");
+            assert!((num(&by_matrix["rotation"]["matrix"][i][j]) - x).abs() < 1e-12, "{by_matrix}");
         }
     }
-    let desc = crate::scene::parse_scene_str(&s.to_string(), "t").unwrap();
-    match &desc.shapes[0].geometry {
-        crate::scene::desc::GeometryDesc::Sphere(d) => {
-            assert!(matches!(d.rotation, Some(crate::scene::desc::RotationDesc::Matrix(_))))
+    for (scene, angles) in [(&scene_angles, true), (&scene_matrix, false)] {
+        let desc = crate::scene::parse_scene_str(&scene.to_string(), "t").unwrap();
+        match &desc.shapes[0].geometry {
+            crate::scene::desc::GeometryDesc::Sphere(d) => match d.rotation {
+                Some(crate::scene::desc::RotationDesc::Angles(a)) => assert!(angles && a == [0.0, 0.0, 90.0], "{a:?}"),
+                Some(crate::scene::desc::RotationDesc::Matrix(_)) => assert!(!angles),
+                None => panic!("no rotation"),
+            },
+            other => panic!("{other:?}"),
         }
-        other => panic!("{other:?}"),
     }
     let plain = import(
         "<shape type=\"sphere\"><transform name=\"to_world\"><scale value=\"2\"/><translate x=\"1\"/>\
