@@ -177,9 +177,13 @@ impl MajorantGrid {
             }
         }
 
-        // A step is a compare, an integer add and one plane crossing: the
-        // axis is chosen without a branch (pbrt-v4's DDA does the same
-        // with a table) and the cell's linear index is kept up to date.
+        // The walk keeps each axis' next crossing in its own variable and
+        // the cell's linear index up to date, so that a step is a compare,
+        // an integer add and one plane crossing read from the grid's table
+        // (no division, no conversion, no index recomputation). The axis
+        // is chosen by branches: a branch-free choice through an array of
+        // crossings measured slower (examples/walk_cost.rs).
+        let [mut next_x, mut next_y, mut next_z] = next;
         let mut index = self.cell_index(cell);
         let values = &self.values[..];
         let mut t = t0;
@@ -215,6 +219,7 @@ impl MajorantGrid {
                 // next segment's start; equal values with different bits
                 // are +0 and -0, so an exit at t = 0 takes the cell steps.
                 if t_exit != 0.0 {
+                    next = [next_x, next_y, next_z];
                     // Crossings of the other axes that come first: before
                     // t_exit, or at it for an axis earlier in the tie order.
                     for b in 0..3 {
@@ -245,6 +250,7 @@ impl MajorantGrid {
                     }
                     plane_i[axis] = (w.offset[axis] + exit_plane[axis]).wrapping_add(step[axis]);
                     next[axis] = crossing_plane(axis, plane_i[axis]);
+                    [next_x, next_y, next_z] = next;
                     index = self.cell_index(cell);
                     if t_exit > t {
                         t = t_exit;
@@ -253,8 +259,13 @@ impl MajorantGrid {
                 }
             }
             // The axis whose plane comes first (ties: x, then y, then z).
-            let axis = first_axis(next);
-            let t_next = next[axis];
+            let (axis, t_next) = if next_x <= next_y && next_x <= next_z {
+                (0, next_x)
+            } else if next_y <= next_z {
+                (1, next_y)
+            } else {
+                (2, next_z)
+            };
             let t_end = t_next.min(t1);
             if t_end > t {
                 let max_density = values[index];
@@ -271,7 +282,12 @@ impl MajorantGrid {
             cell[axis] = cell[axis].wrapping_add(step[axis]);
             plane_i[axis] = plane_i[axis].wrapping_add(step[axis]);
             index = index.wrapping_add(index_step[axis]);
-            next[axis] = crossing_plane(axis, plane_i[axis]);
+            let crossed = crossing_plane(axis, plane_i[axis]);
+            match axis {
+                0 => next_x = crossed,
+                1 => next_y = crossed,
+                _ => next_z = crossed,
+            }
         }
     }
 
@@ -314,6 +330,8 @@ impl MajorantGrid {
 /// The axis whose value in `t` is smallest, ties to the lower axis (x, then
 /// y, then z; with a NaN, the choice of `x <= y && x <= z`, else `y <= z`),
 /// computed without branches.
+// The negated comparisons are the point: a NaN must choose as the chain did.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[inline(always)]
 fn first_axis(t: [f32; 3]) -> usize {
     let not_x = !((t[0] <= t[1]) & (t[0] <= t[2])) as usize;
