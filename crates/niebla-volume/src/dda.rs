@@ -131,60 +131,58 @@ impl MajorantGrid {
             return ControlFlow::Continue(());
         }
 
-        // Cell widths.
-        let width: [f32; 3] = std::array::from_fn(|a| (self.bounds_max[a] - self.bounds_min[a]) / self.res[a] as f32);
-        // The ray parameter where it crosses boundary plane `k` of axis `a`
-        // (the plane formula of `plane`'s callers in the DDA: `bounds_min + k
-        // width`, the last plane exactly `bounds_max`).
-        let crossing_plane = |a: usize, k: usize| -> f32 {
-            let plane = if k >= self.res[a] { self.bounds_max[a] } else { self.bounds_min[a] + k as f32 * width[a] };
-            (plane - o[a]) * inv_d[a]
-        };
+        // The grid's constants (the same expressions the walk once
+        // evaluated here, evaluated when the grid was built).
+        let w = &self.walk;
+        // The ray parameter where it crosses the boundary plane at index `i`
+        // of `w.crossing` (plane `i - w.offset[a]` of axis `a`).
+        let crossing_plane = |a: usize, i: usize| -> f32 { (w.crossing[i] - o[a]) * inv_d[a] };
         // Starting cell and the t of the next boundary plane along each axis.
         let mut cell = [0usize; 3];
         let mut next = [f32::INFINITY; 3];
-        // Per axis: the next plane's index, the cell step (+1 or -1 as a
-        // wrapping usize), the steps left before the ray leaves the grid,
-        // and the step of the linear cell index.
-        let mut plane_k = [0usize; 3];
+        // Per axis: the next plane's index in `w.crossing`, the cell step
+        // (+1 or -1 as a wrapping usize), the steps left before the ray
+        // leaves the grid, and the step of the linear cell index.
+        let mut plane_i = [0usize; 3];
         let mut step = [0usize; 3];
         let mut left = [0usize; 3];
-        let stride = [1, self.res[0], self.res[0] * self.res[1]];
         let mut index_step = [0usize; 3];
         for a in 0..3 {
             let p = o[a] + d[a] * t0;
-            let extent = self.bounds_max[a] - self.bounds_min[a];
             // The cell `floor(u)` clamped to the grid; for `u >= 0` the
             // truncating conversion is the floor, and a negative `u` (or
             // NaN) clamps to 0 either way, so no `floor` call is needed.
-            let u = (p - self.bounds_min[a]) / extent * self.res[a] as f32;
+            let u = (p - self.bounds_min[a]) / w.extent[a] * w.res_f32[a];
             cell[a] = (u.max(0.0) as usize).min(self.res[a] - 1);
             // Rounding may put p just across a plane: settle on the cell that
             // the ray is entering (or, moving along -axis, leaving).
-            if d[a] > 0.0 && cell[a] + 1 < self.res[a] && self.plane(a, cell[a] + 1) <= p {
+            let first = w.offset[a];
+            if d[a] > 0.0 && cell[a] + 1 < self.res[a] && w.start[first + cell[a] + 1] <= p {
                 cell[a] += 1;
-            } else if d[a] < 0.0 && cell[a] > 0 && self.plane(a, cell[a]) >= p {
+            } else if d[a] < 0.0 && cell[a] > 0 && w.start[first + cell[a]] >= p {
                 cell[a] -= 1;
             }
             if d[a] > 0.0 {
-                plane_k[a] = cell[a] + 1;
+                plane_i[a] = first + cell[a] + 1;
                 step[a] = 1;
                 left[a] = self.res[a] - 1 - cell[a];
-                index_step[a] = stride[a];
-                next[a] = crossing_plane(a, plane_k[a]);
+                index_step[a] = w.stride[a];
+                next[a] = crossing_plane(a, plane_i[a]);
             } else if d[a] < 0.0 {
-                plane_k[a] = cell[a];
+                plane_i[a] = first + cell[a];
                 step[a] = usize::MAX;
                 left[a] = cell[a];
-                index_step[a] = stride[a].wrapping_neg();
-                next[a] = crossing_plane(a, plane_k[a]);
+                index_step[a] = w.stride[a].wrapping_neg();
+                next[a] = crossing_plane(a, plane_i[a]);
             }
         }
 
         // The walk keeps each axis' next crossing in its own variable and
         // the cell's linear index up to date, so that a step is a compare,
-        // an integer add and one plane crossing (no array indexed by the
-        // axis, no index recomputation).
+        // an integer add and one plane crossing read from the grid's table
+        // (no division, no conversion, no index recomputation). The axis
+        // is chosen by branches: a branch-free choice through an array of
+        // crossings measured slower (examples/walk_cost.rs).
         let [mut next_x, mut next_y, mut next_z] = next;
         let mut index = self.cell_index(cell);
         let values = &self.values[..];
@@ -204,15 +202,14 @@ impl MajorantGrid {
                         first
                     }
                 });
-                let exit_t: [f32; 3] =
-                    std::array::from_fn(|a| if d[a] != 0.0 { crossing_plane(a, exit_plane[a]) } else { f32::INFINITY });
-                let axis = if exit_t[0] <= exit_t[1] && exit_t[0] <= exit_t[2] {
-                    0
-                } else if exit_t[1] <= exit_t[2] {
-                    1
-                } else {
-                    2
-                };
+                let exit_t: [f32; 3] = std::array::from_fn(|a| {
+                    if d[a] != 0.0 {
+                        crossing_plane(a, w.offset[a] + exit_plane[a])
+                    } else {
+                        f32::INFINITY
+                    }
+                });
+                let axis = first_axis(exit_t);
                 let t_exit = exit_t[axis];
                 // The walk ends at t1 before leaving the block.
                 if t_exit >= t1 {
@@ -232,8 +229,8 @@ impl MajorantGrid {
                         while left[b] > 0 && (next[b] < t_exit || (next[b] == t_exit && b < axis)) {
                             left[b] -= 1;
                             cell[b] = cell[b].wrapping_add(step[b]);
-                            plane_k[b] = plane_k[b].wrapping_add(step[b]);
-                            next[b] = crossing_plane(b, plane_k[b]);
+                            plane_i[b] = plane_i[b].wrapping_add(step[b]);
+                            next[b] = crossing_plane(b, plane_i[b]);
                         }
                     }
                     // The exit crossing itself, into the next block (or out
@@ -251,8 +248,8 @@ impl MajorantGrid {
                         cell[axis] = exit_plane[axis] - 1;
                         left[axis] = cell[axis];
                     }
-                    plane_k[axis] = exit_plane[axis].wrapping_add(step[axis]);
-                    next[axis] = crossing_plane(axis, plane_k[axis]);
+                    plane_i[axis] = (w.offset[axis] + exit_plane[axis]).wrapping_add(step[axis]);
+                    next[axis] = crossing_plane(axis, plane_i[axis]);
                     [next_x, next_y, next_z] = next;
                     index = self.cell_index(cell);
                     if t_exit > t {
@@ -283,9 +280,9 @@ impl MajorantGrid {
             // Step into the neighbour across the plane.
             left[axis] -= 1;
             cell[axis] = cell[axis].wrapping_add(step[axis]);
-            plane_k[axis] = plane_k[axis].wrapping_add(step[axis]);
+            plane_i[axis] = plane_i[axis].wrapping_add(step[axis]);
             index = index.wrapping_add(index_step[axis]);
-            let crossed = crossing_plane(axis, plane_k[axis]);
+            let crossed = crossing_plane(axis, plane_i[axis]);
             match axis {
                 0 => next_x = crossed,
                 1 => next_y = crossed,
@@ -330,6 +327,18 @@ impl MajorantGrid {
     }
 }
 
+/// The axis whose value in `t` is smallest, ties to the lower axis (x, then
+/// y, then z; with a NaN, the choice of `x <= y && x <= z`, else `y <= z`),
+/// computed without branches.
+// The negated comparisons are the point: a NaN must choose as the chain did.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+#[inline(always)]
+fn first_axis(t: [f32; 3]) -> usize {
+    let not_x = !((t[0] <= t[1]) & (t[0] <= t[2])) as usize;
+    let z_over_y = !(t[1] <= t[2]) as usize;
+    not_x * (1 + z_over_y)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -341,6 +350,30 @@ mod tests {
             ControlFlow::Continue(())
         });
         out
+    }
+
+    /// The branch-free axis choice equals the comparison chain it replaced
+    /// on every triple of values with ties, signed zeros, infinities and NaN.
+    #[test]
+    fn first_axis_equals_the_comparison_chain() {
+        let vals = [-f32::INFINITY, -1.0, -0.0, 0.0, 0.5, 1.0, f32::INFINITY, f32::NAN];
+        let mut n = 0;
+        for x in vals {
+            for y in vals {
+                for z in vals {
+                    let chain = if x <= y && x <= z {
+                        0
+                    } else if y <= z {
+                        1
+                    } else {
+                        2
+                    };
+                    assert_eq!(first_axis([x, y, z]), chain, "{x} {y} {z}");
+                    n += 1;
+                }
+            }
+        }
+        assert_eq!(n, 512);
     }
 
     #[test]

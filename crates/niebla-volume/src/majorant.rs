@@ -39,6 +39,68 @@ pub struct DensityBoundGrid {
     /// exactly zero. Derived from `values` by [`DensityBoundGrid::with_zero_blocks`];
     /// [`MajorantGrid::walk_nonzero`] jumps over such blocks.
     pub(crate) zero_blocks: Vec<bool>,
+    /// Per-grid constants of the DDA walk, derived from `res` and the
+    /// bounds by [`DensityBoundGrid::from_parts`].
+    pub(crate) walk: WalkConstants,
+}
+
+/// Constants the DDA walk of a [`DensityBoundGrid`] would otherwise
+/// recompute on every walk: each is the same expression of `res` and the
+/// bounds that the walk evaluated, evaluated once, so a walk reading them
+/// gets the same bits.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct WalkConstants {
+    /// `bounds_max[a] - bounds_min[a]` per axis.
+    pub(crate) extent: [f32; 3],
+    /// `res[a] as f32` per axis.
+    pub(crate) res_f32: [f32; 3],
+    /// Linear-index step of a cell step along x, y and z.
+    pub(crate) stride: [usize; 3],
+    /// Where axis `a`'s planes start in `crossing` and `start` (each axis
+    /// has `res[a] + 1` planes, `k = 0..=res[a]`).
+    pub(crate) offset: [usize; 3],
+    /// The planes the walk steps across: `bounds_min + k * width` with
+    /// `width = (bounds_max - bounds_min) / res` for `k < res`, exactly
+    /// `bounds_max` for `k = res`.
+    pub(crate) crossing: Vec<f32>,
+    /// The planes [`DensityBoundGrid::plane`] gives (the cell boxes'
+    /// faces), against which the walk settles its start cell.
+    pub(crate) start: Vec<f32>,
+}
+
+impl WalkConstants {
+    /// The constants of a grid with `res` cells over `bounds_min..bounds_max`.
+    fn new(res: [usize; 3], bounds_min: [f32; 3], bounds_max: [f32; 3]) -> Self {
+        let offset = [0, res[0] + 1, res[0] + res[1] + 2];
+        let mut crossing = Vec::with_capacity(res.iter().sum::<usize>() + 3);
+        let mut start = Vec::with_capacity(crossing.capacity());
+        for a in 0..3 {
+            let width = (bounds_max[a] - bounds_min[a]) / res[a] as f32;
+            for k in 0..=res[a] {
+                crossing.push(if k >= res[a] { bounds_max[a] } else { bounds_min[a] + k as f32 * width });
+                start.push(plane_formula(res[a], bounds_min[a], bounds_max[a], k));
+            }
+        }
+        WalkConstants {
+            extent: std::array::from_fn(|a| bounds_max[a] - bounds_min[a]),
+            res_f32: res.map(|r| r as f32),
+            stride: [1, res[0], res[0] * res[1]],
+            offset,
+            crossing,
+            start,
+        }
+    }
+}
+
+/// Boundary plane `k` of an axis with `res` cells over `lo..hi`: `hi` for
+/// `k >= res`, else `lo + (hi - lo) * (k / res)`.
+#[inline(always)]
+fn plane_formula(res: usize, lo: f32, hi: f32, k: usize) -> f32 {
+    if k >= res {
+        return hi;
+    }
+    let f = k as f32 / res as f32;
+    lo + (hi - lo) * f
 }
 
 /// Cells per axis of the blocks in which a majorant grid records runs of
@@ -147,7 +209,8 @@ impl DensityBoundGrid {
 
     /// A grid from its parts, with its zero-block flags.
     pub(crate) fn from_parts(res: [usize; 3], bounds_min: [f32; 3], bounds_max: [f32; 3], values: Vec<f32>) -> Self {
-        DensityBoundGrid { res, bounds_min, bounds_max, values, zero_blocks: Vec::new() }.with_zero_blocks()
+        let walk = WalkConstants::new(res, bounds_min, bounds_max);
+        DensityBoundGrid { res, bounds_min, bounds_max, values, zero_blocks: Vec::new(), walk }.with_zero_blocks()
     }
 
     /// `self` with `zero_blocks` recomputed from `values` (call after
@@ -300,11 +363,7 @@ impl DensityBoundGrid {
     /// formula the DDA uses, so both agree to the bit).
     #[inline(always)]
     pub(crate) fn plane(&self, a: usize, k: usize) -> f32 {
-        if k >= self.res[a] {
-            return self.bounds_max[a];
-        }
-        let f = k as f32 / self.res[a] as f32;
-        self.bounds_min[a] + (self.bounds_max[a] - self.bounds_min[a]) * f
+        plane_formula(self.res[a], self.bounds_min[a], self.bounds_max[a], k)
     }
 }
 
@@ -458,5 +517,46 @@ impl SparseLayout {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The walk's tabulated planes are, bit for bit, the per-walk formulas
+    /// they replace (`bounds_min + k * width` for the crossings, `plane`
+    /// for the start checks), with `bounds_max` at `k = res`, on boxes
+    /// whose extents and offsets round (not powers of two).
+    #[test]
+    fn walk_constants_equal_the_per_walk_formulas() {
+        let boxes = [
+            ([7, 1, 13], [-1.2f32, 0.3, 1000.1], [1.7f32, 0.30001, 1012.9]),
+            ([64, 33, 5], [-1e-3, -7.77, 3.3], [2.2e-3, 9.1, 3.31]),
+            ([1, 1, 1], [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]),
+        ];
+        let mut checked = 0;
+        for (res, lo, hi) in boxes {
+            let n: usize = res.iter().product();
+            let m = MajorantGrid::from_parts(res, lo, hi, vec![1.0; n]);
+            let w = &m.walk;
+            for a in 0..3 {
+                assert_eq!(w.extent[a].to_bits(), (hi[a] - lo[a]).to_bits());
+                assert_eq!(w.res_f32[a].to_bits(), (res[a] as f32).to_bits());
+                let width = (hi[a] - lo[a]) / res[a] as f32;
+                for k in 0..=res[a] {
+                    let crossing = if k >= res[a] { hi[a] } else { lo[a] + k as f32 * width };
+                    assert_eq!(w.crossing[w.offset[a] + k].to_bits(), crossing.to_bits(), "axis {a} plane {k}");
+                    assert_eq!(w.start[w.offset[a] + k].to_bits(), m.plane(a, k).to_bits(), "axis {a} plane {k}");
+                    let f = k as f32 / res[a] as f32;
+                    let plane = if k >= res[a] { hi[a] } else { lo[a] + (hi[a] - lo[a]) * f };
+                    assert_eq!(m.plane(a, k).to_bits(), plane.to_bits());
+                    checked += 1;
+                }
+            }
+            assert_eq!(w.stride, [1, res[0], res[0] * res[1]]);
+            assert_eq!(w.crossing.len(), res.iter().sum::<usize>() + 3);
+        }
+        assert_eq!(checked, 24 + 105 + 6);
     }
 }
