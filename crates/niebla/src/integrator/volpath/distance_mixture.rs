@@ -1,0 +1,173 @@
+//! One-sample MIS of the distance to `volpath`'s next scattering vertex on a
+//! homogeneous medium segment, between free flight and equiangular sampling
+//! toward the segment's point and spot lights (Kulla and Fajardo 2012,
+//! section 4: "multiple importance sampling" of the distance; what Cycles'
+//! volume sampling method of that name does).
+//!
+//! Free flight first decides whether the path collides on the segment at all
+//! (probability `1 - T(t_end)` for the hero channel, unchanged); given a
+//! collision, the distance comes from the truncated exponential with
+//! probability `1 - q` and from equiangular sampling toward one of the
+//! segment's lights (chosen uniformly) with probability `q`. The path pdf of
+//! the vertex for channel `c` is then
+//! `(1 - q) sigma_t,c T_c(t) + q (1 - T_c(t_end)) p_eq(t)` (the balance
+//! heuristic over the two strategies, in the one-sample form), and the
+//! probability of passing the segment stays `T_c(t_end)`. The paths that
+//! scatter on a camera ray next to a lamp and then meet its glow are found
+//! by equiangular sampling in proportion to that glow instead of by the
+//! rare free-flight distance.
+
+use crate::color::Rgb;
+use crate::math::Ray;
+use crate::medium::{HomogeneousMedium, MediumPoint};
+use crate::sampling::PixelSampler;
+use crate::tracking::MajorantCollision;
+
+use super::channels::{per_channel, Channels};
+use super::equiangular_nee::SegmentTargets;
+
+/// The mixture of distance samplers on one homogeneous medium segment.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DistanceMixture {
+    /// Probability of the equiangular distance given a collision.
+    q: f32,
+    /// Extinction coefficient per channel (1/length), all positive.
+    sigma_t: Rgb,
+    /// Single-scattering albedo per channel.
+    albedo: Rgb,
+    /// Probability `1 - T_c(t_end)` that free flight collides on the segment.
+    collide: Rgb,
+    /// The medium's coefficients (the same at every point).
+    point: MediumPoint,
+}
+
+impl DistanceMixture {
+    /// The mixture with equiangular probability `q` on `[0, t_end)` of a
+    /// segment in `medium`, toward the equiangular intervals in `targets`;
+    /// `None` (free flight alone) when `q` is 0, there is no interval, the
+    /// medium emits (its collision estimator assumes free-flight
+    /// collisions) or some channel has no extinction.
+    pub(super) fn new(
+        q: f32,
+        medium: &HomogeneousMedium,
+        t_end: f32,
+        targets: &SegmentTargets,
+    ) -> Option<DistanceMixture> {
+        let q = q.min(MAX_EQUIANGULAR_DISTANCE_PROBABILITY);
+        if !(q > 0.0) || targets.intervals().next().is_none() {
+            return None;
+        }
+        let point = medium.point();
+        let sigma_t = medium.sigma_t();
+        let usable = (0..3).all(|c| sigma_t[c] > 0.0 && sigma_t[c].is_finite());
+        if !point.l_ve.is_black() || !usable || !(t_end > 0.0) {
+            return None;
+        }
+        let collide = per_channel(|c| -(-sigma_t[c] * t_end).exp_m1());
+        let albedo = per_channel(|c| point.sigma_s[c] / sigma_t[c]);
+        Some(DistanceMixture { q, sigma_t, albedo, collide, point })
+    }
+
+    /// Mean density of the equiangular strategy at `t`: the intervals of
+    /// `targets`, each chosen with equal probability.
+    #[inline]
+    fn equiangular_pdf(&self, t: f32, targets: &SegmentTargets) -> f32 {
+        let mut sum = 0.0;
+        let mut n = 0u32;
+        for e in targets.intervals() {
+            sum += e.pdf(t);
+            n += 1;
+        }
+        if n == 0 {
+            0.0
+        } else {
+            sum / n as f32
+        }
+    }
+
+    /// Path pdf per channel (1/length) of a scattering vertex at `t`
+    /// produced by the mixture, were that channel the hero.
+    #[inline]
+    pub(super) fn channel_pdfs(&self, t: f32, targets: &SegmentTargets) -> Rgb {
+        let p_eq = self.equiangular_pdf(t, targets);
+        per_channel(|c| {
+            (1.0 - self.q) * self.sigma_t[c] * (-self.sigma_t[c] * t).exp() + self.q * self.collide[c] * p_eq
+        })
+    }
+
+    /// Density of a real scattering at `t` averaged over the channels of
+    /// `group` (albedo times [`Self::channel_pdfs`]): the mixture's
+    /// counterpart of `free_flight_scatter_density`, for the MIS of the
+    /// vertex's light sample against equiangular next-event estimation.
+    #[inline]
+    pub(super) fn scatter_density(&self, t: f32, group: Channels, targets: &SegmentTargets) -> f32 {
+        group.average(self.albedo * self.channel_pdfs(t, targets))
+    }
+
+    /// Free flight on `[0, t_end)` of `ray` for channel `hero` with the
+    /// mixture's distance: draws one number (the free-flight slot's first,
+    /// as [`crate::tracking::sample_t_maj`] does); on a collision calls
+    /// `collide(collision, pdfs, sampler)` with the per-channel path pdfs of
+    /// the vertex ([`Self::channel_pdfs`]) and returns 1, else returns the
+    /// transmittance of the whole segment. Every collision in a homogeneous
+    /// medium is real, so `collide` ends the flight whatever it returns.
+    pub(super) fn flight<F>(
+        &self,
+        ray: &Ray,
+        t_end: f32,
+        hero: usize,
+        targets: &SegmentTargets,
+        sampler: &mut PixelSampler,
+        mut collide: F,
+    ) -> Rgb
+    where
+        F: FnMut(MajorantCollision, Rgb, &mut PixelSampler) -> bool,
+    {
+        let u = sampler.next_1d();
+        let p_collide = self.collide[hero];
+        if !(u < p_collide) {
+            return per_channel(|c| (-self.sigma_t[c] * t_end).exp());
+        }
+        // Uniform on [0, 1) given the collision: it chooses the strategy
+        // and then drives it (one number keeps Sobol's stratification).
+        let v = (u / p_collide).min(ONE_MINUS_EPSILON);
+        let t = if v < self.q {
+            let w = v / self.q;
+            let n = targets.intervals().count();
+            let k = ((w * n as f32) as usize).min(n - 1);
+            let w = (w * n as f32 - k as f32).clamp(0.0, ONE_MINUS_EPSILON);
+            match targets.intervals().nth(k) {
+                Some(e) => e.sample(w),
+                None => return Rgb::ONE,
+            }
+        } else {
+            let w = ((v - self.q) / (1.0 - self.q)).clamp(0.0, ONE_MINUS_EPSILON);
+            -(-w * p_collide).ln_1p() / self.sigma_t[hero]
+        };
+        let t = t.min(t_end);
+        let pdfs = self.channel_pdfs(t, targets);
+        let t_maj = per_channel(|c| (-self.sigma_t[c] * t).exp());
+        let collision = MajorantCollision { t, p: ray.at(t), point: self.point, sigma_maj: self.sigma_t, t_maj };
+        let _ = collide(collision, pdfs, sampler);
+        Rgb::ONE
+    }
+}
+
+/// Largest `f32` below 1.
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// Largest equiangular distance probability used: free flight keeps a
+/// share, so the vertex's weight stays bounded by `albedo / (1 - q)`.
+const MAX_EQUIANGULAR_DISTANCE_PROBABILITY: f32 = 0.9;
+
+/// Real-scattering weights of a mixture vertex with per-channel path pdfs
+/// `pdfs`: throughput `T sigma_s / pdf[hero]` and path pdf ratio
+/// `pdf / pdf[hero]`; `None` when the hero's pdf is not positive.
+#[inline]
+pub(super) fn mixture_scatter_weights(c: &MajorantCollision, pdfs: Rgb, hero: usize) -> Option<(Rgb, Rgb)> {
+    let p = pdfs[hero];
+    if !(p > 0.0 && p.is_finite()) {
+        return None;
+    }
+    Some((c.t_maj * c.point.sigma_s / p, pdfs / p))
+}
