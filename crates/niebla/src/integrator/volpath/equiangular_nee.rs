@@ -59,7 +59,7 @@ impl SegmentTargets {
     /// The target of light `light_index` on `[0, t_end)` of `ray`: the one
     /// kept for it, else found and kept.
     #[inline]
-    fn find(&mut self, light_index: usize, light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget {
+    pub(super) fn find(&mut self, light_index: usize, light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget {
         if let Some(&(_, target)) = self.found.iter().flatten().find(|(i, _)| *i == light_index) {
             return target;
         }
