@@ -76,11 +76,13 @@ impl SegmentTargets {
         }
     }
 
-    /// The equiangular intervals kept, in the order found.
+    /// The equiangular intervals kept, in the order found, of the lights
+    /// whose bit is set in `lights` (bit `i`: light `i`, the first 64) and
+    /// that pass within `max_h` of the ray's line.
     #[inline]
-    pub(super) fn intervals(&self) -> impl Iterator<Item = &EquiangularInterval> {
-        self.found.iter().flatten().filter_map(|(_, target)| match target {
-            PointLightTarget::Interval(e) => Some(e),
+    pub(super) fn intervals(&self, lights: u64, max_h: f32) -> impl Iterator<Item = &EquiangularInterval> {
+        self.found.iter().flatten().filter_map(move |(index, target)| match target {
+            PointLightTarget::Interval(e) if *index < 64 && lights & (1 << index) != 0 && e.h() <= max_h => Some(e),
             _ => None,
         })
     }

@@ -80,12 +80,13 @@ pub struct VolPathIntegrator {
     /// values above `MAX_GUIDE_FRACTION` act as it.
     pub medium_emitter_guide_fraction: f32,
     /// Probability, on a homogeneous medium segment where the path
-    /// collides and point or spot lights have equiangular intervals, of
-    /// placing the next scattering vertex by equiangular sampling toward
-    /// one of them instead of by free flight (one-sample MIS of the two
-    /// distances, `distance_mixture`). 0 turns it off (free flight alone);
-    /// it only acts in scenes with such lights in homogeneous media and
-    /// changes noise, never the mean. Values are clamped to `[0, 0.9]`.
+    /// collides, of placing the next scattering vertex by equiangular
+    /// sampling toward a point or spot light inside a medium that passes
+    /// within one mean free path of the segment, instead of by free flight
+    /// (one-sample MIS of the two distances, `distance_mixture`). 0 turns
+    /// it off (free flight alone); it only acts in scenes with such lamps
+    /// in fog and at most four lights, and changes noise, never the mean.
+    /// Values above 0.9 act as 0.9.
     pub distance_mixture: f32,
     /// What depends only on the scene, when computed once for the scene
     /// being rendered ([`VolPathIntegrator::for_scene`]); else found for

@@ -104,14 +104,15 @@ impl VolPathIntegrator {
                 // (which reuse its intervals).
                 let mut targets = SegmentTargets::default();
                 // The next vertex's distance by free flight or equiangular
-                // sampling (one-sample MIS) on homogeneous segments where
-                // every point light's interval is known.
+                // sampling toward lamps in media (one-sample MIS) on
+                // homogeneous segments, every point light's interval found
+                // first (the mixture's density needs them all).
                 let mut mixture = None;
                 if depth < self.max_depth {
                     if let Some(h) = m.as_homogeneous() {
-                        if !forcing && lights.points > 0 && lights.all() && self.distance_mixture > 0.0 {
+                        if !forcing && lights.in_media != 0 && lights.all() && self.distance_mixture > 0.0 {
                             targets.find_all(scene, &ray, t_end);
-                            mixture = DistanceMixture::new(self.distance_mixture, h, t_end, &targets);
+                            mixture = DistanceMixture::new(self.distance_mixture, h, t_end, &targets, lights.in_media);
                         }
                     }
                     let throughput = beta / group.average(r_u);
