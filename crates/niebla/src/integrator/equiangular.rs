@@ -44,6 +44,11 @@ impl EquiangularInterval {
     pub(crate) fn sample(&self, u: f32) -> f32 {
         sample_equiangular_at_angles(u, self.t_a, self.t_b, self.t_c, self.h, self.angles)
     }
+    /// Distance (world units) from the light to the ray's line.
+    #[inline]
+    pub(crate) fn h(&self) -> f32 {
+        self.h
+    }
     /// Whether `t` lies in the interval.
     #[inline]
     pub(crate) fn contains(&self, t: f32) -> bool {

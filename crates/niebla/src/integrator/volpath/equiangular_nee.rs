@@ -12,9 +12,10 @@ use crate::tracking::{majorant_profile, segment_transmittance, TransmittanceMeth
 use crate::world::Scene;
 
 use super::channels::{per_channel, Channels};
+use super::distance_mixture::DistanceMixture;
 use super::layout::{self, Block};
 use super::nee::LightChoice;
-use crate::integrator::equiangular::{equiangular_target, PointLightTarget};
+use crate::integrator::equiangular::{equiangular_target, EquiangularInterval, PointLightTarget};
 
 /// The medium segment on which a free-flight vertex was found.
 #[derive(Clone, Copy)]
@@ -28,6 +29,8 @@ pub(super) struct Segment<'a> {
     pub(super) medium: &'a Medium,
     /// The equiangular targets [`equiangular_ld`] found on the segment.
     pub(super) targets: &'a SegmentTargets,
+    /// The distance mixture that placed the vertex, if any (else free flight).
+    pub(super) mixture: Option<&'a DistanceMixture>,
 }
 
 /// Most equiangular targets a [`SegmentTargets`] keeps: one per light when
@@ -51,6 +54,37 @@ impl SegmentTargets {
         if let Some(slot) = self.found.iter_mut().find(|slot| slot.is_none()) {
             *slot = Some((light_index, target));
         }
+    }
+
+    /// The target of light `light_index` on `[0, t_end)` of `ray`: the one
+    /// kept for it, else found and kept.
+    #[inline]
+    pub(super) fn find(&mut self, light_index: usize, light: &Light, ray: &Ray, t_end: f32) -> PointLightTarget {
+        if let Some(&(_, target)) = self.found.iter().flatten().find(|(i, _)| *i == light_index) {
+            return target;
+        }
+        let target = equiangular_target(light, ray, t_end);
+        self.keep(light_index, target);
+        target
+    }
+
+    /// Find the targets of every point and spot light of `scene` on
+    /// `[0, t_end)` of `ray` (as many as fit).
+    pub(super) fn find_all(&mut self, scene: &Scene, ray: &Ray, t_end: f32) {
+        for (index, light) in scene.lights.iter().enumerate().filter(|(_, l)| l.point_position().is_some()) {
+            self.find(index, light, ray, t_end);
+        }
+    }
+
+    /// The equiangular intervals kept, in the order found, of the lights
+    /// whose bit is set in `lights` (bit `i`: light `i`, the first 64) and
+    /// that pass within `max_h` of the ray's line.
+    #[inline]
+    pub(super) fn intervals(&self, lights: u64, max_h: f32) -> impl Iterator<Item = &EquiangularInterval> {
+        self.found.iter().flatten().filter_map(move |(index, target)| match target {
+            PointLightTarget::Interval(e) if *index < 64 && lights & (1 << index) != 0 && e.h() <= max_h => Some(e),
+            _ => None,
+        })
     }
 
     /// The target of light `light_index` on `[0, t_end)` of `ray`: the one
@@ -103,7 +137,10 @@ pub(super) fn light_weight_against_equiangular(
         return None;
     };
     let p_eq = e.pdf(seg.t) * lights.point_pmf();
-    let p_d = free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group) * lights.pmf();
+    let p_d = match seg.mixture {
+        Some(mixture) => mixture.scatter_density(seg.t, group, seg.targets),
+        None => free_flight_scatter_density(seg.medium, seg.ray, seg.t_end, seg.t, group),
+    } * lights.pmf();
     (p_d + p_eq > 0.0).then(|| p_d / (p_d + p_eq))
 }
 
@@ -119,6 +156,8 @@ pub(super) struct EquiangularSegment<'a> {
     pub(super) throughput: Rgb,
     /// The segment's block of the Sobol dimension layout.
     pub(super) block: Block,
+    /// The distance mixture of the segment's free flight, if any.
+    pub(super) mixture: Option<DistanceMixture>,
 }
 
 /// Equiangular next-event estimation on a medium segment (Kulla and Fajardo
@@ -167,11 +206,10 @@ fn equiangular_ld_light(
     targets: &mut SegmentTargets,
     sampler: &mut PixelSampler,
 ) -> Rgb {
-    let EquiangularSegment { ray, t_end, medium: m, id, throughput, block } = *segment;
+    let EquiangularSegment { ray, t_end, medium: m, id, throughput, block, mixture } = *segment;
     block.enter(sampler, layout::EQUIANGULAR);
     let (u_t, u_dir) = (sampler.next_1d(), sampler.next_2d());
-    let target = equiangular_target(light, ray, t_end);
-    targets.keep(index, target);
+    let target = targets.find(index, light, ray, t_end);
     let PointLightTarget::Interval(e) = target else {
         return Rgb::ZERO;
     };
@@ -198,7 +236,10 @@ fn equiangular_ld_light(
     }
     let tr_light = scene.transmittance(p, Some(id), ls.wi, ls.distance, TransmittanceMethod::Analytic, sampler);
     let p_eq = pdf_eq * lights.point_pmf();
-    let p_d = free_flight_scatter_density(m, ray, t_end, t, group) * lights.pmf();
+    let p_d = match &mixture {
+        Some(mixture) => mixture.scatter_density(t, group, targets),
+        None => free_flight_scatter_density(m, ray, t_end, t, group),
+    } * lights.pmf();
     let weight = p_eq / (p_eq + p_d);
     throughput * tr_camera * sigma_s * tr_light * ls.li * (f * weight / p_eq)
 }

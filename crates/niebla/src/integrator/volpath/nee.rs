@@ -72,6 +72,9 @@ pub(super) struct LightChoice {
     pub(super) n: usize,
     /// Number of point and spot lights (equiangular sampling's lights).
     pub(super) points: usize,
+    /// Bit `i` set: light `i` (of the first 64) is a point or spot light
+    /// inside a medium (a lamp in fog).
+    pub(super) in_media: u64,
 }
 
 /// Up to this many lights, next-event estimation samples each of them.
@@ -79,7 +82,17 @@ pub(super) const SAMPLE_ALL_LIGHTS_UP_TO: usize = 4;
 
 impl LightChoice {
     pub(super) fn new(scene: &Scene) -> LightChoice {
-        LightChoice { n: scene.lights.iter().filter(|l| sampled_by_nee(l)).count(), points: point_light_count(scene) }
+        let mut in_media = 0u64;
+        for (i, light) in scene.lights.iter().enumerate().take(64) {
+            if light.point_position().is_some_and(|p| scene.medium_at(p).is_some()) {
+                in_media |= 1 << i;
+            }
+        }
+        LightChoice {
+            n: scene.lights.iter().filter(|l| sampled_by_nee(l)).count(),
+            points: point_light_count(scene),
+            in_media,
+        }
     }
 
     /// Whether every light is sampled at each vertex.

@@ -13,6 +13,7 @@ use crate::tracking::{pass_through_weight, sample_t_maj, MajorantCollision};
 use crate::world::{PathRay, Scene};
 
 use super::channels::Channels;
+use super::distance_mixture::{mixture_scatter_weights, DistanceMixture};
 use super::equiangular_nee::{equiangular_ld, EquiangularSegment, Segment, SegmentTargets};
 use super::forced::ForcedCollision;
 use super::guiding::{sample_bsdf, sample_phase};
@@ -102,9 +103,20 @@ impl VolPathIntegrator {
                 // segment, MIS-weighted against the free-flight vertices' NEE
                 // (which reuse its intervals).
                 let mut targets = SegmentTargets::default();
+                // The next vertex's distance by free flight or equiangular
+                // sampling toward lamps in media (one-sample MIS) on
+                // homogeneous segments, every point light's interval found
+                // first (the mixture's density needs them all).
+                let mut mixture = None;
                 if depth < self.max_depth {
+                    if let Some(h) = m.as_homogeneous() {
+                        if !forcing && lights.in_media != 0 && lights.all() && self.distance_mixture > 0.0 {
+                            targets.find_all(scene, &ray, t_end);
+                            mixture = DistanceMixture::new(self.distance_mixture, h, t_end, &targets, lights.in_media);
+                        }
+                    }
                     let throughput = beta / group.average(r_u);
-                    let segment = EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput, block };
+                    let segment = EquiangularSegment { ray: &ray, t_end, medium: m, id, throughput, block, mixture };
                     let v = equiangular_ld(scene, &segment, group, lights, &mut targets, sampler);
                     let at = if depth == 0 { FirstVertex::Medium } else { first };
                     l.add(v, || PathClass::of(at, depth + 1));
@@ -126,7 +138,8 @@ impl VolPathIntegrator {
                     r_u *= r_u_factor;
                 }
                 let forced_here = forced.is_some();
-                let mut collide = |c: MajorantCollision, sampler: &mut PixelSampler| {
+                // `pdfs`: the per-channel path pdfs of a mixture vertex.
+                let mut collide = |c: MajorantCollision, pdfs: Option<Rgb>, sampler: &mut PixelSampler| {
                     // Medium emission, a collision estimator at every tentative collision.
                     if depth < self.max_depth && !c.point.l_ve.is_black() {
                         let pdf = c.sigma_maj[hero] * c.t_maj[hero];
@@ -161,18 +174,29 @@ impl VolPathIntegrator {
                         if depth == 1 {
                             first = FirstVertex::Medium;
                         }
-                        let Some(w) = c.real_scatter_weights(hero) else {
+                        let weights = match pdfs {
+                            Some(pdfs) => mixture_scatter_weights(&c, pdfs, hero),
+                            None => c.real_scatter_weights(hero).map(|w| (w.throughput, w.majorant)),
+                        };
+                        let Some((w_throughput, w_majorant)) = weights else {
                             terminated = true;
                             return false;
                         };
-                        beta *= w.throughput;
-                        r_u *= w.majorant;
+                        beta *= w_throughput;
+                        r_u *= w_majorant;
                         if beta.is_black() || !(group.average(r_u) > 0.0) {
                             terminated = true;
                             return false;
                         }
                         let phase = m.phase();
-                        let segment = Segment { ray: &ray, t_end, t: c.t, medium: m, targets: &targets };
+                        let segment = Segment {
+                            ray: &ray,
+                            t_end,
+                            t: c.t,
+                            medium: m,
+                            targets: &targets,
+                            mixture: mixture.as_ref(),
+                        };
                         let vertex = NeeVertex {
                             p: c.p,
                             wo,
@@ -231,12 +255,17 @@ impl VolPathIntegrator {
                     // A forced collision is real: the callback scattered or
                     // ended the path (it never asks to go on).
                     Some(f) => {
-                        if collide(f.collision, sampler) {
+                        if collide(f.collision, None, sampler) {
                             terminated = true;
                         }
                         Rgb::ONE
                     }
-                    None => sample_t_maj(m, &ray, t_end, hero, sampler, &mut collide),
+                    None => match &mixture {
+                        Some(mixture) => mixture.flight(&ray, t_end, hero, &targets, sampler, |c, pdfs, sampler| {
+                            collide(c, Some(pdfs), sampler)
+                        }),
+                        None => sample_t_maj(m, &ray, t_end, hero, sampler, |c, sampler| collide(c, None, sampler)),
+                    },
                 };
                 if terminated || beta.is_black() || !(group.average(r_u) > 0.0) || !beta.is_finite() {
                     return l;
