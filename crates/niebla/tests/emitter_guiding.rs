@@ -8,6 +8,9 @@
 //!
 //! Heavier versions (more batches) with `NIEBLA_SLOW_TESTS=1`.
 
+mod common;
+
+use common::block_stats;
 use niebla::film::Image;
 use niebla::integrator::IntegratorSettings;
 use niebla::render::{render, RenderOptions};
@@ -35,29 +38,6 @@ fn batches(scene: &Scene, settings: &IntegratorSettings, spp: u32, batches: u64,
             render(scene, settings, &options, &|_, _| {}, None).unwrap()
         })
         .collect()
-}
-
-/// Mean and standard error, per channel, of the mean over the `size` x
-/// `size` block at `(x0, y0)` of each render (the batch means are independent).
-fn block_stats(images: &[Image], x0: u32, y0: u32, size: u32) -> [(f64, f64); 3] {
-    let n = images.len() as f64;
-    std::array::from_fn(|c| {
-        let values: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let mut s = 0.0;
-                for y in y0..y0 + size {
-                    for x in x0..x0 + size {
-                        s += im.pixels[(y * im.width + x) as usize][c] as f64;
-                    }
-                }
-                s / f64::from(size * size)
-            })
-            .collect();
-        let mean = values.iter().sum::<f64>() / n;
-        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (var / n).sqrt())
-    })
 }
 
 /// Asserts that every 4x4 block and channel of two 16x16 batch sets (guided

@@ -17,6 +17,9 @@
 //! so each side's standard error is measured) within 4 combined standard
 //! errors. More batches with `NIEBLA_SLOW_TESTS=1`.
 
+mod common;
+
+use common::block_stats;
 use niebla::film::Image;
 use niebla::integrator::{registry, IntegratorSettings};
 use niebla::light::Light;
@@ -63,29 +66,6 @@ fn batches(scene: &Scene, settings: &IntegratorSettings, spp: u32, n: u64, seed:
         .collect()
 }
 
-/// Mean and standard error, per channel, of the mean over 4x4 block
-/// `(bx, by)` of each render.
-fn block_stats(images: &[Image], bx: u32, by: u32) -> [(f64, f64); 3] {
-    let n = images.len() as f64;
-    std::array::from_fn(|c| {
-        let values: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let mut s = 0.0;
-                for y in by * 4..by * 4 + 4 {
-                    for x in bx * 4..bx * 4 + 4 {
-                        s += im.pixels[(y * im.width + x) as usize][c] as f64;
-                    }
-                }
-                s / 16.0
-            })
-            .collect();
-        let mean = values.iter().sum::<f64>() / n;
-        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (var / n).sqrt())
-    })
-}
-
 /// Every block and channel of `images` against `reference`: |difference| <
 /// 4 combined standard errors plus `bias` times the reference's block mean.
 /// Prints the largest block |z| (difference over combined SE) and the image
@@ -95,7 +75,7 @@ fn compare(name: &str, images: &[Image], reference: &[Image], bias: f64) {
     let mut lit = 0;
     for by in 0..4 {
         for bx in 0..4 {
-            let (a, b) = (block_stats(images, bx, by), block_stats(reference, bx, by));
+            let (a, b) = (block_stats(images, bx * 4, by * 4, 4), block_stats(reference, bx * 4, by * 4, 4));
             for c in 0..3 {
                 let se = (a[c].1.powi(2) + b[c].1.powi(2)).sqrt();
                 let z = (a[c].0 - b[c].0) / (se + 1e-12);

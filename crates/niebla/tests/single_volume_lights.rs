@@ -12,6 +12,9 @@
 //!
 //! More batches with `NIEBLA_SLOW_TESTS=1`.
 
+mod common;
+
+use common::block_stats;
 use niebla::film::Image;
 use niebla::integrator::{IntegratorSettings, SingleSampling};
 use niebla::render::{render, RenderOptions};
@@ -40,29 +43,6 @@ fn batches(scene: &Scene, settings: &IntegratorSettings, spp: u32, batches: u64,
             render(scene, settings, &options, &|_, _| {}, None).unwrap()
         })
         .collect()
-}
-
-/// Mean and standard error, per channel, of the mean over 4x4 block `(bx, by)`
-/// of each render (the batch means are independent).
-fn block_stats(images: &[Image], bx: u32, by: u32) -> [(f64, f64); 3] {
-    let n = images.len() as f64;
-    std::array::from_fn(|c| {
-        let values: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let mut s = 0.0;
-                for y in by * 4..by * 4 + 4 {
-                    for x in bx * 4..bx * 4 + 4 {
-                        s += im.pixels[(y * im.width + x) as usize][c] as f64;
-                    }
-                }
-                s / 16.0
-            })
-            .collect();
-        let mean = values.iter().sum::<f64>() / n;
-        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        (mean, (var / n).sqrt())
-    })
 }
 
 /// Irradiance at a floor point a distance `d` below the center of a purely
@@ -105,7 +85,7 @@ fn single_floor_under_an_emissive_absorbing_sphere_matches_the_quadrature() {
     let n = if slow() { 64 } else { 16 };
     // Surfaces are shaded alike whatever the sampling along camera rays.
     let images = batches(&scene, &single(SingleSampling::Mis, true), 64, n, 1);
-    let (mean, se) = block_stats(&images, 0, 0)[1];
+    let (mean, se) = block_stats(&images, 0, 0, 4)[1];
     let z = (mean - expected) / se;
     eprintln!("single: {mean:.6} +- {se:.1e} vs quadrature {expected:.6} (z = {z:.2})");
     assert!(z.abs() < 4.0, "single: {mean} +- {se} vs {expected}");
@@ -153,8 +133,8 @@ fn single_with_volume_lights_equals_volpath_limited_to_one_scattering_event() {
         let mut z_max = 0.0f64;
         for by in 0..4 {
             for bx in 0..4 {
-                let a = block_stats(&images, bx, by);
-                let b = block_stats(&reference, bx, by);
+                let a = block_stats(&images, bx * 4, by * 4, 4);
+                let b = block_stats(&reference, bx * 4, by * 4, 4);
                 for c in 0..3 {
                     let se = (a[c].1.powi(2) + b[c].1.powi(2)).sqrt();
                     let z = (a[c].0 - b[c].0) / (se + 1e-12);
@@ -182,7 +162,7 @@ fn single_with_volume_lights_equals_volpath_limited_to_one_scattering_event() {
     let mut z_max = 0.0f64;
     for by in 0..4 {
         for bx in 0..4 {
-            let (a, b) = (block_stats(&off, bx, by), block_stats(&reference, bx, by));
+            let (a, b) = (block_stats(&off, bx * 4, by * 4, 4), block_stats(&reference, bx * 4, by * 4, 4));
             for c in 0..3 {
                 let se = (a[c].1.powi(2) + b[c].1.powi(2)).sqrt();
                 z_max = z_max.max((a[c].0 - b[c].0).abs() / (se + 1e-12));

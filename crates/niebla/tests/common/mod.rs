@@ -102,3 +102,27 @@ impl Stats {
         ((self.sum2 / self.n as f64 - m * m).max(0.0) / self.n as f64).sqrt()
     }
 }
+
+/// Mean and standard error, per channel, of the mean over the `size` x
+/// `size` block at pixel `(x0, y0)` of each render (the renders are
+/// independent batches, so their block means are independent samples).
+pub fn block_stats(images: &[niebla::film::Image], x0: u32, y0: u32, size: u32) -> [(f64, f64); 3] {
+    let n = images.len() as f64;
+    std::array::from_fn(|c| {
+        let values: Vec<f64> = images
+            .iter()
+            .map(|im| {
+                let mut s = 0.0;
+                for y in y0..y0 + size {
+                    for x in x0..x0 + size {
+                        s += im.pixels[(y * im.width + x) as usize][c] as f64;
+                    }
+                }
+                s / f64::from(size * size)
+            })
+            .collect();
+        let mean = values.iter().sum::<f64>() / n;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, (var / n).sqrt())
+    })
+}
