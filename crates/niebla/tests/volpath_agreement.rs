@@ -191,24 +191,13 @@ fn chromatic_medium_converges_as_well_as_a_grey_one() {
 /// close to the lamp cause.
 #[test]
 fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
-    use niebla::geometry::Sphere;
     use niebla::integrator::{VolPathIntegrator, DEFAULT_GUIDE_FRACTION};
     use niebla::light::PointLight;
     use niebla::render::render_with;
 
     let lamp = Light::Point(PointLight { position: Vec3::new(4.0, 0.25, 0.2), intensity: Rgb::splat(0.5) });
     let mut s = sphere_scene(Rgb::splat(0.6), Rgb::splat(0.03), vec![lamp]);
-    s.objects.push(SceneObject {
-        shape: Shape::Sphere(Sphere::new(Vec3::new(4.2, -0.45, -0.1), 0.25)),
-        bsdf: Bsdf::Diffuse { reflectance: Rgb::splat(0.7) },
-        interior: None,
-        exterior: Some(MediumId(0)),
-        bounds_medium: false,
-        emitter: None,
-        texture: None,
-        roughness: None,
-        dpdu_frame: false,
-    });
+    s.objects.push(diffuse_ball_in_fog());
     let stats = |integrator: &VolPathIntegrator| {
         let (spp, batches) = (256, 12u64);
         let images: Vec<Image> = (0..batches)
@@ -270,7 +259,6 @@ fn guiding_toward_a_lamp_in_fog_keeps_the_mean_and_lowers_the_variance() {
 /// there or in the per-channel path pdfs shifts the mean.
 #[test]
 fn distance_mixture_keeps_every_pixel_of_lamps_in_fog() {
-    use niebla::geometry::Sphere;
     use niebla::integrator::{VolPathIntegrator, DEFAULT_DISTANCE_MIXTURE};
     use niebla::light::{PointLight, SpotLight};
     use niebla::math::Frame;
@@ -285,17 +273,7 @@ fn distance_mixture_keeps_every_pixel_of_lamps_in_fog() {
         beam_width: 0.35,
     });
     let mut s = sphere_scene(Rgb::new(0.5, 0.7, 0.9), Rgb::new(0.05, 0.03, 0.02), vec![lamp, spot]);
-    s.objects.push(SceneObject {
-        shape: Shape::Sphere(Sphere::new(Vec3::new(4.2, -0.45, -0.1), 0.25)),
-        bsdf: Bsdf::Diffuse { reflectance: Rgb::splat(0.7) },
-        interior: None,
-        exterior: Some(MediumId(0)),
-        bounds_medium: false,
-        emitter: None,
-        texture: None,
-        roughness: None,
-        dpdu_frame: false,
-    });
+    s.objects.push(diffuse_ball_in_fog());
     let batches = 16u64;
     let stats = |integrator: &VolPathIntegrator, seed: u64| {
         let images: Vec<Image> = (0..batches)
@@ -354,4 +332,20 @@ fn distance_mixture_keeps_every_pixel_of_lamps_in_fog() {
     assert!(checked >= 40);
     assert!(se < 0.0075 * b, "standard error {se:.2e} too large to see a 3% bias");
     assert!((a - b).abs() < 4.0 * se, "image mean: mixture {a:.5e} vs free flight {b:.5e} +- {se:.1e}");
+}
+
+/// A diffuse ball (reflectance 0.7, radius 0.25 at (4.2, -0.45, -0.1)) inside
+/// the fog of [`sphere_scene`] (medium 0 outside it), lit by the tests' lamps.
+fn diffuse_ball_in_fog() -> SceneObject {
+    SceneObject {
+        shape: Shape::Sphere(Sphere::new(Vec3::new(4.2, -0.45, -0.1), 0.25)),
+        bsdf: Bsdf::Diffuse { reflectance: Rgb::splat(0.7) },
+        interior: None,
+        exterior: Some(MediumId(0)),
+        bounds_medium: false,
+        emitter: None,
+        texture: None,
+        roughness: None,
+        dpdu_frame: false,
+    }
 }
