@@ -164,9 +164,9 @@ fn every_strategy_sees_one_integral_from_a_mesh_light_with_vertex_normals() {
         .map(|_| {
             let w = frame.to_world(niebla::sampling::sample_cosine_hemisphere(rng.next_2d()));
             let ray = Ray::new(origin, w);
-            scene.intersect(&ray, 0.0, f32::INFINITY).map_or(0.0, |hit| {
-                scene.emitted_radiance(&hit, -w).map_or(0.0, |(le, _)| le.g() as f64 * ALBEDO)
-            })
+            scene
+                .intersect(&ray, 0.0, f32::INFINITY)
+                .map_or(0.0, |hit| scene.emitted_radiance(&hit, -w).map_or(0.0, |(le, _)| le.g() as f64 * ALBEDO))
         })
         .collect();
     // Batch means of 4096, as for the renders.
