@@ -11,7 +11,11 @@
 //! - `emission` against `volpath` at `max_depth = 1` with the fog purely
 //!   absorbing (`emission` has no in-scattering; the floor is lit directly);
 //! - `photon` against full `volpath`: the same per-block test, plus an
-//!   allowance for the density estimate's bias (stated below).
+//!   allowance for the density estimate's bias (stated below);
+//! - `single` against `volpath` at `max_depth = 1` on the same roof with
+//!   Mitsuba's computed vertex normals (`compute_normals`), where light
+//!   sampling alone (`single`) and `volpath`'s MIS of light and BSDF
+//!   sampling agree only if both strategies estimate one integral.
 //!
 //! Every 4x4 block mean and channel of independent renders (batch means,
 //! so each side's standard error is measured) within 4 combined standard
@@ -32,6 +36,11 @@ fn slow() -> bool {
 
 /// The roof in fog of albedo `albedo` (extinction 0.4, HG 0.3).
 fn roof_in_fog(albedo: f64) -> Scene {
+    roof_in_fog_with(albedo, false)
+}
+
+/// [`roof_in_fog`], the roof with computed vertex normals if `normals`.
+fn roof_in_fog_with(albedo: f64, normals: bool) -> Scene {
     let text = format!(
         r#"{{"version": 1,
         "camera": {{"type": "perspective", "position": [0, 1.2, 4.2], "target": [0, 0.8, 0], "fov_y": 45,
@@ -43,7 +52,8 @@ fn roof_in_fog(albedo: f64) -> Scene {
         "lights": [{{"type": "area", "radiance": [3, 2, 1], "shape": {{"type": "mesh",
             "positions": [[-0.7, 0, -0.6], [-0.7, 0, 0.6], [0, 0.5, -0.6], [0, 0.5, 0.6], [0.7, 0, -0.6], [0.7, 0, 0.6]],
             "indices": [[0, 1, 3], [0, 3, 2], [2, 3, 5], [2, 5, 4]],
-            "flip_normals": true, "to_world": {{"rotate_y": 25, "translate": [0.1, 1.3, -0.2]}}}}}}]}}"#
+            "flip_normals": true, "compute_normals": {normals},
+            "to_world": {{"rotate_y": 25, "translate": [0.1, 1.3, -0.2]}}}}}}]}}"#
     );
     let desc = parse_scene_str(&text, "roof.json").unwrap_or_else(|e| panic!("{e}"));
     let scene = build_scene(&desc, "roof.json", ".".as_ref()).unwrap_or_else(|e| panic!("{e}")).scene;
@@ -146,4 +156,16 @@ fn photon_with_a_mesh_light_agrees_with_volpath() {
     let reference = batches(&scene, &volpath(1024), 64, n, 1000);
     let images = batches(&scene, &registry::defaults("photon").unwrap(), 4, n, 1);
     compare("photon", &images, &reference, 0.03);
+}
+
+/// `single` (light sampling alone) against `volpath` at `max_depth = 1`
+/// (MIS of light and BSDF sampling) with the roof's computed vertex
+/// normals (at the ridge 36 degrees off each half's triangles).
+#[test]
+fn single_with_a_vertex_normal_mesh_light_equals_volpath_at_depth_one() {
+    let scene = roof_in_fog_with(0.8, true);
+    let n = if slow() { 64 } else { 16 };
+    let reference = batches(&scene, &volpath(1), 64, n, 1000);
+    let images = batches(&scene, &registry::defaults("single").unwrap(), 16, n, 1);
+    compare("single, vertex normals", &images, &reference, 0.0);
 }

@@ -10,6 +10,11 @@
 //! geometric normal, as Mitsuba 3). A two-sided light emits `L` from both
 //! sides.
 //!
+//! Area-to-solid-angle conversions (light sampling's density and the MIS
+//! density of a ray that hits the light) take the cosine to the geometric
+//! normal, also on a mesh with vertex normals: a surface element `dA`
+//! subtends `|cos theta_g| dA / d^2` steradians whatever its shading normal.
+//!
 //! Directions follow the crate convention: `wi` points from the receiver
 //! toward the light, `w_out` leaves the emitting surface (toward the
 //! receiver, so `w_out = -wi`).
@@ -32,8 +37,9 @@ pub enum AreaShape {
     Disk(Disk),
     /// A sphere, front side outside.
     Sphere(Sphere),
-    /// A triangle mesh, front side that of its shading normal (shared: the
-    /// mesh's triangle distribution is built once).
+    /// A triangle mesh, front side that of its shading normal, solid angle
+    /// by its geometric normal (shared: the mesh's triangle distribution is
+    /// built once).
     Mesh(Arc<MeshLight>),
 }
 
@@ -62,8 +68,10 @@ impl AreaShape {
         }
     }
 
-    /// The front-side normal of a hit `hit` on this shape: the shading
-    /// normal `ns` of a mesh (Mitsuba 3's emitting side), else `n`.
+    /// The front-side normal of a hit `hit` on this shape, which decides the
+    /// emitting side: the shading normal `ns` of a mesh (Mitsuba 3's
+    /// emitting side), else `n`. Not the normal of the area-to-solid-angle
+    /// conversion, which is always the geometric `n`.
     #[inline]
     pub fn front_normal(&self, hit: &SurfaceHit) -> Vec3 {
         match self {
@@ -96,8 +104,13 @@ pub enum AreaMotion {
 pub struct AreaLightSample {
     /// Point on the light (world).
     pub p: Vec3,
-    /// Unit front-side normal of the light at `p` (world).
+    /// Unit front-side normal of the light at `p` (world), which decides
+    /// the emitting side.
     pub n: Vec3,
+    /// Unit geometric normal of the light at `p` (world; `n` itself except
+    /// on a mesh with vertex normals), whose `|cos|` converts area to solid
+    /// angle.
+    pub ng: Vec3,
     /// Unit direction from the receiver toward `p` (world).
     pub wi: Vec3,
     /// Distance from the receiver to `p`.
@@ -213,21 +226,24 @@ impl AreaLight {
     /// the sphere (pbrt-v4 spherical-cap sampling); inside: uniform by area.
     /// Rectangle, disk and mesh: uniform by area (a mesh's triangle chosen by
     /// area). The pdf is converted to solid angle with the cosine to the
-    /// front-side normal (a mesh's shading normal).
+    /// geometric normal (also on a mesh with vertex normals); the front-side
+    /// normal (a mesh's shading normal) decides only whether `p` emits
+    /// toward `p_ref`.
     /// `None` when the point emits nothing toward `p_ref` (its back side of a
     /// one-sided light) or the density is degenerate.
     pub fn sample_li(&self, p_ref: Vec3, u: Vec2) -> Option<AreaLightSample> {
-        let (p, n, pdf) = match &self.shape {
+        let (p, n, ng, pdf) = match &self.shape {
             AreaShape::Sphere(s) if (p_ref - s.center).length_squared() > s.radius * s.radius => {
-                sample_sphere_cone(s, p_ref, u)
+                let (p, n, pdf) = sample_sphere_cone(s, p_ref, u);
+                (p, n, n, pdf)
             }
             _ => {
-                // Uniform by area, then to solid angle: pdf_A d^2 / |cos|.
-                let (p, n) = self.sample_area(u);
+                // Uniform by area, then to solid angle: pdf_A d^2 / |cos_g|.
+                let (p, n, ng) = self.sample_area(u);
                 let to = p - p_ref;
                 let d2 = to.length_squared();
-                let cos_light = n.dot(to).abs() / d2.sqrt();
-                (p, n, d2 / (cos_light * self.area()))
+                let cos_light = ng.dot(to).abs() / d2.sqrt();
+                (p, n, ng, d2 / (cos_light * self.area()))
             }
         };
         let to = p - p_ref;
@@ -240,7 +256,7 @@ impl AreaLight {
         if li.is_black() {
             return None;
         }
-        Some(AreaLightSample { p, n, wi, distance, li, pdf })
+        Some(AreaLightSample { p, n, ng, wi, distance, li, pdf })
     }
 
     /// Density per steradian with which [`AreaLight::sample_li`] at `p_ref`
@@ -260,30 +276,32 @@ impl AreaLight {
                 return if inside { 1.0 / (2.0 * PI * one_minus_cos_theta_max(sin2_theta_max)) } else { 0.0 };
             }
         }
-        // Area sampling: intersect and convert.
+        // Area sampling: intersect and convert with the geometric normal.
         let Some(hit) = self.shape.intersect(&Ray::new(p_ref, wi), 0.0, f32::INFINITY) else {
             return 0.0;
         };
-        let cos_light = self.shape.front_normal(&hit).dot(wi).abs();
+        let cos_light = hit.n.dot(wi).abs();
         if cos_light == 0.0 {
             return 0.0;
         }
         hit.t * hit.t / (cos_light * self.area())
     }
 
-    /// A point uniformly distributed by area and its front-side normal.
+    /// A point uniformly distributed by area, its unit front-side normal
+    /// (which decides the emitting side) and its unit geometric normal
+    /// (the same vector except on a mesh with vertex normals).
     #[inline]
-    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3) {
+    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, Vec3) {
         match &self.shape {
             AreaShape::Rectangle(r) => {
                 // An affine map takes uniform points of the square to uniform points.
                 let local = Vec3::new(2.0 * u.x - 1.0, 2.0 * u.y - 1.0, 0.0);
-                (r.transform.point_to_world(local), r.normal)
+                (r.transform.point_to_world(local), r.normal, r.normal)
             }
-            AreaShape::Disk(d) => (d.sample_point(u), d.normal),
+            AreaShape::Disk(d) => (d.sample_point(u), d.normal, d.normal),
             AreaShape::Sphere(s) => {
                 let n = sample_uniform_sphere(u);
-                (s.center + s.radius * n, n)
+                (s.center + s.radius * n, n, n)
             }
             AreaShape::Mesh(m) => m.sample_area(u),
         }

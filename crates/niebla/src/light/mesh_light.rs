@@ -3,12 +3,19 @@
 //! point is drawn uniformly by area over the whole mesh (pbrt-v4 section
 //! 6.5.4 triangle sampling; Mitsuba 3's `Mesh::sample_position`).
 //!
-//! Normal convention (Mitsuba 3's, which the importer matches): the normal of
-//! a point is the mesh's shading normal there, the interpolated vertex normal
-//! when the mesh has vertex normals, else the geometric normal
-//! `(p1 - p0) x (p2 - p0)` (`flip_normals` negates both). That normal decides
-//! the emitting side and gives the cosine of the area-to-solid-angle
-//! conversion, in light sampling and for a ray that hits the mesh alike.
+//! Normal convention. The emitting side of a point is that of the mesh's
+//! shading normal there (the interpolated vertex normal when the mesh has
+//! vertex normals, else the geometric normal `(p1 - p0) x (p2 - p0)`;
+//! `flip_normals` negates both), as Mitsuba 3 decides it, for light sampling
+//! and for a ray that hits the mesh alike. The power a surface element
+//! `dA` sends into `dw` is `L |cos theta_g| dA dw` with the *geometric*
+//! normal (the projected area of the triangle, whatever its vertex normals
+//! say), so the area-to-solid-angle conversion of light sampling uses the
+//! geometric normal's cosine: a point sampled by area and a ray that finds
+//! the same point by hitting it then estimate the same integral, the
+//! radiance `L` over the directions that see the emitting side.
+//! (Mitsuba 3.9 puts the shading normal's cosine in its emitter-sampling
+//! density instead, which its hits do not share.)
 
 use crate::geometry::{MeshInstance, SurfaceHit};
 use crate::math::{Ray, Vec2, Vec3};
@@ -55,10 +62,11 @@ impl MeshLight {
         self.cdf[i] - if i == 0 { 0.0 } else { self.cdf[i - 1] }
     }
 
-    /// A point uniformly distributed by area (density `1 / area`) and its
-    /// normal (see the module docs): `u.x` chooses the triangle by area and is
-    /// reused, rescaled, with `u.y` for the point inside it.
-    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3) {
+    /// A point uniformly distributed by area (density `1 / area`), its
+    /// front-side (shading) normal and its unit geometric normal (see the
+    /// module docs): `u.x` chooses the triangle by area and is reused,
+    /// rescaled, with `u.y` for the point inside it.
+    pub fn sample_area(&self, u: Vec2) -> (Vec3, Vec3, Vec3) {
         let n = self.cdf.len();
         let prim = self.cdf.partition_point(|&c| c <= u.x).min(n - 1);
         let lo = if prim == 0 { 0.0 } else { self.cdf[prim - 1] };
@@ -69,11 +77,12 @@ impl MeshLight {
         let su = ux.sqrt();
         let (b1, b2) = (u.y * su, 1.0 - su);
         let s = self.instance.surface_point(prim as u32, b1, b2);
-        (s.p, s.ns)
+        (s.p, s.ns, s.n)
     }
 
     /// The first point of the mesh along `ray` with `t` in `(t_min, t_max)`,
-    /// with its normals (`ns` is the light's normal there).
+    /// with its normals (`ns` decides the emitting side, `n` is the
+    /// geometric normal of the area-to-solid-angle conversion).
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
         let hit = self.instance.hit(ray, t_min, t_max)?;
@@ -139,8 +148,8 @@ mod tests {
         let mut first = 0;
         let mut left = 0;
         for _ in 0..n {
-            let (p, normal) = light.sample_area(rng.next_2d());
-            assert!(p.z.abs() < 1e-6 && (normal - Vec3::Z).length() < 1e-6);
+            let (p, normal, geometric) = light.sample_area(rng.next_2d());
+            assert!(p.z.abs() < 1e-6 && (normal - Vec3::Z).length() < 1e-6 && normal == geometric);
             if p.x < 3.0 {
                 first += 1;
                 // Uniform in the first triangle (x in [0, 2], y <= 1 - x/2):

@@ -163,9 +163,10 @@ impl Light {
                     // of it may hide the point): a ray leaving a surface
                     // starts up to `surface_epsilon(p)` off `p`, which moves
                     // its end by as much; pulled back by twice that over the
-                    // light's |cos|, the end stays in front of the sampled
-                    // triangle (at least half the distance is kept).
-                    let cos_light = s.n.dot(s.wi).abs().max(1e-3);
+                    // light's geometric |cos|, the end stays in front of
+                    // the sampled triangle (at least half the distance is
+                    // kept).
+                    let cos_light = s.ng.dot(s.wi).abs().max(1e-3);
                     distance = (distance - 2.0 * crate::world::surface_epsilon(p) / cos_light).max(0.5 * s.distance);
                 }
                 Some(LightSample { wi: s.wi, distance, li: s.li, pdf: s.pdf, is_delta: false })
