@@ -21,6 +21,9 @@
 //! `|cos_g|` (Mitsuba 3's emitter-sampling density) the integral is 13%
 //! lower; the test asserts that it tells the two apart.
 
+mod common;
+
+use common::mean_se;
 use niebla::integrator::{registry, IntegratorSettings};
 use niebla::math::{Frame, Ray, Vec3};
 use niebla::render::{render, RenderOptions};
@@ -74,47 +77,18 @@ type V = glam::DVec3;
 /// with the interpolated normal's; the second value's only use is to show
 /// that the estimates tell the two apart.
 fn irradiance(m: usize) -> (f64, f64) {
-    let x = V::from(RECEIVER);
     let lift = V::new(0.0, 1.0, 0.0);
-    let (mut geometric, mut shading) = (0.0, 0.0);
-    for tri in INDICES {
-        let [a, b, c] = tri.map(|i| V::from(POSITIONS[i]) + lift);
-        // flip_normals: the winding and the vertex normals reversed.
-        let [na, nb, nc] = tri.map(|i| -V::from(NORMALS[i]).normalize());
-        let cross = (c - a).cross(b - a);
-        let (area, ng) = (0.5 * cross.length(), cross.normalize());
-        let (mut sum_g, mut sum_s) = (0.0, 0.0);
-        for i in 0..m {
-            for j in 0..m {
-                // Uniform by area: b1 = t sqrt(s), b2 = 1 - sqrt(s).
-                let (s, t) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
-                let (b1, b2) = (t * s.sqrt(), 1.0 - s.sqrt());
-                let b0 = 1.0 - b1 - b2;
-                let p = a * b0 + b * b1 + c * b2;
-                let ns = (na * b0 + nb * b1 + nc * b2).normalize();
-                assert!(ns.dot(ng) > 0.0, "a vertex normal on the other side of its triangle");
-                let d = p - x;
-                let r2 = d.length_squared();
-                let w = d / r2.sqrt();
-                // Emits toward the receiver only on its normal's side.
-                if ns.dot(-w) > 0.0 {
-                    sum_g += w.y * ng.dot(w).abs() / r2;
-                    sum_s += w.y * ns.dot(w).abs() / r2;
-                }
-            }
-        }
-        geometric += RADIANCE * sum_g * area / (m * m) as f64;
-        shading += RADIANCE * sum_s * area / (m * m) as f64;
-    }
-    (geometric, shading)
-}
-
-/// Mean and standard error of the mean.
-fn mean_se(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
+    // flip_normals: the winding (here b and c swapped) and the vertex
+    // normals reversed.
+    let triangles: Vec<_> = INDICES
+        .iter()
+        .map(|&[i0, i1, i2]| {
+            let tri = [i0, i2, i1];
+            (tri.map(|i| V::from(POSITIONS[i]) + lift), tri.map(|i| -V::from(NORMALS[i]).normalize()))
+        })
+        .collect();
+    let (geometric, shading) = common::smooth_mesh_irradiance(&triangles, V::from(RECEIVER), V::Y, m);
+    (RADIANCE * geometric, RADIANCE * shading)
 }
 
 /// The pixel (green) of `batches` independent renders of `spp`.

@@ -4,6 +4,8 @@
 //! sampling (NEE) against BSDF sampling through the scene on a non-convex
 //! mesh that hides parts of itself, and the errors for bad emitting meshes.
 
+mod common;
+
 use std::f64::consts::PI as PI64;
 use std::sync::Arc;
 
@@ -14,13 +16,7 @@ use niebla::math::{Frame, Vec2, Vec3};
 use niebla::sampling::PixelSampler;
 use niebla::scene::{build_scene, parse_scene_str};
 
-/// Mean and standard error of the mean.
-fn mean_se(values: &[f64]) -> (f64, f64) {
-    let n = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / n;
-    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
+use common::mean_se;
 
 /// A mesh light from object-space data placed by the identity.
 fn mesh_light(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>, normals: Option<Vec<Vec3>>) -> AreaLight {
@@ -213,36 +209,11 @@ fn vertex_normal_roof_irradiance_matches_quadrature() {
     let normals = [[-0.5, -1.0, -0.5], [0.5, -1.0, -0.5], [0.5, -1.0, 0.5], [-0.5, -1.0, 0.5], [0.3, -1.0, 0.0]]
         .map(|v: [f64; 3]| glam::DVec3::from(v).normalize());
     let pd = glam::DVec3::new(p.x as f64, p.y as f64, p.z as f64);
-    let m = 400;
-    let (mut exact, mut shading) = (0.0, 0.0);
-    for tri in [[0usize, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]] {
-        let [a, b, c] = tri.map(|i| positions[i]);
-        let [na, nb, nc] = tri.map(|i| normals[i]);
-        let area = 0.5 * (b - a).cross(c - a).length();
-        let ng = (b - a).cross(c - a).normalize();
-        // Midpoints of the m^2 sub-triangles of equal area (uniform grid of
-        // the unit square folded by the sqrt map would weight unevenly):
-        // sample the square (s, t) midpoints with b1 = t sqrt(s), b2 = 1 - sqrt(s).
-        let (mut sum, mut sum_s) = (0.0, 0.0);
-        for i in 0..m {
-            for j in 0..m {
-                let (s, t) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
-                let (b1, b2) = (t * s.sqrt(), 1.0 - s.sqrt());
-                let b0 = 1.0 - b1 - b2;
-                let x = a * b0 + b * b1 + c * b2;
-                let ns = (na * b0 + nb * b1 + nc * b2).normalize();
-                let d = x - pd;
-                let r2 = d.length_squared();
-                let w = d / r2.sqrt();
-                if ns.dot(-w) > 0.0 && w.y > 0.0 {
-                    sum += w.y * ng.dot(w).abs() / r2;
-                    sum_s += w.y * ns.dot(w).abs() / r2;
-                }
-            }
-        }
-        exact += sum * area / (m * m) as f64;
-        shading += sum_s * area / (m * m) as f64;
-    }
+    let triangles: Vec<_> = [[0usize, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]
+        .iter()
+        .map(|tri| (tri.map(|i| positions[i]), tri.map(|i| normals[i])))
+        .collect();
+    let (exact, shading) = common::smooth_mesh_irradiance(&triangles, pd, glam::DVec3::Y, 400);
     let mut rng = PixelSampler::from_key(31);
     let values: Vec<f64> = (0..200_000)
         .map(|_| match light.sample_li(p, rng.next_2d()) {

@@ -126,3 +126,56 @@ pub fn block_stats(images: &[niebla::film::Image], x0: u32, y0: u32, size: u32) 
         (mean, (var / n).sqrt())
     })
 }
+
+/// Mean and standard error of the mean of independent samples.
+pub fn mean_se(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Irradiance at `x` (receiver normal `n_r`) from triangles of radiance 1
+/// that emit on the side of their interpolated vertex normals, by the
+/// midpoint rule over `m x m` sub-triangles of equal area per triangle
+/// (`b1 = t sqrt(s)`, `b2 = 1 - sqrt(s)` at the midpoints `(s, t)` of the
+/// unit square). Each triangle is its corners `[a, b, c]` and their vertex
+/// normals, its geometric normal `(b - a) x (c - a)`, which every vertex
+/// normal must lean toward. Returns the irradiance with the geometric
+/// normal's cosine in the area-to-solid-angle conversion (the physical
+/// value) and with the interpolated normal's.
+pub fn smooth_mesh_irradiance(
+    triangles: &[([glam::DVec3; 3], [glam::DVec3; 3])],
+    x: glam::DVec3,
+    n_r: glam::DVec3,
+    m: usize,
+) -> (f64, f64) {
+    let (mut geometric, mut shading) = (0.0, 0.0);
+    for &([a, b, c], [na, nb, nc]) in triangles {
+        let cross = (b - a).cross(c - a);
+        let (area, ng) = (0.5 * cross.length(), cross.normalize());
+        let (mut sum_g, mut sum_s) = (0.0, 0.0);
+        for i in 0..m {
+            for j in 0..m {
+                let (s, t) = ((i as f64 + 0.5) / m as f64, (j as f64 + 0.5) / m as f64);
+                let (b1, b2) = (t * s.sqrt(), 1.0 - s.sqrt());
+                let b0 = 1.0 - b1 - b2;
+                let p = a * b0 + b * b1 + c * b2;
+                let ns = (na * b0 + nb * b1 + nc * b2).normalize();
+                assert!(ns.dot(ng) > 0.0, "a vertex normal on the other side of its triangle");
+                let d = p - x;
+                let r2 = d.length_squared();
+                let w = d / r2.sqrt();
+                let cos_r = n_r.dot(w);
+                // Emits toward the receiver only on its normal's side.
+                if ns.dot(-w) > 0.0 && cos_r > 0.0 {
+                    sum_g += cos_r * ng.dot(w).abs() / r2;
+                    sum_s += cos_r * ns.dot(w).abs() / r2;
+                }
+            }
+        }
+        geometric += sum_g * area / (m * m) as f64;
+        shading += sum_s * area / (m * m) as f64;
+    }
+    (geometric, shading)
+}
