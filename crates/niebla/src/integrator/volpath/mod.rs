@@ -150,9 +150,10 @@ pub const DEFAULT_GUIDE_FRACTION: f32 = 0.25;
 /// spp, Sobol, the guide's radius the root mean square distance): relative
 /// MSE 3.96e-3 at 0.25, 3.74e-3 at 0.35; at a radius of half the farthest
 /// corner's 3.91e-3, 3.71e-3 and 3.91e-3 at 0.25, 0.35 and 0.5. With the
-/// guide's share toward lit objects (`LitSurfaces`, share 0.3): 3.47e-3 at
-/// 0.35 (share 0.1), 3.28e-3 at 0.4, 3.27e-3 at 0.45, 3.61e-3 +- 2.7e-4
-/// (a tail) at 0.5.
+/// guide's share toward lit objects (`LitSurfaces`, share 0.3 unless
+/// stated): 3.47e-3 at 0.35 (share 0.1), 3.28e-3 at 0.4, 3.26e-3 at 0.45
+/// (share 0.25), 3.61e-3 +- 2.7e-4 (a tail) at 0.5; without it 3.73e-3 at
+/// 0.4 and 3.75e-3 at 0.45.
 pub const DEFAULT_POINT_GUIDE_FRACTION: f32 = 0.4;
 
 /// [`VolPathIntegrator::emitter_guide_fraction`] of [`VolPathIntegrator::new`].
