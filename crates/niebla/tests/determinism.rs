@@ -39,8 +39,10 @@ fn all_integrators() -> Vec<(String, IntegratorSettings)> {
     out
 }
 
-/// The default scene, and a grid medium (trackers, majorant DDA) lit by a
-/// spot light, both at a size that is not a multiple of the tile size.
+/// The default scene, a grid medium (trackers, majorant DDA) lit by a spot
+/// light, and bench/scenes/fog_point.json (a point lamp in fog next to
+/// diffuse objects: `volpath`'s lamp guide and its directions toward the
+/// lit objects), all at a size that is not a multiple of the tile size.
 fn scenes() -> Vec<(&'static str, BuiltScene)> {
     let grid = r#"{"version": 1,
         "camera": {"type": "perspective", "position": [0.5, 0.6, 3], "target": [0.5, 0.5, 0.5], "width": 8, "height": 8},
@@ -51,7 +53,8 @@ fn scenes() -> Vec<(&'static str, BuiltScene)> {
                     "cutoff_angle": 30, "beam_width": 20},
                    {"type": "constant", "radiance": 0.1}]}"#;
     let mut out = Vec::new();
-    for (name, text) in [("default", DEFAULT_SCENE), ("grid", grid)] {
+    let fog_point = include_str!("../../../bench/scenes/fog_point.json");
+    for (name, text) in [("default", DEFAULT_SCENE), ("grid", grid), ("fog_point", fog_point)] {
         let desc = parse_scene_str(text, name).unwrap();
         let mut built = build_scene(&desc, name, Path::new(".")).unwrap();
         built.scene.camera.width = 37; // not a multiple of the tile size

@@ -39,6 +39,7 @@ pub use single::{SingleIntegrator, SingleSampling};
 pub use surface_shadows::SurfaceShadows;
 pub use volpath::{
     VolPathIntegrator, DEFAULT_DISTANCE_MIXTURE, DEFAULT_EMITTER_GUIDE_FRACTION, DEFAULT_GUIDE_FRACTION,
+    DEFAULT_POINT_GUIDE_FRACTION,
 };
 pub use volume_lights::{majorant_at, VolumeLightSample, VolumeLights};
 pub use zhou::{ZhouIntegrator, ZhouSettings};

@@ -16,6 +16,8 @@ use crate::sampling::sample_uniform_cone;
 
 use crate::integrator::equiangular::cone_hull;
 
+use super::lit_guide::LitSurfaces;
+
 /// Points with density `1 / (Omega R r^2)` in the cone of half-angle
 /// `acos(cos_cutoff)` (`cos_cutoff = -1`: the whole sphere) around `axis`
 /// with apex at the light, `r` the distance to the apex, `r < R`, Omega the
@@ -188,7 +190,60 @@ mod tests {
         let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
+    /// On bench/scenes/fog_point.json the guide aims at its point lamp and
+    /// at the three diffuse objects it lights (ball, box, floor), and its
+    /// whole mixture density (lamp volume and lit objects) integrates to 1
+    /// over the sphere from points in the fog, on the floor and next to
+    /// the lamp (400000 uniform directions, within 4 standard errors), and
+    /// the directions it samples follow it (as above, within 2%).
+    #[test]
+    fn fog_point_guide_density_integrates_to_one_and_is_sampled() {
+        use crate::scene::{build_scene, parse_scene_str};
+        let text = include_str!("../../../../../bench/scenes/fog_point.json");
+        let desc = parse_scene_str(text, "fog_point").unwrap();
+        let scene = build_scene(&desc, "fog_point", std::path::Path::new(".")).unwrap().scene;
+        let guide = LightGuide::new(&scene);
+        assert_eq!(guide.count, 1);
+        assert!(guide.lit_share > 0.0 && guide.lit.is_active());
+        for x in [Vec3::new(0.3, 1.2, 2.5), Vec3::new(1.5, 1e-3, 1.0), Vec3::new(-0.1, 1.4, 0.5)] {
+            assert!(guide.lit_at(x).0 > 0.0, "{x}");
+            let mut s = PixelSampler::from_key(17);
+            let n = 400_000;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            for _ in 0..n {
+                let w = sample_uniform_sphere(s.next_2d());
+                let v = f64::from(guide.pdf(x, w)) * 4.0 * std::f64::consts::PI;
+                sum += v;
+                sum2 += v * v;
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            assert!((mean - 1.0).abs() < 4.0 * se + 2e-3, "from {x}: {mean} +- {se}");
+            let cap = 2.0f64;
+            let mut by_sampling = 0.0f64;
+            for _ in 0..n {
+                let Some(w) = guide.sample(x, s.next_1d(), s.next_2d(), s.next_1d()) else { continue };
+                by_sampling += f64::from(guide.pdf(x, w)).min(cap);
+            }
+            let mut by_uniform = 0.0f64;
+            for _ in 0..n {
+                let w = sample_uniform_sphere(s.next_2d());
+                let p = f64::from(guide.pdf(x, w));
+                by_uniform += p * p.min(cap) * 4.0 * std::f64::consts::PI;
+            }
+            let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
+            assert!((a - b).abs() < 0.02 * b, "from {x}: sampled {a} vs integrated {b}");
+        }
+    }
 }
+
+/// Share of a [`LightGuide`]'s directions drawn toward diffuse objects the
+/// guided point lights light ([`LitSurfaces`]), where it has some in view
+/// and every guided light is a point light.
+/// On bench/scenes/fog_point.json (48 px, 8 renders of 64 spp, guide
+/// fraction 0.4) 0.2, 0.3 and 0.4 gave relative MSE 3.33e-3, 3.28e-3 and
+/// 3.40e-3 (3.73e-3 without).
+const LIT_SHARE: f32 = 0.3;
 
 /// Most lights a [`LightGuide`] aims at.
 const MAX_GUIDED_LIGHTS: usize = 4;
@@ -209,6 +264,14 @@ const MAX_GUIDED_LIGHTS: usize = 4;
 pub(crate) struct LightGuide {
     volumes: [Option<LightCone>; MAX_GUIDED_LIGHTS],
     count: usize,
+    /// Whether every guided light is a point light.
+    points_only: bool,
+    /// Directions toward the diffuse objects those lights light (used only
+    /// when every guided light is a point light).
+    lit: LitSurfaces,
+    /// Share of the guide's directions drawn toward `lit` where some of its
+    /// objects is seen from outside its bounding sphere.
+    lit_share: f32,
 }
 
 impl LightGuide {
@@ -217,6 +280,7 @@ impl LightGuide {
     pub(crate) fn new(scene: &crate::world::Scene) -> LightGuide {
         let mut volumes = [None; MAX_GUIDED_LIGHTS];
         let mut count = 0;
+        let mut points_only = true;
         let (lo, hi) = scene.bounds;
         for light in &scene.lights {
             let Some(position) = light.point_position() else {
@@ -242,9 +306,36 @@ impl LightGuide {
             if let Some(v) = LightCone::new(light, radius) {
                 volumes[count] = Some(v);
                 count += 1;
+                points_only &= matches!(light, Light::Point(_));
             }
         }
-        LightGuide { volumes, count }
+        let lit = LitSurfaces::new(&scene.objects, &scene.lights, |p| scene.medium_at(p).is_some());
+        // Only where every guided light is a point light: the estimates know
+        // point lights alone, and a spot's guide keeps its whole share (its
+        // apex tail). On the built-in default scene (a spot and a dim point
+        // lamp in haze) the lit objects took 30% of the spot's guide and the
+        // image mean's standard error over 32 renders rose 1.3x.
+        let lit_share = if lit.is_active() && count > 0 && points_only { LIT_SHARE } else { 0.0 };
+        LightGuide { volumes, count, points_only, lit, lit_share }
+    }
+
+    /// The share of directions toward lit objects at `x` and the lit
+    /// guide's normalization there (both 0 where it has nothing to aim at).
+    #[inline]
+    fn lit_at(&self, x: Vec3) -> (f32, f32) {
+        if self.lit_share > 0.0 {
+            let total = self.lit.total(x);
+            if total > 0.0 {
+                return (self.lit_share, total);
+            }
+        }
+        (0.0, 0.0)
+    }
+
+    /// Whether every guided light is a point light (true when none is guided).
+    #[inline]
+    pub(crate) fn points_only(&self) -> bool {
+        self.points_only
     }
 
     /// Whether some light is guided toward.
@@ -256,6 +347,11 @@ impl LightGuide {
     /// A unit direction from `x` toward a point of one guided light's volume
     /// (chosen uniformly with `u_light`); `None` when that point is `x`.
     pub(crate) fn sample(&self, x: Vec3, u_light: f32, u_dir: crate::math::Vec2, u_r: f32) -> Option<Vec3> {
+        let (share, total) = self.lit_at(x);
+        if u_light < share {
+            return self.lit.sample(x, total, u_light / share, u_dir);
+        }
+        let u_light = (u_light - share) / (1.0 - share);
         let k = ((u_light * self.count as f32) as usize).min(self.count.saturating_sub(1));
         let to = self.volumes[k]?.sample(u_dir, u_r) - x;
         let length = to.length();
@@ -265,7 +361,14 @@ impl LightGuide {
     /// Solid-angle density (1/sr) of [`LightGuide::sample`] from `x` at `w`.
     pub(crate) fn pdf(&self, x: Vec3, w: Vec3) -> f32 {
         let sum: f32 = self.volumes[..self.count].iter().flatten().map(|v| v.direction_pdf(x, w)).sum();
-        sum / self.count.max(1) as f32
+        let lamps = sum / self.count.max(1) as f32;
+        if self.lit_share > 0.0 {
+            let (total, inside) = self.lit.density(x, w);
+            if total > 0.0 {
+                return (1.0 - self.lit_share) * lamps + self.lit_share * inside / total;
+            }
+        }
+        lamps
     }
 }
 
