@@ -135,7 +135,8 @@ impl EmitterGuide {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::{sample_uniform_sphere, PixelSampler};
+    use crate::integrator::volpath::guide_checks::{sampled_and_integrated, sphere_integral};
+    use crate::sampling::PixelSampler;
 
     /// Two overlapping boxes, as two emitters' regions.
     fn guide() -> EmitterGuide {
@@ -152,17 +153,7 @@ mod tests {
         let g = guide();
         // Outside both, inside the larger only, inside both.
         for x in [Vec3::new(0.2, 0.0, 2.0), Vec3::new(0.6, 0.5, 0.0), Vec3::new(0.0, 0.4, 0.0)] {
-            let mut s = PixelSampler::from_key(17);
-            let n = 400_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for _ in 0..n {
-                let w = sample_uniform_sphere(s.next_2d());
-                let v = f64::from(g.pdf(x, w)) * 4.0 * std::f64::consts::PI;
-                sum += v;
-                sum2 += v * v;
-            }
-            let mean = sum / n as f64;
-            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            let (mean, se) = sphere_integral(&mut PixelSampler::from_key(17), 400_000, |w| g.pdf(x, w));
             assert!((mean - 1.0).abs() < 4.0 * se, "from {x}: {mean} +- {se}");
         }
     }
@@ -174,22 +165,11 @@ mod tests {
     fn sampled_directions_follow_the_density() {
         let g = guide();
         let x = Vec3::new(0.3, 0.0, 1.8);
-        let mut s = PixelSampler::from_key(23);
-        let n = 400_000;
-        let cap = 3.0f64;
-        let mut by_sampling = 0.0f64;
-        for _ in 0..n {
+        let sample = |s: &mut PixelSampler| {
             let (u_box, u_dir, u_r) = (s.next_1d(), s.next_2d(), s.next_1d());
-            let w = g.sample(x, u_box, u_dir, u_r).unwrap();
-            by_sampling += f64::from(g.pdf(x, w)).min(cap);
-        }
-        let mut by_uniform = 0.0f64;
-        for _ in 0..n {
-            let w = sample_uniform_sphere(s.next_2d());
-            let p = f64::from(g.pdf(x, w));
-            by_uniform += p * p.min(cap) * 4.0 * std::f64::consts::PI;
-        }
-        let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
+            Some(g.sample(x, u_box, u_dir, u_r).unwrap())
+        };
+        let (a, b) = sampled_and_integrated(&mut PixelSampler::from_key(23), 400_000, 3.0, sample, |w| g.pdf(x, w));
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
 

@@ -98,8 +98,9 @@ impl LightCone {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrator::volpath::guide_checks::{mean_se, sampled_and_integrated, sphere_integral};
     use crate::light::{PointLight, SpotLight};
-    use crate::sampling::{sample_uniform_sphere, PixelSampler};
+    use crate::sampling::PixelSampler;
 
     /// The direction density integrates to 1 over the sphere of directions
     /// from a point (Monte Carlo with uniform directions), for a point light
@@ -118,16 +119,7 @@ mod tests {
             let volume = LightCone::new(&light, 5.0).unwrap();
             for x in [Vec3::new(0.3, 1.0, 0.2), Vec3::new(4.0, -1.0, 2.0), Vec3::new(0.0, 2.5, 0.0)] {
                 let mut s = PixelSampler::from_key(5);
-                let n = 400_000;
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                for _ in 0..n {
-                    let w = sample_uniform_sphere(s.next_2d());
-                    let v = f64::from(volume.direction_pdf(x, w)) * 4.0 * std::f64::consts::PI;
-                    sum += v;
-                    sum2 += v * v;
-                }
-                let mean = sum / n as f64;
-                let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+                let (mean, se) = sphere_integral(&mut s, 400_000, |w| volume.direction_pdf(x, w));
                 assert!((mean - 1.0).abs() < 4.0 * se + 2e-3, "{light:?} from {x}: {mean} +- {se}");
             }
         }
@@ -141,17 +133,10 @@ mod tests {
         let (lo, hi) = (Vec3::new(-3.0, -0.5, -3.0), Vec3::new(3.0, 3.0, 5.5));
         for p in [Vec3::new(-0.2, 1.5, 0.4), Vec3::new(2.9, -0.4, 5.0), Vec3::new(10.0, 4.0, -7.0)] {
             let mut s = PixelSampler::from_key(3);
-            let n = 400_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for _ in 0..n {
+            let (mean, se) = mean_se(400_000, || {
                 let u = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
-                let y = lo + (hi - lo) * u;
-                let d2 = f64::from((y - p).length_squared());
-                sum += d2;
-                sum2 += d2 * d2;
-            }
-            let mean = sum / n as f64;
-            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+                f64::from((lo + (hi - lo) * u - p).length_squared())
+            });
             let r = f64::from(rms_distance_to_box(p, lo, hi));
             assert!((r * r - mean).abs() < 4.0 * se + 1e-4 * mean, "from {p}: {} vs {mean} +- {se}", r * r);
         }
@@ -171,23 +156,11 @@ mod tests {
         });
         let volume = LightCone::new(&light, 4.0).unwrap();
         let x = Vec3::new(2.5, 0.5, 0.3);
-        let mut s = PixelSampler::from_key(9);
-        let n = 400_000;
         // E_q[min(p, c)] under the sampler vs the same integral with uniform directions.
-        let cap = 2.0f64;
-        let mut by_sampling = 0.0f64;
-        for _ in 0..n {
-            let y = volume.sample(s.next_2d(), s.next_1d());
-            let w = (y - x).normalize();
-            by_sampling += f64::from(volume.direction_pdf(x, w)).min(cap);
-        }
-        let mut by_uniform = 0.0f64;
-        for _ in 0..n {
-            let w = sample_uniform_sphere(s.next_2d());
-            let p = f64::from(volume.direction_pdf(x, w));
-            by_uniform += p * p.min(cap) * 4.0 * std::f64::consts::PI;
-        }
-        let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
+        let sample = |s: &mut PixelSampler| Some((volume.sample(s.next_2d(), s.next_1d()) - x).normalize());
+        let (a, b) = sampled_and_integrated(&mut PixelSampler::from_key(9), 400_000, 2.0, sample, |w| {
+            volume.direction_pdf(x, w)
+        });
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
     /// On bench/scenes/fog_point.json the guide aims at its point lamp and
@@ -208,30 +181,10 @@ mod tests {
         for x in [Vec3::new(0.3, 1.2, 2.5), Vec3::new(1.5, 1e-3, 1.0), Vec3::new(-0.1, 1.4, 0.5)] {
             assert!(guide.lit_at(x).0 > 0.0, "{x}");
             let mut s = PixelSampler::from_key(17);
-            let n = 400_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for _ in 0..n {
-                let w = sample_uniform_sphere(s.next_2d());
-                let v = f64::from(guide.pdf(x, w)) * 4.0 * std::f64::consts::PI;
-                sum += v;
-                sum2 += v * v;
-            }
-            let mean = sum / n as f64;
-            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            let (mean, se) = sphere_integral(&mut s, 400_000, |w| guide.pdf(x, w));
             assert!((mean - 1.0).abs() < 4.0 * se + 2e-3, "from {x}: {mean} +- {se}");
-            let cap = 2.0f64;
-            let mut by_sampling = 0.0f64;
-            for _ in 0..n {
-                let Some(w) = guide.sample(x, s.next_1d(), s.next_2d(), s.next_1d()) else { continue };
-                by_sampling += f64::from(guide.pdf(x, w)).min(cap);
-            }
-            let mut by_uniform = 0.0f64;
-            for _ in 0..n {
-                let w = sample_uniform_sphere(s.next_2d());
-                let p = f64::from(guide.pdf(x, w));
-                by_uniform += p * p.min(cap) * 4.0 * std::f64::consts::PI;
-            }
-            let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
+            let sample = |s: &mut PixelSampler| guide.sample(x, s.next_1d(), s.next_2d(), s.next_1d());
+            let (a, b) = sampled_and_integrated(&mut s, 400_000, 2.0, sample, |w| guide.pdf(x, w));
             assert!((a - b).abs() < 0.02 * b, "from {x}: sampled {a} vs integrated {b}");
         }
     }

@@ -218,7 +218,8 @@ impl LitSurfaces {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::{sample_uniform_sphere, PixelSampler};
+    use crate::integrator::volpath::guide_checks::{sampled_and_integrated, sphere_integral};
+    use crate::sampling::PixelSampler;
 
     /// Three targets: a far small one, a near large one and one that holds
     /// the second query point.
@@ -242,17 +243,7 @@ mod tests {
         for x in [Vec3::new(0.5, 1.5, 0.2), Vec3::new(0.1, 0.1, 0.0), Vec3::new(-4.0, 2.0, 3.0)] {
             let total = g.total(x);
             assert!(total > 0.0);
-            let mut s = PixelSampler::from_key(11);
-            let n = 400_000;
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for _ in 0..n {
-                let w = sample_uniform_sphere(s.next_2d());
-                let v = f64::from(g.pdf(x, total, w)) * 4.0 * std::f64::consts::PI;
-                sum += v;
-                sum2 += v * v;
-            }
-            let mean = sum / n as f64;
-            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            let (mean, se) = sphere_integral(&mut PixelSampler::from_key(11), 400_000, |w| g.pdf(x, total, w));
             assert!((mean - 1.0).abs() < 4.0 * se + 1e-3, "from {x}: {mean} +- {se}");
         }
     }
@@ -266,22 +257,13 @@ mod tests {
         let g = guide();
         let x = Vec3::new(0.5, 1.5, 0.2);
         let total = g.total(x);
-        let mut s = PixelSampler::from_key(13);
-        let n = 400_000;
-        let cap = 2.0f64;
-        let mut by_sampling = 0.0f64;
-        for _ in 0..n {
+        let sample = |s: &mut PixelSampler| {
             let w = g.sample(x, total, s.next_1d(), s.next_2d()).unwrap();
             assert!((w.length() - 1.0).abs() < 1e-4);
-            by_sampling += f64::from(g.pdf(x, total, w)).min(cap);
-        }
-        let mut by_uniform = 0.0f64;
-        for _ in 0..n {
-            let w = sample_uniform_sphere(s.next_2d());
-            let p = f64::from(g.pdf(x, total, w));
-            by_uniform += p * p.min(cap) * 4.0 * std::f64::consts::PI;
-        }
-        let (a, b) = (by_sampling / n as f64, by_uniform / n as f64);
+            Some(w)
+        };
+        let (a, b) =
+            sampled_and_integrated(&mut PixelSampler::from_key(13), 400_000, 2.0, sample, |w| g.pdf(x, total, w));
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
 

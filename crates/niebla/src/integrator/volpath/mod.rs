@@ -31,6 +31,8 @@ mod distance_mixture;
 mod emitter_guide;
 mod equiangular_nee;
 mod forced;
+#[cfg(test)]
+mod guide_checks;
 mod guiding;
 mod layout;
 mod light_guide;
