@@ -20,11 +20,15 @@
 //!
 //! Files: `path` (the path loop), `nee` (next-event estimation and shadow
 //! rays), `equiangular_nee` (equiangular sampling on medium segments and its
-//! MIS), `guiding` and `light_guide` (directions toward lamps inside media),
-//! `channels` (channel grouping), `volume_nee` (light sampling of emissive
-//! media, MIS-weighted against the collision estimator of their emission),
-//! `emitter_guide` (directions toward emissive media), `forced`
-//! (forced collisions where leaving the medium gathers nothing).
+//! MIS), `distance_mixture` (the next vertex's distance by free flight or
+//! equiangular sampling), `guiding` and `light_guide` (directions toward
+//! lamps inside media, with `lit_guide` toward the diffuse objects they
+//! light), `channels` (channel grouping), `volume_nee` (light sampling of
+//! emissive media, MIS-weighted against the collision estimator of their
+//! emission), `emitter_guide` (directions toward emissive media), `forced`
+//! (forced collisions where leaving the medium gathers nothing), `layout`
+//! (the Sobol dimension layout), `settings` (the scene keys), and for the
+//! unit tests `guide_checks` (Monte Carlo checks of the guides' densities).
 
 mod channels;
 mod distance_mixture;
