@@ -163,6 +163,7 @@ mod tests {
         });
         assert!((a - b).abs() < 0.02 * b, "sampled {a} vs integrated {b}");
     }
+
     /// On bench/scenes/fog_point.json the guide aims at its point lamp and
     /// at the three diffuse objects it lights (ball, box, floor), and its
     /// whole mixture density (lamp volume and lit objects) integrates to 1
